@@ -1,0 +1,144 @@
+#include "solvers/calibrate_laser.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+namespace calib {
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::string IntervalName(const LaserInterval& interval, size_t index) {
+  if (interval.line > 0) {
+    return "record " + std::to_string(interval.record) + " (line " + std::to_string(interval.line) +
+           ")";
+  }
+  return "interval " + std::to_string(index + 1);
+}
+
+Eigen::Matrix3d DiagonalSqrtInformation(const Eigen::Vector3d& sigma) {
+  return sigma.cwiseInverse().asDiagonal();
+}
+
+}  // namespace
+
+Status ValidateLaserIntervals(const std::vector<LaserInterval>& intervals) {
+  if (intervals.empty()) return Status::Error("the log holds no intervals");
+  for (size_t k = 0; k < intervals.size(); ++k) {
+    const LaserInterval& interval = intervals[k];
+    if (!(interval.duration_s > 0.0) || !std::isfinite(interval.duration_s)) {
+      return Status::Error(IntervalName(interval, k) + ": T must be positive and finite");
+    }
+    if (!std::isfinite(interval.left_speed) || !std::isfinite(interval.right_speed) ||
+        !interval.sensor_motion.allFinite()) {
+      return Status::Error(IntervalName(interval, k) + ": wheel speeds and sm must be finite");
+    }
+    for (const WheelStep& step : interval.steps) {
+      if (!std::isfinite(step.left_rad) || !std::isfinite(step.right_rad)) {
+        return Status::Error(IntervalName(interval, k) + ": wheel steps must be finite");
+      }
+    }
+  }
+  return Status::Ok();
+}
+
+StatusOr<LaserCalibrationResult> CalibrateLaser(const std::vector<LaserInterval>& intervals,
+                                                const LaserCalibrationOptions& options) {
+  return CalibrateLaserJoint({&intervals}, options);
+}
+
+StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
+    const std::vector<const std::vector<LaserInterval>*>& logs,
+    const LaserCalibrationOptions& options) {
+  const auto report = [&](const std::string& line) {
+    if (options.progress) options.progress(line);
+  };
+  std::vector<LaserInterval> all;
+  for (size_t i = 0; i < logs.size(); ++i) {
+    const Status valid = ValidateLaserIntervals(*logs[i]);
+    if (!valid.ok()) {
+      return Status::Error(logs.size() > 1 ? "log " + std::to_string(i + 1) + ": " + valid.message()
+                                           : valid.message());
+    }
+    if (logs.size() > 1) all.insert(all.end(), logs[i]->begin(), logs[i]->end());
+  }
+  if (logs.empty()) return Status::Error("no logs to calibrate");
+  const std::vector<LaserInterval>& joined = logs.size() > 1 ? all : *logs[0];
+
+  LaserCalibrationResult result;
+  result.samples = static_cast<int>(joined.size());
+  result.census = CountLaserMotion(joined);
+
+  auto start = std::chrono::steady_clock::now();
+  StatusOr<CensiClosedFormResult> closed_form = CensiClosedForm(joined);
+  if (!closed_form.ok()) return closed_form.status();
+  result.closed_form = *closed_form;
+  result.closed_form_seconds = SecondsSince(start);
+  report("closed form done in " + std::to_string(result.closed_form_seconds) + " s");
+
+  start = std::chrono::steady_clock::now();
+  std::vector<LaserDataset> datasets;
+  for (const auto* log : logs) datasets.push_back(LaserDataset{log, Eigen::Matrix3d::Identity()});
+  LaserProblem problem(datasets, closed_form->calibration, options.refinement);
+  const auto estimate_noise = [&]() {
+    for (size_t d = 0; d < logs.size(); ++d) {
+      const Eigen::Vector3d sigma =
+          options.noise_sigma ? *options.noise_sigma : RobustNoiseSigma(problem.Errors(d));
+      problem.SetSqrtInformation(d, DiagonalSqrtInformation(sigma));
+    }
+  };
+  estimate_noise();
+  for (int round = 0; round < std::max(1, options.noise_rounds); ++round) {
+    ceres::Solver::Summary summary;
+    const Status solved = problem.Solve(&summary);
+    if (!solved.ok()) return solved;
+    result.iterations += static_cast<int>(summary.iterations.size());
+    if (!options.noise_sigma) estimate_noise();
+    report("refinement round " + std::to_string(round + 1) + ": " +
+           std::to_string(summary.iterations.size()) + " iterations");
+  }
+  result.estimate = problem.calibration();
+  result.refinement_seconds = SecondsSince(start);
+
+  // Inliers and their noise level.
+  for (size_t d = 0; d < logs.size(); ++d) {
+    const std::vector<double> s = problem.WhitenedSquaredNorms(d);
+    const std::vector<Eigen::Vector3d> errors = problem.Errors(d);
+    std::vector<bool> inlier(s.size());
+    Eigen::Vector3d sum_sq = Eigen::Vector3d::Zero();
+    int count = 0;
+    for (size_t k = 0; k < s.size(); ++k) {
+      inlier[k] = s[k] < options.inlier_chi2;
+      if (inlier[k]) {
+        sum_sq += errors[k].cwiseAbs2();
+        ++count;
+      }
+    }
+    result.inliers += count;
+    result.noise_sigma.push_back(count > 0 ? Eigen::Vector3d((sum_sq / count).cwiseSqrt())
+                                           : Eigen::Vector3d::Constant(NAN));
+    result.is_inlier.push_back(std::move(inlier));
+  }
+
+  start = std::chrono::steady_clock::now();
+  StatusOr<LaserParamMatrix> covariance = problem.Covariance();
+  if (!covariance.ok()) return covariance.status();
+  result.covariance = *covariance;
+  result.covariance_scale = problem.covariance_scale();
+  result.stddev = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  result.covariance_seconds = SecondsSince(start);
+  result.observability = AnalyzeLaserObservability(result.covariance, result.estimate,
+                                                   result.census);
+  if (result.inliers < result.samples / 2) {
+    result.observability.warnings.push_back(
+        "only " + std::to_string(result.inliers) + " of " + std::to_string(result.samples) +
+        " intervals agree with the model: check the wheel-speed signs, units and the scan "
+        "matcher");
+  }
+  return result;
+}
+
+}  // namespace calib

@@ -1,0 +1,59 @@
+#ifndef CALIB_PROBLEMS_LASER_RESIDUAL_H_
+#define CALIB_PROBLEMS_LASER_RESIDUAL_H_
+
+#include <ceres/autodiff_cost_function.h>
+
+#include <Eigen/Core>
+
+#include "core/laser_log.h"
+#include "core/se2.h"
+
+namespace calib {
+
+// Pose-composition residual of one laser interval (Censi eq. 9 as a measurement model):
+//   ŝ_pred = ℓ⁻¹ ∘ o(Δφ_l, Δφ_r; r_l, r_r, b) ∘ ℓ,   e = ŝ_pred⁻¹ ∘ ŝ  (e_θ wrapped),
+//   r = L·e,  with LᵀL the information of the scan-matching noise.
+// Parameter blocks: odometry = (r_l, r_r, b), base_T_sensor = (x, y, θ).
+// `sqrt_information` is held by pointer so that a re-estimated noise level applies without
+// rebuilding the problem; it must outlive the cost function.
+class LaserResidual {
+ public:
+  LaserResidual(const LaserInterval& interval, const Eigen::Matrix3d* sqrt_information)
+      : interval_(interval), sqrt_information_(sqrt_information) {}
+
+  template <typename T>
+  bool operator()(const T* const odometry, const T* const base_T_sensor, T* residual) const {
+    const Pose2<T> robot_motion = IntervalRobotMotion(odometry[0], odometry[1], odometry[2],
+                                                      interval_);
+    const Pose2<T> mounting(base_T_sensor[0], base_T_sensor[1], base_T_sensor[2]);
+    const Pose2<T> predicted = SensorMotionFromRobotMotion(mounting, robot_motion);
+    Pose2<T> error = Between(predicted, Pose2<T>(interval_.sensor_motion.cast<T>()));
+    error(2) = WrapAngle(error(2));
+    Eigen::Map<Eigen::Matrix<T, 3, 1>> whitened(residual);
+    whitened = sqrt_information_->cast<T>() * error;
+    return true;
+  }
+
+  // Unwhitened error e for given parameters, for noise estimation and diagnostics.
+  static Eigen::Vector3d Error(const LaserInterval& interval, const double* odometry,
+                               const double* base_T_sensor) {
+    const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d error;
+    LaserResidual(interval, &identity)(odometry, base_T_sensor, error.data());
+    return error;
+  }
+
+  static ceres::CostFunction* Create(const LaserInterval& interval,
+                                     const Eigen::Matrix3d* sqrt_information) {
+    return new ceres::AutoDiffCostFunction<LaserResidual, 3, 3, 3>(
+        new LaserResidual(interval, sqrt_information));
+  }
+
+ private:
+  LaserInterval interval_;
+  const Eigen::Matrix3d* sqrt_information_;
+};
+
+}  // namespace calib
+
+#endif  // CALIB_PROBLEMS_LASER_RESIDUAL_H_
