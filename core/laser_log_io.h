@@ -43,12 +43,17 @@ struct StampedPose {
 // One interval per pair of consecutive sensor poses: sm = pose_k⁻¹ ∘ pose_{k+1}; the wheel
 // rotations over the interval are integrated from the encoder samples inside it (linear
 // interpolation of the cumulative angles at the interval ends), kept as constant-speed steps.
-// Intervals across a gap in either stream are dropped and the next one is marked gap_before.
+// Intervals that contain an encoder gap (a sample period longer than 5x the median period) are
+// dropped and the next kept one is marked gap_before. Poses outside the encoder time span are
+// dropped. `steps` is filled only when encoder samples fall strictly inside the interval.
 StatusOr<LaserLog> LaserLogFromStreams(const std::vector<WheelAngleSample>& odometry,
                                        const std::vector<StampedPose>& sensor_poses,
                                        const std::string& source);
 StatusOr<LaserLog> ReadLaserStream(const std::string& directory);
 
+// Writers emit the shortest decimal form that reads back bit-exact. They write the interval
+// values only: `steps`, `line` and `record` are not stored. WriteLaserTuples adds the key "t"
+// when log.has_timestamps, so gaps survive a round trip; the CSV always has the t column.
 Status WriteLaserTuples(const LaserLog& log, const std::string& path);
 Status WriteLaserCsv(const LaserLog& log, const std::string& path);  // Includes the t column.
 Status WriteLaserStream(const std::vector<WheelAngleSample>& odometry,

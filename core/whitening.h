@@ -2,6 +2,7 @@
 #define CALIB_CORE_WHITENING_H_
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <Eigen/Core>
 
 namespace calib {
