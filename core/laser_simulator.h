@@ -50,6 +50,8 @@ struct LaserSimOptions {
   double encoder_ticks_per_rad = 0.0;  // > 0: cumulative wheel angles are quantized.
   double wheel_speed_noise = 0.0;      // Std of white noise added to the reported φ (rad/s).
   int record_steps = 0;   // > 0: store this many encoder sub-steps per interval in `steps`.
+  // Shortest quadrature panel; panels otherwise break at every speed target, scan time and
+  // radius change and span at most half of min(speed time constant, 1/ω).
   double integration_step_s = 0.002;
   LaserEffects effects;
   uint64_t seed = 1;

@@ -1,6 +1,7 @@
 #include "solvers/calibrate_laser.h"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -12,12 +13,15 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
 }
 
 std::string IntervalName(const LaserInterval& interval, size_t index) {
-  if (interval.line > 0) {
-    return "record " + std::to_string(interval.record) + " (line " + std::to_string(interval.line) +
-           ")";
-  }
-  return "interval " + std::to_string(index + 1);
+  std::string name = interval.record > 0 ? "record " + std::to_string(interval.record)
+                                         : "interval " + std::to_string(index + 1);
+  if (interval.line > 0) name += " (line " + std::to_string(interval.line) + ")";
+  return name;
 }
+
+// A relative change of the noise level below which another fit would move the estimate by a
+// negligible fraction of its sigma.
+constexpr double kNoiseRefitChange = 0.01;
 
 Eigen::Matrix3d DiagonalSqrtInformation(const Eigen::Vector3d& sigma) {
   return sigma.cwiseInverse().asDiagonal();
@@ -83,12 +87,17 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   std::vector<LaserDataset> datasets;
   for (const auto* log : logs) datasets.push_back(LaserDataset{log, Eigen::Matrix3d::Identity()});
   LaserProblem problem(datasets, closed_form->calibration, options.refinement);
+  // Whitens each log by its robust noise level; returns the largest relative change.
   const auto estimate_noise = [&]() {
+    double change = 0.0;
     for (size_t d = 0; d < logs.size(); ++d) {
       const Eigen::Vector3d sigma =
           options.noise_sigma ? *options.noise_sigma : RobustNoiseSigma(problem.Errors(d));
+      const Eigen::Vector3d old_sigma = problem.sqrt_information(d).diagonal().cwiseInverse();
+      change = std::max(change, ((sigma - old_sigma).cwiseQuotient(sigma)).cwiseAbs().maxCoeff());
       problem.SetSqrtInformation(d, DiagonalSqrtInformation(sigma));
     }
+    return change;
   };
   estimate_noise();
   for (int round = 0; round < std::max(1, options.noise_rounds); ++round) {
@@ -96,9 +105,10 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
     const Status solved = problem.Solve(&summary);
     if (!solved.ok()) return solved;
     result.iterations += static_cast<int>(summary.iterations.size());
-    if (!options.noise_sigma) estimate_noise();
     report("refinement round " + std::to_string(round + 1) + ": " +
            std::to_string(summary.iterations.size()) + " iterations");
+    // Refit only when the noise level moved enough to shift the weights noticeably.
+    if (options.noise_sigma || estimate_noise() < kNoiseRefitChange) break;
   }
   result.estimate = problem.calibration();
   result.refinement_seconds = SecondsSince(start);

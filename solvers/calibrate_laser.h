@@ -26,8 +26,9 @@ namespace calib {
 
 struct LaserCalibrationOptions {
   LaserRefinementOptions refinement;
-  // Fit, re-estimate the scan noise from the residuals, fit again: this many fits.
-  int noise_rounds = 2;
+  // Fit, re-estimate the scan noise from the residuals, fit again while it changes by more than
+  // 1 %: at most this many fits.
+  int noise_rounds = 3;
   // Scan-matching noise σ (x, y, θ) when known; estimated from the data when empty.
   std::optional<Eigen::Vector3d> noise_sigma;
   // Intervals whose squared whitened residual exceeds this are outliers (χ²₃ at 99.9 %).

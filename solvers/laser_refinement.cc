@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Dense>
+
 #include "problems/laser_residual.h"
+#include "problems/positive_manifold.h"
 
 namespace calib {
 
@@ -45,14 +48,16 @@ LaserProblem::LaserProblem(const std::vector<LaserDataset>& datasets,
   problem_options.enable_fast_removal = false;
   problem_ = std::make_unique<ceres::Problem>(problem_options);
   set_calibration(initial);
-  problem_->AddParameterBlock(odometry_, 3);
+  // Radii and wheelbase stay positive through the manifold (the problem owns it).
+  problem_->AddParameterBlock(odometry_, 3, new PositiveManifold<3>());
   problem_->AddParameterBlock(base_T_sensor_, 3);
-  for (int i = 0; i < 3; ++i) problem_->SetParameterLowerBound(odometry_, i, 1e-9);
   for (const LaserDataset& dataset : datasets_) {
     sqrt_information_.push_back(std::make_unique<Eigen::Matrix3d>(dataset.sqrt_information));
     for (const LaserInterval& interval : *dataset.intervals) {
-      problem_->AddResidualBlock(LaserResidual::Create(interval, sqrt_information_.back().get()),
-                                 loss_.get(), odometry_, base_T_sensor_);
+      ceres::CostFunction* cost = LaserResidual::Create(interval, sqrt_information_.back().get());
+      problem_->AddResidualBlock(cost, loss_.get(), odometry_, base_T_sensor_);
+      cost_functions_.push_back(cost);
+      cost_dataset_.push_back(sqrt_information_.size() - 1);
     }
   }
 }
@@ -63,12 +68,12 @@ Status LaserProblem::Solve(ceres::Solver::Summary* summary) {
   ceres::Solver::Options solver_options;
   solver_options.minimizer_type = ceres::TRUST_REGION;
   solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  solver_options.linear_solver_type = ceres::DENSE_QR;
+  solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
   solver_options.max_num_iterations = options_.max_iterations;
   solver_options.num_threads = options_.num_threads;
-  solver_options.function_tolerance = 1e-12;
-  solver_options.gradient_tolerance = 1e-14;
-  solver_options.parameter_tolerance = 1e-12;
+  solver_options.function_tolerance = 1e-10;
+  solver_options.gradient_tolerance = 1e-12;
+  solver_options.parameter_tolerance = 1e-10;
   solver_options.logging_type = ceres::SILENT;
   ceres::Solver::Summary local_summary;
   ceres::Solve(solver_options, problem_.get(), &local_summary);
@@ -76,6 +81,10 @@ Status LaserProblem::Solve(ceres::Solver::Summary* summary) {
   if (local_summary.termination_type == ceres::FAILURE ||
       !std::isfinite(local_summary.final_cost)) {
     return Status::Error("the refinement failed: " + local_summary.message);
+  }
+  if (!(odometry_[0] > 0.0 && odometry_[1] > 0.0 && odometry_[2] > 0.0)) {
+    return Status::Error("the refinement drove a wheel radius or the wheelbase to a non-positive "
+                         "value: the data do not fit a differential-drive robot");
   }
   return Status::Ok();
 }
@@ -124,7 +133,7 @@ double LaserProblem::LossWeight(double s) const {
 StatusOr<LaserParamMatrix> LaserProblem::Covariance() const {
   ceres::Covariance::Options covariance_options;
   covariance_options.num_threads = options_.num_threads;
-  covariance_options.algorithm_type = ceres::DENSE_SVD;
+  covariance_options.algorithm_type = ceres::SPARSE_QR;
   covariance_options.apply_loss_function = true;
   ceres::Covariance covariance(covariance_options);
   const std::vector<const double*> blocks = {odometry_, base_T_sensor_};
@@ -157,6 +166,36 @@ StatusOr<LaserParamMatrix> LaserProblem::Covariance() const {
   covariance_scale_ = mean_weight * mean_meat / (mean_bread * mean_bread) * components /
                       (components - kNumLaserParams);
   return LaserParamMatrix(cov * covariance_scale_);
+}
+
+StatusOr<LaserParamMatrix> LaserProblem::SandwichCovariance() const {
+  LaserParamMatrix bread = LaserParamMatrix::Zero(), meat = LaserParamMatrix::Zero();
+  const double* parameters[2] = {odometry_, base_T_sensor_};
+  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> j_odometry, j_sensor;
+  double* jacobians[2] = {j_odometry.data(), j_sensor.data()};
+  Eigen::Matrix<double, 3, kNumLaserParams> j;
+  Eigen::Vector3d r;
+  for (const ceres::CostFunction* cost : cost_functions_) {
+    if (!cost->Evaluate(parameters, r.data(), jacobians)) {
+      return Status::Error("a residual could not be evaluated at the estimate");
+    }
+    j << j_odometry, j_sensor;
+    const double s = r.squaredNorm();
+    double rho[3] = {s, 1.0, 0.0};
+    if (loss_) loss_->Evaluate(s, rho);
+    const Eigen::Matrix<double, kNumLaserParams, 1> g = j.transpose() * r;
+    bread += rho[1] * j.transpose() * j + 2.0 * rho[2] * g * g.transpose();
+    meat += rho[1] * rho[1] * g * g.transpose();
+  }
+  const double n = 3.0 * cost_functions_.size();
+  if (n <= kNumLaserParams) return Status::Error("too few intervals for a covariance");
+  const Eigen::LDLT<LaserParamMatrix> ldlt(bread);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
+    return Status::Error("the information matrix is singular: the log does not determine all six "
+                         "parameters");
+  }
+  const LaserParamMatrix inverse = ldlt.solve(LaserParamMatrix::Identity());
+  return LaserParamMatrix(inverse * meat * inverse * (n / (n - kNumLaserParams)));
 }
 
 Eigen::Vector3d RobustNoiseSigma(const std::vector<Eigen::Vector3d>& errors) {

@@ -66,6 +66,11 @@ class LaserProblem {
   StatusOr<LaserParamMatrix> Covariance() const;
   double covariance_scale() const { return covariance_scale_; }
 
+  // The M-estimator's sandwich H⁻¹·B·H⁻¹·n/(n − 6) from per-interval Jacobians J_i and whitened
+  // residuals r_i: H = Σ J_iᵀ(ρ'·I + 2ρ''·r_i r_iᵀ)J_i, B = Σ ρ'²·J_iᵀ r_i r_iᵀ J_i. Unlike the
+  // scalar correction it stays honest when the residual scatter differs between kinds of motion.
+  StatusOr<LaserParamMatrix> SandwichCovariance() const;
+
   // The loss's weight ρ'(s) for a squared whitened norm s (1 without a robust loss).
   double LossWeight(double s) const;
 
@@ -74,6 +79,8 @@ class LaserProblem {
   std::vector<std::unique_ptr<Eigen::Matrix3d>> sqrt_information_;  // Stable addresses.
   std::unique_ptr<ceres::LossFunction> loss_;
   std::unique_ptr<ceres::Problem> problem_;
+  std::vector<const ceres::CostFunction*> cost_functions_;  // Owned by problem_.
+  std::vector<size_t> cost_dataset_;
   LaserRefinementOptions options_;
   double odometry_[3];
   double base_T_sensor_[3];

@@ -10,6 +10,7 @@
 #include <gflags/gflags.h>
 
 #include "core/laser_log_io.h"
+#include "core/laser_simulator.h"
 #include "solvers/calibrate_laser.h"
 #include "tools/laser_report.h"
 
@@ -21,12 +22,28 @@ DEFINE_string(loss, "cauchy", "Robust loss: cauchy, huber or none");
 DEFINE_double(loss_scale, 3.0, "Scale of the robust loss, in whitened residual units");
 DEFINE_bool(quiet, false, "Do not print the summary on stdout");
 
+// `calib simulate`: a laser log with known truth.
+DEFINE_string(truth, "", "simulate: where to write the truth as JSON (optional)");
+DEFINE_int32(intervals, 2000, "simulate: number of intervals");
+DEFINE_uint64(seed, 1, "simulate: random seed");
+DEFINE_string(trajectory, "rich", "simulate: rich, straight, rotation or arc");
+DEFINE_double(noise_xy, 0.001, "simulate: scan-matching noise sigma on x and y (m)");
+DEFINE_double(noise_theta, 0.002, "simulate: scan-matching noise sigma on theta (rad)");
+DEFINE_double(outliers, 0.0, "simulate: fraction of slip outliers");
+DEFINE_double(time_offset, 0.0, "simulate: scans stamped t were taken at t + this (s)");
+DEFINE_double(lateral_slip, 0.0, "simulate: lateral velocity = this * v * omega (s)");
+DEFINE_double(longitudinal_slip, 0.0, "simulate: forward velocity = v - this * dv/dt (s)");
+DEFINE_double(radius_change_time, -1.0, "simulate: time of a wheel-radius change (s), < 0: none");
+DEFINE_double(r_l_after, 0.0, "simulate: left radius after the change (m)");
+DEFINE_double(r_r_after, 0.0, "simulate: right radius after the change (m)");
+
 namespace {
 
 constexpr char kUsage[] =
     "calib <command> [flags]\n"
     "  calibrate --input PATH --output OUT.json   estimate the calibration\n"
-    "  diagnose  --input PATH --output OUT.json   find physics the model leaves out\n";
+    "  diagnose  --input PATH --output OUT.json   find physics the model leaves out\n"
+    "  simulate  --output LOG [--truth T.json]    write a simulated laser log (.tuple or .csv)\n";
 
 int Fail(const std::string& message) {
   std::fprintf(stderr, "calib: error: %s\n", message.c_str());
@@ -88,6 +105,62 @@ int Calibrate() {
   return 0;
 }
 
+int Simulate() {
+  if (FLAGS_output.empty()) return Fail("--output is required");
+  calib::LaserSimOptions options;
+  options.num_intervals = FLAGS_intervals;
+  options.seed = FLAGS_seed;
+  if (FLAGS_trajectory == "rich") {
+    options.trajectory = calib::LaserTrajectory::kRich;
+  } else if (FLAGS_trajectory == "straight") {
+    options.trajectory = calib::LaserTrajectory::kStraight;
+  } else if (FLAGS_trajectory == "rotation") {
+    options.trajectory = calib::LaserTrajectory::kPureRotation;
+  } else if (FLAGS_trajectory == "arc") {
+    options.trajectory = calib::LaserTrajectory::kConstantArc;
+  } else {
+    return Fail("unknown --trajectory '" + FLAGS_trajectory + "' (rich, straight, rotation, arc)");
+  }
+  if (FLAGS_intervals <= 0) return Fail("--intervals must be positive");
+  options.scan_noise_sigma = Eigen::Vector3d(FLAGS_noise_xy, FLAGS_noise_xy, FLAGS_noise_theta);
+  options.outlier_fraction = FLAGS_outliers;
+  options.effects.time_offset_s = FLAGS_time_offset;
+  options.effects.lateral_slip_s = FLAGS_lateral_slip;
+  options.effects.longitudinal_slip_s = FLAGS_longitudinal_slip;
+  options.effects.radius_change_time_s = FLAGS_radius_change_time;
+  options.effects.left_radius_after_m = FLAGS_r_l_after;
+  options.effects.right_radius_after_m = FLAGS_r_r_after;
+  calib::LaserSimTruth truth;
+  const calib::LaserLog log = calib::SimulateLaserLog(options, &truth);
+  const bool csv = FLAGS_output.size() > 4 && FLAGS_output.substr(FLAGS_output.size() - 4) == ".csv";
+  const calib::Status written = csv ? calib::WriteLaserCsv(log, FLAGS_output)
+                                    : calib::WriteLaserTuples(log, FLAGS_output);
+  if (!written.ok()) return Fail(written.message());
+  if (!FLAGS_truth.empty()) {
+    nlohmann::ordered_json json;
+    json["problem"] = "laser";
+    json["estimate"] = {{"r_l", truth.odometry.left_radius_m},
+                        {"r_r", truth.odometry.right_radius_m},
+                        {"b", truth.odometry.wheelbase_m},
+                        {"sensor_x", truth.base_T_sensor(0)},
+                        {"sensor_y", truth.base_T_sensor(1)},
+                        {"sensor_theta", truth.base_T_sensor(2)}};
+    json["effects"] = {{"time_offset", truth.effects.time_offset_s},
+                       {"lateral_slip", truth.effects.lateral_slip_s},
+                       {"longitudinal_slip", truth.effects.longitudinal_slip_s},
+                       {"wheel_radius_change", truth.effects.radius_change_time_s},
+                       {"r_l_after", truth.effects.left_radius_after_m},
+                       {"r_r_after", truth.effects.right_radius_after_m}};
+    json["simulation"] = {{"intervals", FLAGS_intervals}, {"seed", FLAGS_seed},
+                          {"trajectory", FLAGS_trajectory}, {"noise_xy", FLAGS_noise_xy},
+                          {"noise_theta", FLAGS_noise_theta}, {"outliers", FLAGS_outliers}};
+    std::ofstream out(FLAGS_truth);
+    out << json.dump(2) << "\n";
+    if (!out) return Fail("cannot write " + FLAGS_truth);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -99,6 +172,7 @@ int main(int argc, char** argv) {
   }
   const std::string command = argv[1];
   if (command == "calibrate") return Calibrate();
+  if (command == "simulate") return Simulate();
   if (command == "diagnose") return Fail("diagnose is not available in this build yet");
   std::fprintf(stderr, "calib: unknown command '%s'\n%s", command.c_str(), kUsage);
   return 2;

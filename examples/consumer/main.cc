@@ -1,0 +1,29 @@
+// Calibrates a laser log in a few lines: calib_consumer LOG
+#include <cstdio>
+
+#include <calib/core/laser_log_io.h>
+#include <calib/solvers/calibrate_laser.h>
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: calib_consumer LOG\n");
+    return 2;
+  }
+  const calib::StatusOr<calib::LaserLog> log = calib::ReadLaserLog(argv[1]);
+  if (!log.ok()) {
+    std::fprintf(stderr, "%s\n", log.message().c_str());
+    return 1;
+  }
+  const calib::StatusOr<calib::LaserCalibrationResult> result =
+      calib::CalibrateLaser(log->intervals);
+  if (!result.ok()) {
+    std::fprintf(stderr, "%s\n", result.message().c_str());
+    return 1;
+  }
+  const calib::LaserParamVector estimate = result->estimate.ToVector();
+  for (int i = 0; i < calib::kNumLaserParams; ++i) {
+    std::printf("%s = %.6g ± %.2g\n", calib::kLaserParamNames[i].c_str(), estimate(i),
+                result->stddev(i));
+  }
+  return 0;
+}
