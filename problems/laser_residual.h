@@ -14,20 +14,21 @@ namespace calib {
 //   ŝ_pred = ℓ⁻¹ ∘ o(Δφ_l, Δφ_r; r_l, r_r, b) ∘ ℓ,   e = ŝ_pred⁻¹ ∘ ŝ  (e_θ wrapped),
 //   r = L·e,  with LᵀL the information of the scan-matching noise.
 // Parameter blocks: odometry = (r_l, r_r, b), base_T_sensor = (x, y, θ).
-// `sqrt_information` is held by pointer so that a re-estimated noise level applies without
-// rebuilding the problem; it must outlive the cost function.
+// The interval and `sqrt_information` are held by pointer (a million intervals are not copied, and
+// a re-estimated noise level applies without rebuilding the problem); both must outlive the cost
+// function.
 class LaserResidual {
  public:
   LaserResidual(const LaserInterval& interval, const Eigen::Matrix3d* sqrt_information)
-      : interval_(interval), sqrt_information_(sqrt_information) {}
+      : interval_(&interval), sqrt_information_(sqrt_information) {}
 
   template <typename T>
   bool operator()(const T* const odometry, const T* const base_T_sensor, T* residual) const {
     const Pose2<T> robot_motion = IntervalRobotMotion(odometry[0], odometry[1], odometry[2],
-                                                      interval_);
+                                                      *interval_);
     const Pose2<T> mounting(base_T_sensor[0], base_T_sensor[1], base_T_sensor[2]);
     const Pose2<T> predicted = SensorMotionFromRobotMotion(mounting, robot_motion);
-    Pose2<T> error = Between(predicted, Pose2<T>(interval_.sensor_motion.cast<T>()));
+    Pose2<T> error = Between(predicted, Pose2<T>(interval_->sensor_motion.cast<T>()));
     error(2) = WrapAngle(error(2));
     Eigen::Map<Eigen::Matrix<T, 3, 1>> whitened(residual);
     whitened = sqrt_information_->cast<T>() * error;
@@ -50,7 +51,7 @@ class LaserResidual {
   }
 
  private:
-  LaserInterval interval_;
+  const LaserInterval* interval_;
   const Eigen::Matrix3d* sqrt_information_;
 };
 

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/laser_log_io.h"
 #include "core/laser_simulator.h"
 
 namespace calib {
@@ -161,6 +162,23 @@ TEST(CalibrateLaserTest, JointLogsShareParametersAndKeepTheirNoise) {
   EXPECT_NEAR(joint->noise_sigma[1](0) / joint->noise_sigma[0](0), 3.0, 0.4);
   EXPECT_EQ(joint->samples, 2000);
   for (int i = 0; i < kNumLaserParams; ++i) EXPECT_LT(joint->stddev(i), alone->stddev(i));
+}
+
+// Raw encoder and scan-matcher streams, integrated into intervals (speeds vary inside them),
+// give the truth back.
+TEST(CalibrateLaserTest, RawStreamsAreIntegratedAndCalibrated) {
+  LaserSimOptions sim;
+  sim.num_intervals = 2000;
+  sim.seed = 31;
+  sim.speed_time_constant_s = 0.3;
+  const LaserStreams streams = SimulateLaserStreams(sim, /*encoder_rate_hz=*/100.0);
+  const StatusOr<LaserLog> log =
+      LaserLogFromStreams(streams.odometry, streams.sensor_poses, "simulated streams");
+  ASSERT_TRUE(log.ok()) << log.message();
+  EXPECT_FALSE(log->intervals[10].steps.empty());
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(log->intervals);
+  ASSERT_TRUE(result.ok()) << result.message();
+  ExpectWithinSigmas(*result, Truth(sim), 3.0);
 }
 
 TEST(CalibrateLaserTest, DegenerateLogsGiveTheMissingMotion) {
