@@ -1,10 +1,9 @@
 #ifndef CALIB_CORE_DIFF_DRIVE_H_
 #define CALIB_CORE_DIFF_DRIVE_H_
 
+#include <Eigen/Core>
 #include <cmath>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/se2.h"
 

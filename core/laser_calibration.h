@@ -1,10 +1,9 @@
 #ifndef CALIB_CORE_LASER_CALIBRATION_H_
 #define CALIB_CORE_LASER_CALIBRATION_H_
 
+#include <Eigen/Core>
 #include <array>
 #include <string>
-
-#include <Eigen/Core>
 
 #include "core/diff_drive.h"
 #include "core/se2.h"
@@ -24,8 +23,8 @@ struct LaserCalibration {
 
   LaserParamVector ToVector() const {
     LaserParamVector v;
-    v << odometry.left_radius_m, odometry.right_radius_m, odometry.wheelbase_m,
-        base_T_sensor(0), base_T_sensor(1), base_T_sensor(2);
+    v << odometry.left_radius_m, odometry.right_radius_m, odometry.wheelbase_m, base_T_sensor(0),
+        base_T_sensor(1), base_T_sensor(2);
     return v;
   }
   static LaserCalibration FromVector(const LaserParamVector& v) {

@@ -1,10 +1,9 @@
 #ifndef CALIB_CORE_LASER_LOG_H_
 #define CALIB_CORE_LASER_LOG_H_
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/diff_drive.h"
 #include "core/se2.h"
@@ -29,7 +28,7 @@ struct LaserInterval {
 };
 
 struct LaserLog {
-  std::string source;  // File name, for messages.
+  std::string source;           // File name, for messages.
   bool has_timestamps = false;  // True when start_s came from the input, not from summing T.
   std::vector<LaserInterval> intervals;
 };

@@ -1,9 +1,8 @@
 #ifndef CALIB_CORE_SE2_H_
 #define CALIB_CORE_SE2_H_
 
-#include <cmath>
-
 #include <Eigen/Core>
+#include <cmath>
 
 // Planar rigid motions as (x, y, theta), templated on the scalar so that the same code serves
 // double and ceres::Jet. Frame names follow `a_T_b`: the pose of frame b expressed in frame a.

@@ -2,8 +2,8 @@
 #define CALIB_CORE_WHITENING_H_
 
 #include <Eigen/Cholesky>
-#include <Eigen/LU>
 #include <Eigen/Core>
+#include <Eigen/LU>
 
 namespace calib {
 

@@ -24,8 +24,8 @@ class LaserResidual {
 
   template <typename T>
   bool operator()(const T* const odometry, const T* const base_T_sensor, T* residual) const {
-    const Pose2<T> robot_motion = IntervalRobotMotion(odometry[0], odometry[1], odometry[2],
-                                                      *interval_);
+    const Pose2<T> robot_motion =
+        IntervalRobotMotion(odometry[0], odometry[1], odometry[2], *interval_);
     const Pose2<T> mounting(base_T_sensor[0], base_T_sensor[1], base_T_sensor[2]);
     const Pose2<T> predicted = SensorMotionFromRobotMotion(mounting, robot_motion);
     Pose2<T> error = Between(predicted, Pose2<T>(interval_->sensor_motion.cast<T>()));

@@ -1,9 +1,9 @@
 #ifndef CALIB_PROBLEMS_POSITIVE_MANIFOLD_H_
 #define CALIB_PROBLEMS_POSITIVE_MANIFOLD_H_
 
-#include <cmath>
-
 #include <ceres/manifold.h>
+
+#include <cmath>
 
 namespace calib {
 

@@ -1,7 +1,7 @@
 #include "solvers/calibrate_laser.h"
 
-#include <chrono>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -146,9 +146,9 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   }
   std::vector<LaserDataset> datasets;
   for (size_t d = 0; d < logs.size(); ++d) {
-    datasets.push_back(LaserDataset{
-        logs[d], initial_sigma.empty() ? Eigen::Matrix3d::Identity()
-                                       : DiagonalSqrtInformation(initial_sigma[d])});
+    datasets.push_back(LaserDataset{logs[d], initial_sigma.empty()
+                                                 ? Eigen::Matrix3d::Identity()
+                                                 : DiagonalSqrtInformation(initial_sigma[d])});
   }
   LaserProblem problem(datasets, initial, options.refinement);
   const Status solved = RefineWithNoise(options, &problem, &result.iterations, report);
@@ -184,8 +184,8 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   result.covariance_scale = total <= kCeresCovarianceUpTo ? problem.covariance_scale() : 1.0;
   result.stddev = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
   result.covariance_seconds = SecondsSince(start);
-  result.observability = AnalyzeLaserObservability(result.covariance, result.estimate,
-                                                   result.census);
+  result.observability =
+      AnalyzeLaserObservability(result.covariance, result.estimate, result.census);
   if (result.inliers < result.samples / 2) {
     result.observability.warnings.push_back(
         "only " + std::to_string(result.inliers) + " of " + std::to_string(result.samples) +

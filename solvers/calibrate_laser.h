@@ -1,12 +1,11 @@
 #ifndef CALIB_SOLVERS_CALIBRATE_LASER_H_
 #define CALIB_SOLVERS_CALIBRATE_LASER_H_
 
+#include <Eigen/Core>
 #include <functional>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/laser_calibration.h"
 #include "core/laser_log.h"
@@ -44,8 +43,8 @@ struct LaserCalibrationResult {
   CensiClosedFormResult closed_form;
   int samples = 0;
   int inliers = 0;
-  std::vector<std::vector<bool>> is_inlier;   // Per log, per interval.
-  std::vector<Eigen::Vector3d> noise_sigma;   // Per log: the scan noise of its inliers.
+  std::vector<std::vector<bool>> is_inlier;  // Per log, per interval.
+  std::vector<Eigen::Vector3d> noise_sigma;  // Per log: the scan noise of its inliers.
   LaserMotionCensus census;
   LaserObservability observability;
   double covariance_scale = 1.0;  // The loss correction κ applied to Ceres' covariance.

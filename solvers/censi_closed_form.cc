@@ -1,10 +1,9 @@
 #include "solvers/censi_closed_form.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <string>
-
-#include <Eigen/Dense>
 
 #include "core/se2.h"
 #include "solvers/laser_motion.h"
@@ -88,8 +87,7 @@ StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>
   if (!(a_condition < options.max_condition_number * options.max_condition_number)) {
     return Status::Error(
         "the system for b and the sensor position is degenerate (condition number " +
-        std::to_string(a_condition) +
-        "): the log needs both arcs (or straight runs) and turns");
+        std::to_string(a_condition) + "): the log needs both arcs (or straight runs) and turns");
   }
   const Eigen::LDLT<Eigen::Matrix3d> a_ldlt(a);
   const Eigen::Matrix2d schur = cc - b.transpose() * a_ldlt.solve(b);
@@ -101,8 +99,9 @@ StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>
   x.tail<2>() = q;
   if (x(0) < 0.0) x = -x;  // Constraint (19): b > 0.
   if (!(x(0) > 0.0) || !x.allFinite()) {
-    return Status::Error("the closed form gave a non-positive wheelbase: the data do not fit a "
-                         "differential-drive robot (check the sign of the wheel speeds)");
+    return Status::Error(
+        "the closed form gave a non-positive wheelbase: the data do not fit a "
+        "differential-drive robot (check the sign of the wheel speeds)");
   }
   // r_l = −b·J21 and r_r = +b·J22 (the paper's final formulas print the signs the wrong way).
   result.calibration.odometry = OdometryParams{-x(0) * result.j21, x(0) * result.j22, x(0)};
@@ -134,8 +133,8 @@ StatusOr<TrimmedClosedFormResult> CensiClosedFormTrimmed(
     for (size_t k = 0; k < intervals.size(); ++k) {
       const Pose2d o = IntervalRobotMotion(cal.odometry.left_radius_m, cal.odometry.right_radius_m,
                                            cal.odometry.wheelbase_m, intervals[k]);
-      const Pose2d e = Compose(cal.base_T_sensor, intervals[k].sensor_motion) -
-                       Compose(o, cal.base_T_sensor);
+      const Pose2d e =
+          Compose(cal.base_T_sensor, intervals[k].sensor_motion) - Compose(o, cal.base_T_sensor);
       xy_error[k] = e.head<2>().norm();
       theta_error[k] = std::abs(WrapAngle(e(2)));
       if (result.kept[k]) {

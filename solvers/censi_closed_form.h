@@ -17,10 +17,10 @@ struct CensiClosedFormOptions {
 
 struct CensiClosedFormResult {
   LaserCalibration calibration;
-  double j21 = 0.0;  // −r_l/b
-  double j22 = 0.0;  // +r_r/b
-  double j_condition_number = 0.0;   // Of the stacked [Δφ_l Δφ_r] system (eq. 8).
-  double lambda = 0.0;               // Lagrange multiplier of the constraint x4² + x5² = 1.
+  double j21 = 0.0;                 // −r_l/b
+  double j22 = 0.0;                 // +r_r/b
+  double j_condition_number = 0.0;  // Of the stacked [Δφ_l Δφ_r] system (eq. 8).
+  double lambda = 0.0;              // Lagrange multiplier of the constraint x4² + x5² = 1.
   int samples_used = 0;
 };
 

@@ -4,7 +4,7 @@
 
 namespace calib {
 namespace {
-constexpr double kStillRad = 1e-6;     // Below this total rotation the wheels are at rest.
+constexpr double kStillRad = 1e-6;       // Below this total rotation the wheels are at rest.
 constexpr double kComponentShare = 0.1;  // Share of the rotation that counts as turning/moving.
 constexpr int kMinimumIntervals = 3;
 }  // namespace
@@ -41,14 +41,14 @@ std::string DescribeMissingLaserMotion(const LaserMotionCensus& census) {
            "): nothing can be calibrated; drive turns and arcs";
   }
   if (census.turning() < kMinimumIntervals) {
-    return "the robot never turns (" + std::to_string(census.straight) +
-           " straight intervals, " + std::to_string(census.turning()) +
+    return "the robot never turns (" + std::to_string(census.straight) + " straight intervals, " +
+           std::to_string(census.turning()) +
            " turning): the wheel radii relative to the wheelbase and the sensor position are "
            "not observable; drive some turns and arcs";
   }
   if (census.translating() < kMinimumIntervals) {
-    return "all intervals are pure rotations (" + std::to_string(census.pure_rotation) +
-           " of " + std::to_string(census.total) +
+    return "all intervals are pure rotations (" + std::to_string(census.pure_rotation) + " of " +
+           std::to_string(census.total) +
            "): b and the sensor position are not observable; drive some arcs or straight runs";
   }
   return "";

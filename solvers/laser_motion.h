@@ -13,10 +13,10 @@ namespace calib {
 // when |Δφ_r + Δφ_l| is.
 struct LaserMotionCensus {
   int total = 0;
-  int still = 0;           // Wheels (nearly) at rest.
-  int pure_rotation = 0;   // Turning on the spot.
-  int straight = 0;        // Driving without turning.
-  int arc = 0;             // Turning and translating together.
+  int still = 0;          // Wheels (nearly) at rest.
+  int pure_rotation = 0;  // Turning on the spot.
+  int straight = 0;       // Driving without turning.
+  int arc = 0;            // Turning and translating together.
   int turning() const { return pure_rotation + arc; }
   int translating() const { return straight + arc; }
 };
@@ -34,7 +34,8 @@ inline Eigen::Vector2d IntervalWheelRotation(const LaserInterval& interval) {
     return Eigen::Vector2d(interval.left_speed, interval.right_speed) * interval.duration_s;
   }
   Eigen::Vector2d total = Eigen::Vector2d::Zero();
-  for (const WheelStep& step : interval.steps) total += Eigen::Vector2d(step.left_rad, step.right_rad);
+  for (const WheelStep& step : interval.steps)
+    total += Eigen::Vector2d(step.left_rad, step.right_rad);
   return total;
 }
 

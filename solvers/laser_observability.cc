@@ -1,11 +1,10 @@
 #include "solvers/laser_observability.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numeric>
-
-#include <Eigen/Eigenvalues>
 
 namespace calib {
 namespace {
@@ -51,16 +50,18 @@ LaserObservability AnalyzeLaserObservability(const LaserParamMatrix& covariance,
   double carried = 0.0;
   for (int i : order) {
     const double component = sign * report.weakest_direction(i);
-    if (!words.empty()) words += component < 0 ? " − " : " + ";
-    else if (component < 0) words += "−";
+    if (!words.empty())
+      words += component < 0 ? " − " : " + ";
+    else if (component < 0)
+      words += "−";
     words += Format("%.2f·", std::abs(component)) + kLaserParamNames[i];
     carried += component * component;
     if (carried > 0.9) break;
   }
-  report.weakest_description =
-      "weakest direction " + words + " (relative σ " +
-      Format("%.2g", report.weakest_relative_sigma) + ", scaled condition number " +
-      Format("%.3g", report.condition_number) + ")";
+  report.weakest_description = "weakest direction " + words + " (relative σ " +
+                               Format("%.2g", report.weakest_relative_sigma) +
+                               ", scaled condition number " +
+                               Format("%.3g", report.condition_number) + ")";
 
   for (int i = 0; i < kNumLaserParams; ++i) {
     if (report.relative_sigma(i) > kPoorRelativeSigma || !std::isfinite(report.relative_sigma(i))) {

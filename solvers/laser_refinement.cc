@@ -1,9 +1,8 @@
 #include "solvers/laser_refinement.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Dense>
 
 #include "problems/laser_residual.h"
 #include "problems/positive_manifold.h"
@@ -87,8 +86,9 @@ Status LaserProblem::Solve(ceres::Solver::Summary* summary) {
     return Status::Error("the refinement failed: " + local_summary.message);
   }
   if (!(odometry_[0] > 0.0 && odometry_[1] > 0.0 && odometry_[2] > 0.0)) {
-    return Status::Error("the refinement drove a wheel radius or the wheelbase to a non-positive "
-                         "value: the data do not fit a differential-drive robot");
+    return Status::Error(
+        "the refinement drove a wheel radius or the wheelbase to a non-positive "
+        "value: the data do not fit a differential-drive robot");
   }
   return Status::Ok();
 }
@@ -142,8 +142,9 @@ StatusOr<LaserParamMatrix> LaserProblem::Covariance() const {
   ceres::Covariance covariance(covariance_options);
   const std::vector<const double*> blocks = {odometry_, base_T_sensor_};
   if (!covariance.Compute(blocks, problem_.get())) {
-    return Status::Error("the information matrix is singular: the log does not determine all six "
-                         "parameters");
+    return Status::Error(
+        "the information matrix is singular: the log does not determine all six "
+        "parameters");
   }
   LaserParamMatrix cov;
   if (!covariance.GetCovarianceMatrix(blocks, cov.data())) {
@@ -195,8 +196,9 @@ StatusOr<LaserParamMatrix> LaserProblem::SandwichCovariance() const {
   if (n <= kNumLaserParams) return Status::Error("too few intervals for a covariance");
   const Eigen::LDLT<LaserParamMatrix> ldlt(bread);
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
-    return Status::Error("the information matrix is singular: the log does not determine all six "
-                         "parameters");
+    return Status::Error(
+        "the information matrix is singular: the log does not determine all six "
+        "parameters");
   }
   const LaserParamMatrix inverse = ldlt.solve(LaserParamMatrix::Identity());
   return LaserParamMatrix(inverse * meat * inverse * (n / (n - kNumLaserParams)));

@@ -1,13 +1,12 @@
 #ifndef CALIB_SOLVERS_LASER_REFINEMENT_H_
 #define CALIB_SOLVERS_LASER_REFINEMENT_H_
 
-#include <memory>
-#include <string>
-#include <vector>
-
 #include <ceres/ceres.h>
 
 #include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
 
 #include "core/laser_calibration.h"
 #include "core/laser_log.h"
@@ -50,7 +49,9 @@ class LaserProblem {
   void set_calibration(const LaserCalibration& calibration);
 
   size_t num_datasets() const { return datasets_.size(); }
-  const Eigen::Matrix3d& sqrt_information(size_t dataset) const { return *sqrt_information_[dataset]; }
+  const Eigen::Matrix3d& sqrt_information(size_t dataset) const {
+    return *sqrt_information_[dataset];
+  }
   void SetSqrtInformation(size_t dataset, const Eigen::Matrix3d& sqrt_information);
 
   // Unwhitened errors e (see LaserResidual) of every interval of a dataset.

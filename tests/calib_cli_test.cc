@@ -1,13 +1,13 @@
 // The offline tool as a user runs it: exit status, messages, and the contract's JSON keys.
+#include <gtest/gtest.h>
+
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
-
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 namespace {
 
@@ -62,8 +62,8 @@ class CalibCliTest : public ::testing::Test {
     EXPECT_GT(run.exit_code, 0) << "crashed: " << args;
     EXPECT_LT(run.exit_code, 128) << "crashed: " << args;
     for (const std::string& needle : needles) {
-      EXPECT_NE(run.err.find(needle), std::string::npos)
-          << "stderr lacks '" << needle << "':\n" << run.err;
+      EXPECT_NE(run.err.find(needle), std::string::npos) << "stderr lacks '" << needle << "':\n"
+                                                         << run.err;
     }
   }
 
@@ -114,8 +114,7 @@ TEST_F(CalibCliTest, NanValue) {
 }
 
 TEST_F(CalibCliTest, MissingCsvColumn) {
-  const fs::path path =
-      Write("missing.csv", "T,phi_l,phi_r,sm_x,sm_y\n0.8,0.4,0.5,0.008,0.0001\n");
+  const fs::path path = Write("missing.csv", "T,phi_l,phi_r,sm_x,sm_y\n0.8,0.4,0.5,0.008,0.0001\n");
   ExpectFailure(Calibrate(path), {"missing.csv", "sm_theta"});
 }
 
@@ -132,9 +131,8 @@ TEST_F(CalibCliTest, OnlyPureRotations) {
   std::string text;
   for (int k = 0; k < 100; ++k) {
     const double s = (k % 2 ? 1 : -1) * 0.5;
-    text += "{ \"T\": 0.8, \"phi_l\": " + std::to_string(s) + ", \"phi_r\": " +
-            std::to_string(-s) + ", \"sm\": [ 0.0001, 0.0002, " + std::to_string(-s * 0.37) +
-            " ] }\n";
+    text += "{ \"T\": 0.8, \"phi_l\": " + std::to_string(s) + ", \"phi_r\": " + std::to_string(-s) +
+            ", \"sm\": [ 0.0001, 0.0002, " + std::to_string(-s * 0.37) + " ] }\n";
   }
   const fs::path path = Write("rotations.tuple", text);
   ExpectFailure(Calibrate(path), {"rotations.tuple", "pure rotations", "not observable"});

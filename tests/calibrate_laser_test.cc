@@ -1,8 +1,8 @@
 #include "solvers/calibrate_laser.h"
 
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "core/laser_log_io.h"
 #include "core/laser_simulator.h"
@@ -61,8 +61,7 @@ TEST(CalibrateLaserTest, NoisyLogWithinThreeSigmas) {
   for (int j = 0; j < 3; ++j) {
     EXPECT_NEAR(result->noise_sigma[0](j), sim.scan_noise_sigma(j), 0.1 * sim.scan_noise_sigma(j));
   }
-  EXPECT_TRUE(result->observability.warnings.empty())
-      << result->observability.warnings.front();
+  EXPECT_TRUE(result->observability.warnings.empty()) << result->observability.warnings.front();
 }
 
 TEST(CalibrateLaserTest, RobustToTenPercentSlipOutliers) {
@@ -110,8 +109,7 @@ TEST(CalibrateLaserTest, ReportedSigmasAreHonest) {
     sim.num_intervals = 1500;
     sim.seed = seed;
     sim.outlier_fraction = 0.02;
-    const StatusOr<LaserCalibrationResult> result =
-        CalibrateLaser(SimulateLaserLog(sim).intervals);
+    const StatusOr<LaserCalibrationResult> result = CalibrateLaser(SimulateLaserLog(sim).intervals);
     ASSERT_TRUE(result.ok()) << result.message();
     const LaserParamVector z =
         (result->estimate.ToVector() - Truth(sim).ToVector()).cwiseQuotient(result->stddev);
@@ -205,17 +203,34 @@ TEST(CalibrateLaserTest, BadIntervalsAreNamed) {
   EXPECT_NE(result.message().find("record 8"), std::string::npos) << result.message();
 }
 
-TEST(CalibrateLaserTest, SingleArcLogWarnsAboutObservability) {
+TEST(CalibrateLaserTest, SingleArcIsDegenerate) {
   LaserSimOptions sim;
   sim.trajectory = LaserTrajectory::kConstantArc;
   sim.num_intervals = 500;
   const StatusOr<LaserCalibrationResult> result = CalibrateLaser(SimulateLaserLog(sim).intervals);
-  // One arc cannot separate the radii from the wheelbase: either a status or a warning.
-  if (result.ok()) {
-    EXPECT_FALSE(result->observability.warnings.empty());
-  } else {
-    EXPECT_FALSE(result.message().empty());
+  // One wheel-speed ratio cannot separate J21 from J22.
+  ASSERT_FALSE(result.ok());
+  EXPECT_NE(result.message().find("different wheel-speed ratios"), std::string::npos)
+      << result.message();
+}
+
+// Few turns: the estimate exists, and the report says that the sensor position rests on little.
+TEST(CalibrateLaserTest, ThinTurningWarns) {
+  LaserSimOptions straight, rich;
+  straight.trajectory = LaserTrajectory::kStraight;
+  straight.num_intervals = 2000;
+  rich.num_intervals = 40;
+  rich.seed = 3;
+  std::vector<LaserInterval> intervals = SimulateLaserLog(straight).intervals;
+  const LaserLog turns = SimulateLaserLog(rich);
+  intervals.insert(intervals.end(), turns.intervals.begin(), turns.intervals.end());
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(intervals);
+  ASSERT_TRUE(result.ok()) << result.message();
+  bool warned = false;
+  for (const std::string& warning : result->observability.warnings) {
+    warned |= warning.find("few intervals turn") != std::string::npos;
   }
+  EXPECT_TRUE(warned);
 }
 
 }  // namespace

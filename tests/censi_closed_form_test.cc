@@ -1,8 +1,8 @@
 #include "solvers/censi_closed_form.h"
 
-#include <random>
-
 #include <gtest/gtest.h>
+
+#include <random>
 
 #include "core/se2.h"
 

@@ -1,11 +1,11 @@
 // The published recordings of Censi et al. (../shared/data/censi2013): our calibration against
 // the authors' published results, and the three disjoint subsets of each set against each other.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-
-#include <gtest/gtest.h>
 
 #include "core/laser_log_io.h"
 #include "solvers/calibrate_laser.h"
@@ -69,7 +69,8 @@ TEST_P(CensiDataTest, AgreesWithThePublishedResult) {
 
 TEST_P(CensiDataTest, DisjointSubsetsAgreeWithinThreeSigmas) {
   std::vector<LaserCalibrationResult> subsets;
-  for (int k = 0; k < 3; ++k) subsets.push_back(Calibrate(GetParam() + "_" + std::to_string(k) + ".tuple"));
+  for (int k = 0; k < 3; ++k)
+    subsets.push_back(Calibrate(GetParam() + "_" + std::to_string(k) + ".tuple"));
   for (int a = 0; a < 3; ++a) {
     for (int b = a + 1; b < 3; ++b) {
       for (int i = 0; i < kNumLaserParams; ++i) {

@@ -1,10 +1,10 @@
 #include "problems/laser_residual.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <limits>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "core/whitening.h"
 
@@ -19,8 +19,8 @@ LaserInterval ExactInterval(double left_speed, double right_speed, double durati
   interval.duration_s = duration;
   interval.left_speed = left_speed;
   interval.right_speed = right_speed;
-  interval.sensor_motion = SensorMotionFromRobotMotion(
-      kMounting, IntervalRobotMotion(kRl, kRr, kB, interval));
+  interval.sensor_motion =
+      SensorMotionFromRobotMotion(kMounting, IntervalRobotMotion(kRl, kRr, kB, interval));
   return interval;
 }
 

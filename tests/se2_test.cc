@@ -1,9 +1,9 @@
 #include "core/se2.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "core/diff_drive.h"
 
@@ -88,8 +88,8 @@ Pose2d IntegrateUnicycle(double v, double w, double duration, int steps) {
 TEST(DiffDriveTest, ArcMatchesNumericalIntegration) {
   for (double w : {-2.0, -0.3, -1e-3, -1e-9, 0.0, 1e-7, 5e-3, 0.011, 0.7, 3.0}) {
     const double v = 0.3, duration = 0.9;
-    ExpectPoseNear(ArcDisplacement(v * duration, w * duration), IntegrateUnicycle(v, w, duration, 2000),
-                   1e-12);
+    ExpectPoseNear(ArcDisplacement(v * duration, w * duration),
+                   IntegrateUnicycle(v, w, duration, 2000), 1e-12);
   }
 }
 

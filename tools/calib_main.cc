@@ -1,5 +1,7 @@
 // calib: offline calibration of a differential-drive robot from its own logs.
 //   calib calibrate --input PATH --output OUT.json [--format ...] [--loss ...]
+#include <gflags/gflags.h>
+
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -7,15 +9,14 @@
 #include <string>
 #include <vector>
 
-#include <gflags/gflags.h>
-
 #include "core/laser_log_io.h"
 #include "core/laser_simulator.h"
 #include "solvers/calibrate_laser.h"
 #include "tools/laser_report.h"
 
-DEFINE_string(input, "", "Laser log file (tuples or CSV), a raw-stream directory, or several "
-                         "laser logs separated by commas to calibrate jointly");
+DEFINE_string(input, "",
+              "Laser log file (tuples or CSV), a raw-stream directory, or several "
+              "laser logs separated by commas to calibrate jointly");
 DEFINE_string(output, "", "Where to write the JSON result");
 DEFINE_string(format, "auto", "Laser log format: auto, tuples, csv or stream");
 DEFINE_string(loss, "cauchy", "Robust loss: cauchy, huber or none");
@@ -132,27 +133,26 @@ int Simulate() {
   options.effects.right_radius_after_m = FLAGS_r_r_after;
   calib::LaserSimTruth truth;
   const calib::LaserLog log = calib::SimulateLaserLog(options, &truth);
-  const bool csv = FLAGS_output.size() > 4 && FLAGS_output.substr(FLAGS_output.size() - 4) == ".csv";
-  const calib::Status written = csv ? calib::WriteLaserCsv(log, FLAGS_output)
-                                    : calib::WriteLaserTuples(log, FLAGS_output);
+  const bool csv =
+      FLAGS_output.size() > 4 && FLAGS_output.substr(FLAGS_output.size() - 4) == ".csv";
+  const calib::Status written =
+      csv ? calib::WriteLaserCsv(log, FLAGS_output) : calib::WriteLaserTuples(log, FLAGS_output);
   if (!written.ok()) return Fail(written.message());
   if (!FLAGS_truth.empty()) {
     nlohmann::ordered_json json;
     json["problem"] = "laser";
-    json["estimate"] = {{"r_l", truth.odometry.left_radius_m},
-                        {"r_r", truth.odometry.right_radius_m},
-                        {"b", truth.odometry.wheelbase_m},
-                        {"sensor_x", truth.base_T_sensor(0)},
-                        {"sensor_y", truth.base_T_sensor(1)},
-                        {"sensor_theta", truth.base_T_sensor(2)}};
+    json["estimate"] = {
+        {"r_l", truth.odometry.left_radius_m}, {"r_r", truth.odometry.right_radius_m},
+        {"b", truth.odometry.wheelbase_m},     {"sensor_x", truth.base_T_sensor(0)},
+        {"sensor_y", truth.base_T_sensor(1)},  {"sensor_theta", truth.base_T_sensor(2)}};
     json["effects"] = {{"time_offset", truth.effects.time_offset_s},
                        {"lateral_slip", truth.effects.lateral_slip_s},
                        {"longitudinal_slip", truth.effects.longitudinal_slip_s},
                        {"wheel_radius_change", truth.effects.radius_change_time_s},
                        {"r_l_after", truth.effects.left_radius_after_m},
                        {"r_r_after", truth.effects.right_radius_after_m}};
-    json["simulation"] = {{"intervals", FLAGS_intervals}, {"seed", FLAGS_seed},
-                          {"trajectory", FLAGS_trajectory}, {"noise_xy", FLAGS_noise_xy},
+    json["simulation"] = {{"intervals", FLAGS_intervals},     {"seed", FLAGS_seed},
+                          {"trajectory", FLAGS_trajectory},   {"noise_xy", FLAGS_noise_xy},
                           {"noise_theta", FLAGS_noise_theta}, {"outliers", FLAGS_outliers}};
     std::ofstream out(FLAGS_truth);
     out << json.dump(2) << "\n";

@@ -1,9 +1,8 @@
 #ifndef CALIB_TOOLS_LASER_REPORT_H_
 #define CALIB_TOOLS_LASER_REPORT_H_
 
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "solvers/calibrate_laser.h"
 

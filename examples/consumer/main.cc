@@ -1,8 +1,8 @@
 // Calibrates a laser log in a few lines: calib_consumer LOG
-#include <cstdio>
-
 #include <calib/core/laser_log_io.h>
 #include <calib/solvers/calibrate_laser.h>
+
+#include <cstdio>
 
 int main(int argc, char** argv) {
   if (argc != 2) {
