@@ -273,8 +273,8 @@ StatusOr<MartinelliRunEstimate> FitRun(const CircularRunSamples& samples, double
   const int n = static_cast<int>(s.size());
   if (n < 8) {
     return Status::Error(name + ": " + std::to_string(n) +
-                         " bearing(s); a circular run needs at least 8 (more than a period's "
-                         "worth at several per radian of turn)");
+                         " bearing(s); a circular run needs at least 8 to fix its period, node, "
+                         "L and k");
   }
   const auto [s_lo, s_hi] = std::minmax_element(s.begin(), s.end());
   const double span = *s_hi - *s_lo;
@@ -316,33 +316,45 @@ StatusOr<MartinelliRunEstimate> FitRun(const CircularRunSamples& samples, double
                          " m of right-wheel travel; they span " + Num(span) + " m); at least " +
                          Num(options.min_periods, 3) + " of a period (one loop) is needed");
   }
-  // Algorithm 1 (the node), eq. 35 (L), eq. 36 (k).
-  StatusOr<NodeSearch> node = FindNodeAlgorithm1(s, beta, xi_q, options.node_grid_points);
-  if (!node.ok()) return Status::Error(name + ": " + node.message());
-  run.node_algorithm1_m = node->node_m;
-  run.spread_algorithm1_rad = node->spread_rad;
-  const PeriodicBearings table(s, beta, xi_q);
-  double beta_m1 = 0.0, beta_m2 = 0.0;
-  const bool have_mirrors = table.At(node->node_m + 0.25 * period, &beta_m1) &&
-                            table.At(node->node_m + 0.75 * period, &beta_m2);
-  run.k_mirror_points_per_m =
-      have_mirrors ? KFromMirrorBearings(beta_m1, beta_m2, xi_q) : std::nan("");
-
-  BearingCircle circle;
-  if (options.refine_with_all_samples) {
-    // The fitted circle with its node the one Algorithm 1 found (nodes repeat every π/|ξq|).
-    circle = *fitted;
-    const double shift = NearestModulo(circle.node_m, 0.5 * period, node->node_m) - circle.node_m;
-    if (std::fmod(std::abs(std::round(shift / (0.5 * period))), 2.0) == 1.0) {
-      circle.ratio = -circle.ratio;
+  // Algorithm 1 (the node), eq. 35 (L), eq. 36 (k). With bearings missing over much of the circle
+  // (a narrow field of view) it may find no mirrored pairs; the all-sample circle does not need it.
+  const StatusOr<NodeSearch> node = FindNodeAlgorithm1(s, beta, xi_q, options.node_grid_points);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  run.node_algorithm1_m = node.ok() ? node->node_m : nan;
+  run.spread_algorithm1_rad = node.ok() ? node->spread_rad : nan;
+  run.k_mirror_points_per_m = nan;
+  run.l_algorithm1_rad = nan;
+  if (node.ok()) {
+    const PeriodicBearings table(s, beta, xi_q);
+    double beta_m1 = 0.0, beta_m2 = 0.0;
+    if (table.At(node->node_m + 0.25 * period, &beta_m1) &&
+        table.At(node->node_m + 0.75 * period, &beta_m2)) {
+      run.k_mirror_points_per_m = KFromMirrorBearings(beta_m1, beta_m2, xi_q);
     }
-    circle.node_m += shift;
+    run.l_algorithm1_rad = 0.5 * M_PI - 0.5 * node->symmetric_sum_rad;
+  }
+
+  BearingCircle circle = *fitted;
+  if (options.refine_with_all_samples) {
+    // The fitted circle, with its node the one Algorithm 1 found (nodes repeat every π/|ξq|).
+    if (node.ok()) {
+      const double shift = NearestModulo(circle.node_m, 0.5 * period, node->node_m) - circle.node_m;
+      if (std::fmod(std::abs(std::round(shift / (0.5 * period))), 2.0) == 1.0) {
+        circle.ratio = -circle.ratio;
+      }
+      circle.node_m += shift;
+    }
   } else {
+    if (!node.ok() || !std::isfinite(run.k_mirror_points_per_m)) {
+      return Status::Error(name + ": " +
+                           (node.ok() ? std::string("the mirror points of eq. 36 fall in a gap of "
+                                                    "the bearings")
+                                      : node.message()) +
+                           "; use the all-sample refinement");
+    }
     // θC ≡ sum/2 (mod π) and |r| from eq. 36; the sign pair that fits the bearings.
-    circle.xi_q_per_m = xi_q;
     circle.node_m = node->node_m;
-    const double r2 = 1.0 - xi_q / run.k_mirror_points_per_m;
-    const double r_abs = std::sqrt(std::max(r2, 0.0));
+    const double r_abs = std::sqrt(std::max(1.0 - xi_q / run.k_mirror_points_per_m, 0.0));
     double best = std::numeric_limits<double>::infinity();
     for (double theta : {0.5 * node->symmetric_sum_rad, 0.5 * node->symmetric_sum_rad + M_PI}) {
       for (double ratio : {r_abs, -r_abs}) {
@@ -361,7 +373,6 @@ StatusOr<MartinelliRunEstimate> FitRun(const CircularRunSamples& samples, double
   run.circle_covariance = CircleCovariance(circle, s, beta);
   // Provisional L (mod π, in [0, π)); the branch is chosen once ψ is known.
   run.l_rad = CircleLModPi(circle);
-  run.l_algorithm1_rad = 0.5 * M_PI - 0.5 * node->symmetric_sum_rad;
   return run;
 }
 

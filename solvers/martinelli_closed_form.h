@@ -2,6 +2,7 @@
 #define CALIB_SOLVERS_MARTINELLI_CLOSED_FORM_H_
 
 #include <Eigen/Core>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -14,13 +15,15 @@
 // eq. 35), L, c, k; then over ≥ 3 runs with distinct q the parameters φ, ψ, η, δ, ξ, and with an
 // initial distance D0 also ρ, δR, δL, δB.
 //
-// Two additions to the paper, both closed form. (1) On a circle, β(s) = θC + arg(1 + r·e^{iχ})
+// Additions to the paper, all closed form. (1) On a circle, β(s) = θC + arg(1 + r·e^{iχ})
 // (core/bearing_model.h, BearingCircle): for a trial ξq the condition "e^{iβj} ∥ a + b·e^{−iξq·sj}"
 // is linear and homogeneous in the complex a, b, so the period is found by a 1-D search whose
-// cost is the smallest eigenvalue of a 4×4 matrix, using every sample wherever it lies in s; the
-// same eigenvector gives θC, r and the node exactly (Algorithm 1's node is kept and reported).
-// (2) The mod-2π form of eq. 35, β(s) + β(ŝ) = π − 2L, and the sign of the centre's direction fix
-// L modulo π and ψ modulo 2π, which the paper's mod-π equations leave open.
+// cost is the least eigenvalue of a 4×4 (generalized) eigenproblem, using every sample wherever
+// it lies in s; the same eigenvector gives θC, r and the node exactly. Algorithm 1 and eq. 36 are
+// still run and reported, and used instead with refine_with_all_samples = false. (2) The mod-2π
+// form of eq. 35, β(s) + β(ŝ) = π − 2L, and the sign of the centre's direction fix L modulo π and
+// ψ modulo 2π, which the paper's mod-π equations leave open. (3) ξ and δ by least squares over all
+// runs, weighted by each ξq's variance.
 namespace calib {
 
 struct MartinelliOptions {
@@ -56,10 +59,10 @@ struct MartinelliRunEstimate {
   double k_mirror_points_per_m = 0.0;  // Eq. 36 from the bearings at two mirror points.
   double c_rad = 0.0;                  // Eq. 21, consistent with the node through eq. 26 for s_w.
   int s_w = 1;
-  double c_candidates_rad[2] = {0.0, 0.0};  // Eq. 26 for S_w = +1, −1, wrapped to (−π/2, π/2].
-  double a0 = 0.0, v0 = 0.0;                // A and V (eq. 15) at s = 0.
-  double mu0 = 0.0, gamma0_rad = 0.0;       // μ and γ (eq. 3) at s = 0.
-  double rms_residual_rad = 0.0;            // Bearing residual of the fitted circle.
+  std::array<double, 2> c_candidates_rad{};  // Eq. 26 for S_w = +1, −1, in (−π/2, π/2].
+  double a0 = 0.0, v0 = 0.0;                 // A and V (eq. 15) at s = 0.
+  double mu0 = 0.0, gamma0_rad = 0.0;        // μ and γ (eq. 3) at s = 0.
+  double rms_residual_rad = 0.0;             // Bearing residual of the fitted circle.
   // Covariance of (ξq, node, θC, r) from the residuals (first order, s taken as exact).
   Eigen::Matrix4d circle_covariance = Eigen::Matrix4d::Zero();
   double parallax = 0.0;  // min(|r|, 1/|r|).
