@@ -10,9 +10,20 @@
 
 namespace calib {
 
+// The mismatch ŝ ⊖ ŝ_pred between a measured and a predicted sensor displacement, expressed in
+// the sensor frame at the interval start, where the scan matcher reports ŝ and its noise lives:
+//   e = R(ŝ_pred,θ)·(ŝ_pred⁻¹ ∘ ŝ)_xy , wrap(ŝ_θ − ŝ_pred,θ)  =  (ŝ_xy − ŝ_pred,xy, wrap(ŝ_θ − ŝ_pred,θ)).
+// (Whitening ŝ_pred⁻¹ ∘ ŝ itself would apply an anisotropic noise model in a frame rotated by
+// ŝ_pred,θ.)
+template <typename T>
+Eigen::Matrix<T, 3, 1> SensorMotionError(const Pose2<T>& predicted, const Pose2d& measured) {
+  return Eigen::Matrix<T, 3, 1>(T(measured(0)) - predicted(0), T(measured(1)) - predicted(1),
+                                WrapAngle(T(measured(2)) - predicted(2)));
+}
+
 // Pose-composition residual of one laser interval (Censi eq. 9 as a measurement model):
-//   ŝ_pred = ℓ⁻¹ ∘ o(Δφ_l, Δφ_r; r_l, r_r, b) ∘ ℓ,   e = ŝ_pred⁻¹ ∘ ŝ  (e_θ wrapped),
-//   r = L·e,  with LᵀL the information of the scan-matching noise.
+//   ŝ_pred = ℓ⁻¹ ∘ o(Δφ_l, Δφ_r; r_l, r_r, b) ∘ ℓ,   r = L·SensorMotionError(ŝ_pred, ŝ),
+// with LᵀL the information of the scan-matching noise.
 // Parameter blocks: odometry = (r_l, r_r, b), base_T_sensor = (x, y, θ).
 // The interval and `sqrt_information` are held by pointer (a million intervals are not copied, and
 // a re-estimated noise level applies without rebuilding the problem); both must outlive the cost
@@ -28,8 +39,7 @@ class LaserResidual {
         IntervalRobotMotion(odometry[0], odometry[1], odometry[2], *interval_);
     const Pose2<T> mounting(base_T_sensor[0], base_T_sensor[1], base_T_sensor[2]);
     const Pose2<T> predicted = SensorMotionFromRobotMotion(mounting, robot_motion);
-    Pose2<T> error = Between(predicted, Pose2<T>(interval_->sensor_motion.cast<T>()));
-    error(2) = WrapAngle(error(2));
+    const Eigen::Matrix<T, 3, 1> error = SensorMotionError(predicted, interval_->sensor_motion);
     Eigen::Map<Eigen::Matrix<T, 3, 1>> whitened(residual);
     whitened = sqrt_information_->cast<T>() * error;
     return true;

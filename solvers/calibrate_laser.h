@@ -40,7 +40,8 @@ struct LaserCalibrationResult {
   LaserCalibration estimate;
   LaserParamMatrix covariance = LaserParamMatrix::Zero();
   LaserParamVector stddev = LaserParamVector::Zero();
-  CensiClosedFormResult closed_form;
+  CensiClosedFormResult closed_form;          // The paper's closed form on all data.
+  CensiClosedFormResult closed_form_trimmed;  // With its trimming: the refinement's seed.
   int samples = 0;
   int inliers = 0;
   std::vector<std::vector<bool>> is_inlier;  // Per log, per interval.

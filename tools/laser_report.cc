@@ -27,6 +27,7 @@ nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
   out["estimate"] = ParamObject(result.estimate.ToVector());
   out["stddev"] = ParamObject(result.stddev);
   out["closed_form"] = ParamObject(result.closed_form.calibration.ToVector());
+  out["closed_form_trimmed"] = ParamObject(result.closed_form_trimmed.calibration.ToVector());
   out["samples"] = result.samples;
   out["inliers"] = result.inliers;
   out["loss"] = loss;

@@ -1,0 +1,65 @@
+#ifndef CALIB_BENCHMARKS_BENCH_COMMON_H_
+#define CALIB_BENCHMARKS_BENCH_COMMON_H_
+
+#include <Eigen/Core>
+#include <chrono>
+#include <cstdio>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/laser_calibration.h"
+
+// Shared pieces of calib_bench: run settings, timing, a parallel loop and plain-text tables.
+namespace calib::bench {
+
+struct BenchConfig {
+  bool quick = false;
+  int seeds = 0;  // Seeds per scenario; 0: the mode's default.
+  int threads = 2;
+  std::string censi_dir;
+  std::string self_path;  // This binary, re-executed for per-process memory peaks.
+};
+
+class Stopwatch {
+ public:
+  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
+  double Seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+};
+
+// Calls f(0) … f(n − 1) on `threads` workers; f must be safe to run concurrently.
+void ParallelFor(int n, int threads, const std::function<void(int)>& f);
+
+// printf into a std::string.
+std::string Format(const char* format, ...) __attribute__((format(printf, 1, 2)));
+
+double Median(std::vector<double> values);
+
+// Parameter i of a LaserParamVector in display units: mm for lengths, mrad (or deg) for θ.
+double ToDisplay(int param, double value, bool degrees = false);
+
+nlohmann::json ToJson(const LaserParamVector& v);
+nlohmann::json ToJson(const Eigen::Vector3d& v);
+
+// Columns right-aligned except the first; a row of a single "-" cell draws a rule.
+class TextTable {
+ public:
+  explicit TextTable(std::vector<std::string> header) : header_(std::move(header)) {}
+  void AddRow(std::vector<std::string> cells) { rows_.push_back(std::move(cells)); }
+  void AddRule() { rows_.push_back({"-"}); }
+  void Print(std::FILE* out = stdout) const;
+
+ private:
+  std::vector<std::string> header_;
+  std::vector<std::vector<std::string>> rows_;
+};
+
+}  // namespace calib::bench
+
+#endif  // CALIB_BENCHMARKS_BENCH_COMMON_H_

@@ -1,0 +1,73 @@
+#include "benchmarks/bench_crlb.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <memory>
+
+#include "problems/laser_residual.h"
+
+namespace calib::bench {
+
+StatusOr<LaserParamMatrix> LaserCramerRaoBound(const std::vector<LaserInterval>& intervals,
+                                               const std::vector<bool>& skip,
+                                               const LaserCalibration& truth,
+                                               const Eigen::Vector3d& scan_sigma,
+                                               double wheel_sigma,
+                                               LaserParamMatrix* diagonal_weighted) {
+  const LaserParamVector p = truth.ToVector();
+  const double* parameters[2] = {p.data(), p.data() + 3};
+  const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> j_odometry, j_sensor;
+  double* jacobians[2] = {j_odometry.data(), j_sensor.data()};
+  LaserParamMatrix fisher = LaserParamMatrix::Zero();
+  LaserParamMatrix bread = LaserParamMatrix::Zero(), meat = LaserParamMatrix::Zero();
+  const Eigen::Matrix3d weight = scan_sigma.cwiseAbs2().cwiseInverse().asDiagonal();
+  for (size_t k = 0; k < intervals.size(); ++k) {
+    if (k < skip.size() && skip[k]) continue;
+    // Evaluate at the noise-free measurement, so the Jacobian is that of the model, not of the
+    // particular noise draw.
+    LaserInterval clean = intervals[k];
+    const Pose2d robot = IntervalRobotMotion(p(0), p(1), p(2), clean);
+    clean.sensor_motion = SensorMotionFromRobotMotion(truth.base_T_sensor, robot);
+    const std::unique_ptr<ceres::CostFunction> cost(LaserResidual::Create(clean, &identity));
+    Eigen::Vector3d r;
+    if (!cost->Evaluate(parameters, r.data(), jacobians)) {
+      return Status::Error("a residual could not be evaluated at the truth");
+    }
+    Eigen::Matrix<double, 3, 6> j;
+    j << j_odometry, j_sensor;
+    // e_xy = R(−θ)·(s_xy − ŝ_xy): noise added to sm is rotated by the predicted θ.
+    const double c = std::cos(clean.sensor_motion(2)), s = std::sin(clean.sensor_motion(2));
+    Eigen::Matrix3d a = Eigen::Matrix3d::Identity();
+    a.topLeftCorner<2, 2>() << c, s, -s, c;
+    Eigen::Matrix3d noise = a * scan_sigma.cwiseAbs2().asDiagonal() * a.transpose();
+    if (wheel_sigma > 0.0 && clean.steps.empty()) {
+      // ∂e/∂(φ_l, φ_r) by central differences; the error is smooth in the speeds.
+      Eigen::Matrix<double, 3, 2> j_speed;
+      const double h = 1e-6;
+      for (int w = 0; w < 2; ++w) {
+        LaserInterval plus = clean, minus = clean;
+        (w == 0 ? plus.left_speed : plus.right_speed) += h;
+        (w == 0 ? minus.left_speed : minus.right_speed) -= h;
+        j_speed.col(w) = (LaserResidual::Error(plus, parameters[0], parameters[1]) -
+                          LaserResidual::Error(minus, parameters[0], parameters[1])) /
+                         (2 * h);
+      }
+      noise += wheel_sigma * wheel_sigma * j_speed * j_speed.transpose();
+    }
+    fisher += j.transpose() * noise.inverse() * j;
+    bread += j.transpose() * weight * j;
+    meat += j.transpose() * weight * noise * weight * j;
+  }
+  const Eigen::LDLT<LaserParamMatrix> ldlt(fisher);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
+    return Status::Error("the Fisher information is singular");
+  }
+  if (diagonal_weighted != nullptr) {
+    const LaserParamMatrix bread_inverse = bread.inverse();
+    *diagonal_weighted = bread_inverse * meat * bread_inverse;
+  }
+  return LaserParamMatrix(ldlt.solve(LaserParamMatrix::Identity()));
+}
+
+}  // namespace calib::bench
