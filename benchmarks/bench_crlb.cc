@@ -36,11 +36,8 @@ StatusOr<LaserParamMatrix> LaserCramerRaoBound(const std::vector<LaserInterval>&
     }
     Eigen::Matrix<double, 3, 6> j;
     j << j_odometry, j_sensor;
-    // e_xy = R(−θ)·(s_xy − ŝ_xy): noise added to sm is rotated by the predicted θ.
-    const double c = std::cos(clean.sensor_motion(2)), s = std::sin(clean.sensor_motion(2));
-    Eigen::Matrix3d a = Eigen::Matrix3d::Identity();
-    a.topLeftCorner<2, 2>() << c, s, -s, c;
-    Eigen::Matrix3d noise = a * scan_sigma.cwiseAbs2().asDiagonal() * a.transpose();
+    // The error is ŝ − ŝ_pred in the scan matcher's own frame, so the noise on sm enters as is.
+    Eigen::Matrix3d noise = scan_sigma.cwiseAbs2().asDiagonal();
     if (wheel_sigma > 0.0 && clean.steps.empty()) {
       // ∂e/∂(φ_l, φ_r) by central differences; the error is smooth in the speeds.
       Eigen::Matrix<double, 3, 2> j_speed;
