@@ -260,7 +260,8 @@ nlohmann::ordered_json RunBearingBench(bool quick, int seeds) {
               setting.c_str());
   std::printf(
       "Errors in Table 4's units (deg for φ, ψ; relative for η, δ, ξ). CF: Martinelli's closed "
-      "form; BA: bundle adjustment with σβ and K estimated from each log. 'bound |e|' is the "
+      "form; BA: bundle adjustment with σβ and K estimated from each log. CRLB: bearing noise "
+      "and the encoder noise propagated to the poses (BearingCramerRaoBound). 'bound |e|' is the "
       "mean absolute error of an efficient unbiased estimator, √(2/π)·√CRLB; 'bound |mean|' the "
       "same for the mean of %d signed errors. 'BA sd/CRLB' is the median ratio of the reported "
       "sigma to √CRLB; 'BA in 3sd' the share of logs within 3 reported sigmas.\n",

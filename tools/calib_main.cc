@@ -12,6 +12,8 @@
 #include "core/laser_log_io.h"
 #include "core/laser_simulator.h"
 #include "solvers/calibrate_laser.h"
+#include "tools/bearing_report.h"
+#include "tools/diagnose_report.h"
 #include "tools/laser_report.h"
 
 DEFINE_string(input, "",
@@ -64,6 +66,10 @@ std::vector<std::string> SplitCommas(const std::string& text) {
 int Calibrate() {
   if (FLAGS_input.empty()) return Fail("--input is required");
   if (FLAGS_output.empty()) return Fail("--output is required");
+  if (FLAGS_format == "auto" && calib::IsBearingLogDirectory(FLAGS_input)) {
+    return calib::CalibrateBearingCommand(FLAGS_input, FLAGS_output, FLAGS_loss, FLAGS_loss_scale,
+                                          FLAGS_quiet);
+  }
   const calib::StatusOr<calib::LaserFormat> format = calib::ParseLaserFormat(FLAGS_format);
   if (!format.ok()) return Fail(format.message());
   const calib::StatusOr<calib::RobustLoss> loss = calib::ParseRobustLoss(FLAGS_loss);
@@ -173,7 +179,7 @@ int main(int argc, char** argv) {
   const std::string command = argv[1];
   if (command == "calibrate") return Calibrate();
   if (command == "simulate") return Simulate();
-  if (command == "diagnose") return Fail("diagnose is not available in this build yet");
+  if (command == "diagnose") return calib::RunDiagnoseCommand();
   std::fprintf(stderr, "calib: unknown command '%s'\n%s", command.c_str(), kUsage);
   return 2;
 }

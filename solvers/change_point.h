@@ -1,0 +1,50 @@
+#ifndef CALIB_SOLVERS_CHANGE_POINT_H_
+#define CALIB_SOLVERS_CHANGE_POINT_H_
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <vector>
+
+// Where a mismatch lives: change points of a series over time (CUSUM) and the dependence of
+// residuals on a covariate (binned means).
+namespace calib {
+
+struct SeriesSegment {
+  size_t begin = 0;      // First index.
+  size_t end = 0;        // One past the last index.
+  Eigen::VectorXd mean;  // Per column.
+  double share = 0.0;    // Of the series' total (first column), Σ_segment / Σ_all.
+};
+
+// Splits the rows of `series` (N × d) into segments of different means by binary segmentation:
+// a segment [a, b) splits at the j maximizing the CUSUM statistic
+//   Q(j) = Σ_c (S_c(j) − π·S_c(b))² / (σ_c²·n·π(1 − π)),  π = (j − a)/n, n = b − a,
+// when P(sup Q > observed) < alpha (SupChiSquareSurvival with d degrees of freedom and the
+// trim), at most max_segments segments, none shorter than min_length.
+std::vector<SeriesSegment> SegmentMeans(const Eigen::MatrixXd& series, double alpha,
+                                        int max_segments, double trim, size_t min_length);
+
+// The p-value of the first split of SegmentMeans (1 when it does not split): is the mean
+// constant over time?
+double ConstantMeanPValue(const Eigen::MatrixXd& series, double trim, size_t* split = nullptr);
+
+// Rows of `values` (N × d) grouped into `bins` bins of (nearly) equal count by the covariate.
+struct BinnedMeans {
+  std::vector<double> center;                   // Mean covariate per bin.
+  std::vector<Eigen::VectorXd> mean;            // Weighted mean per bin.
+  std::vector<Eigen::VectorXd> standard_error;  // Of the mean.
+  std::vector<size_t> count;
+  // Σ_bins Σ_c z²: the bin means as z-scores, χ² with bins·d degrees of freedom when the values
+  // have mean zero and do not depend on the covariate.
+  double statistic = 0.0;
+  int dof = 0;
+  double p_value = 1.0;
+  // Share of Σ_k w_k‖v_k‖² that the bin means explain.
+  double explained = 0.0;
+};
+BinnedMeans BinByCovariate(const std::vector<double>& covariate, const Eigen::MatrixXd& values,
+                           const Eigen::VectorXd& weights, int bins);
+
+}  // namespace calib
+
+#endif  // CALIB_SOLVERS_CHANGE_POINT_H_
