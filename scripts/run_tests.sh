@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
-# Builds everything and runs the test suite (and the benchmark's quick smoke run).
+# Builds everything, runs the benchmark's quick mode as a smoke test (its tables go to
+# build/bench_quick.txt), then the test suite.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build.sh
+./build/bin/calib_bench --quick --json build/bench_quick.json > build/bench_quick.txt
+echo "calib_bench --quick: $(tail -n 1 build/bench_quick.txt)"
 cd build
 ctest --output-on-failure -j"$(nproc 2>/dev/null || echo 2)" --timeout 900
