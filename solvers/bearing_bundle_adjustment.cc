@@ -386,7 +386,8 @@ StatusOr<BearingVarianceComponents> BearingProblem::VarianceComponents(
 
   BearingVarianceComponents out;
   double all_bearing_redundancy = 0.0;
-  // Bearings: h = ρ'·J·C·Jᵀ with J = ∂r/∂(pose, c), as Ceres weighs them in the covariance.
+  // Bearings: h = ρ'·J·C·Jᵀ with J = ∂r/∂(pose, c), as Ceres weighs them in the covariance (the
+  // leverages then sum to the number of free parameters).
   for (const BearingTerm& term : bearings_) {
     const double* pose = Node(term.run, term.node);
     const double* parameters[2] = {pose, calibration_};

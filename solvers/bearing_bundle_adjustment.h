@@ -157,8 +157,9 @@ class BearingProblem {
   double StartDistance(size_t run_index) const;
   double covariance_scale() const { return covariance_scale_; }
 
-  // Leverages of every residual from the covariance of all blocks, summed per class; bearings
-  // with inlier[i][j] false are left out of the bearing class.
+  // Leverages of every residual from the covariance of all blocks (with the loss's weights, as
+  // the solution has them), summed per class; bearings with inlier[i][j] false are left out of
+  // the bearing class.
   StatusOr<BearingVarianceComponents> VarianceComponents(
       const std::vector<std::vector<bool>>& inlier) const;
 

@@ -26,6 +26,7 @@ std::string RunName(int id) { return "run " + std::to_string(id); }
 
 // A variance component is re-estimated only from at least this many degrees of freedom.
 constexpr double kMinRedundancy = 2.0;
+constexpr double kMinOdometryRedundancy = 0.5;
 
 double Seconds(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -625,10 +626,15 @@ StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
           std::clamp(std::sqrt(vc->bearing_sum_sq_rad2 / vc->bearing_redundancy / kept_variance),
                      min_sigma, max_sigma);
     }
-    if (result.encoder_k_estimated && vc->odometry_redundancy >= kMinRedundancy) {
-      result.encoder_k_estimate =
-          next.encoder_k * std::sqrt(vc->odometry_sum_sq / vc->odometry_redundancy);
-      next.encoder_k = std::max({min_k, options.encoder_noise_k_floor, result.encoder_k_estimate});
+    if (result.encoder_k_estimated && vc->odometry_redundancy >= kMinOdometryRedundancy) {
+      // A K too small makes the odometry rigid and leaves it few degrees of freedom, so that it
+      // would never be corrected: the update runs from half a degree of freedom on. The fixed
+      // point K = K·√(Σ‖L·e‖²/r) is approached slowly (the redundancy grows with K), so each
+      // step is doubled in log K (over-relaxation), and kept within a factor of 3.
+      const double ratio = vc->odometry_sum_sq / vc->odometry_redundancy;
+      result.encoder_k_estimate = next.encoder_k * std::sqrt(ratio);
+      next.encoder_k = std::max({min_k, options.encoder_noise_k_floor,
+                                 next.encoder_k * std::clamp(ratio, 1.0 / 3.0, 3.0)});
     }
     const double change =
         std::max(std::abs(next.bearing_sigma_rad / problem->noise().bearing_sigma_rad - 1.0),

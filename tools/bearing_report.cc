@@ -170,10 +170,14 @@ std::string BearingResultSummary(const BearingCalibrationResult& result, const s
                 result.encoder_k_estimate, result.odometry_redundancy);
   text += line;
   for (const BearingRunSummary& run : result.runs) {
+    char kind[64];
+    if (run.circular) {
+      std::snprintf(kind, sizeof(kind), "circle at q = %.3f", run.q);
+    } else {
+      std::snprintf(kind, sizeof(kind), "not a circle at fixed q");
+    }
     std::snprintf(line, sizeof(line), "  run %d: %d bearings, %s, rms residual %.3f deg\n", run.run,
-                  run.bearings,
-                  run.circular ? ("circle q = " + std::to_string(run.q)).c_str() : "not circular",
-                  run.rms_residual_rad * deg);
+                  run.bearings, kind, run.rms_residual_rad * deg);
     text += line;
   }
   return text;

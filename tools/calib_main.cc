@@ -17,8 +17,9 @@
 #include "tools/laser_report.h"
 
 DEFINE_string(input, "",
-              "Laser log file (tuples or CSV), a raw-stream directory, or several "
-              "laser logs separated by commas to calibrate jointly");
+              "A laser log file (tuples or CSV), a laser raw-stream directory, several laser logs "
+              "separated by commas (calibrated jointly), or a bearing log directory "
+              "(odometry.csv, bearings.csv, meta.json)");
 DEFINE_string(output, "", "Where to write the JSON result");
 DEFINE_string(format, "auto", "Laser log format: auto, tuples, csv or stream");
 DEFINE_string(loss, "cauchy", "Robust loss: cauchy, huber or none");
