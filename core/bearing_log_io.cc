@@ -13,6 +13,8 @@
 #include <system_error>
 #include <utility>
 
+#include "core/text_file.h"
+
 namespace calib {
 namespace {
 
@@ -40,27 +42,6 @@ std::string_view Trim(std::string_view s) {
 std::string_view WithoutBom(std::string_view text) {
   if (text.size() >= 3 && text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.remove_prefix(3);
   return text;
-}
-
-Status ReadWholeFile(const std::string& path, std::string* text) {
-  std::error_code ec;
-  const fs::file_status status = fs::status(path, ec);
-  if (!fs::exists(status)) return Status::Error(path + ": no such file");
-  if (fs::is_directory(status)) return Status::Error(path + ": is a directory, expected a file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::Error(path + ": cannot open for reading");
-  text->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  if (in.bad()) return Status::Error(path + ": cannot read");
-  return Status::Ok();
-}
-
-Status WriteWholeFile(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) return Status::Error(path + ": cannot open for writing");
-  out.write(text.data(), static_cast<std::streamsize>(text.size()));
-  out.close();
-  if (!out) return Status::Error(path + ": write failed");
-  return Status::Ok();
 }
 
 // A CSV table: the header's column names, then rows of fields with their line numbers.

@@ -119,16 +119,7 @@ BearingProblem::BearingProblem(const BearingLog& log, const BearingParams& initi
                                const std::vector<std::vector<Pose2d>>& world_T_robot,
                                const BearingNoise& noise, const BearingAdjustmentOptions& options)
     : log_(&log), nodes_(BearingNodes(log)), options_(options), noise_(noise) {
-  switch (options.loss) {
-    case RobustLoss::kCauchy:
-      loss_ = std::make_unique<ceres::CauchyLoss>(options.loss_scale);
-      break;
-    case RobustLoss::kHuber:
-      loss_ = std::make_unique<ceres::HuberLoss>(options.loss_scale);
-      break;
-    case RobustLoss::kNone:
-      break;
-  }
+  loss_ = MakeLossFunction(options.loss, options.loss_scale);
   ceres::Problem::Options problem_options;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.enable_fast_removal = false;

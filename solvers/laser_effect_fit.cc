@@ -29,16 +29,7 @@ LaserEffectData::LaserEffectData(const std::vector<LaserInterval>& intervals,
                                  const Eigen::Matrix3d& sqrt_information,
                                  const LaserRefinementOptions& options)
     : intervals_(&intervals), sqrt_information_(sqrt_information), options_(options) {
-  switch (options.loss) {
-    case RobustLoss::kCauchy:
-      loss_ = std::make_unique<ceres::CauchyLoss>(options.loss_scale);
-      break;
-    case RobustLoss::kHuber:
-      loss_ = std::make_unique<ceres::HuberLoss>(options.loss_scale);
-      break;
-    case RobustLoss::kNone:
-      break;
-  }
+  loss_ = MakeLossFunction(options.loss, options.loss_scale);
   piecewise_ = BuildLaserEffectContexts(intervals, BoundarySpeedModel::kPiecewiseConstant);
   smooth_ = BuildLaserEffectContexts(intervals, BoundarySpeedModel::kSmooth);
 }

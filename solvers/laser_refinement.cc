@@ -28,38 +28,10 @@ void ParallelChunks(size_t n, int threads, const Body& body) {
 
 }  // namespace
 
-StatusOr<RobustLoss> ParseRobustLoss(const std::string& name) {
-  if (name == "cauchy") return RobustLoss::kCauchy;
-  if (name == "huber") return RobustLoss::kHuber;
-  if (name == "none") return RobustLoss::kNone;
-  return Status::Error("unknown loss '" + name + "' (expected cauchy, huber or none)");
-}
-
-std::string RobustLossName(RobustLoss loss) {
-  switch (loss) {
-    case RobustLoss::kCauchy:
-      return "cauchy";
-    case RobustLoss::kHuber:
-      return "huber";
-    case RobustLoss::kNone:
-      return "none";
-  }
-  return "none";
-}
-
 LaserProblem::LaserProblem(const std::vector<LaserDataset>& datasets,
                            const LaserCalibration& initial, const LaserRefinementOptions& options)
     : datasets_(datasets), options_(options) {
-  switch (options.loss) {
-    case RobustLoss::kCauchy:
-      loss_ = std::make_unique<ceres::CauchyLoss>(options.loss_scale);
-      break;
-    case RobustLoss::kHuber:
-      loss_ = std::make_unique<ceres::HuberLoss>(options.loss_scale);
-      break;
-    case RobustLoss::kNone:
-      break;
-  }
+  loss_ = MakeLossFunction(options.loss, options.loss_scale);
   ceres::Problem::Options problem_options;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   // Residual blocks are only added, never removed: skip the bookkeeping that removal needs.

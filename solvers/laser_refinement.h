@@ -11,14 +11,11 @@
 #include "core/laser_calibration.h"
 #include "core/laser_log.h"
 #include "core/status.h"
+#include "solvers/robust_loss.h"
 
 // Maximum-likelihood refinement of the laser–odometry calibration with Ceres
 // (Levenberg–Marquardt, robust loss instead of the paper's trimming).
 namespace calib {
-
-enum class RobustLoss { kCauchy, kHuber, kNone };
-StatusOr<RobustLoss> ParseRobustLoss(const std::string& name);  // "cauchy", "huber", "none".
-std::string RobustLossName(RobustLoss loss);
 
 struct LaserRefinementOptions {
   RobustLoss loss = RobustLoss::kCauchy;
