@@ -9,17 +9,21 @@
 #include <set>
 #include <sstream>
 
-#include "benchmarks/bench_common.h"
-#include "benchmarks/bench_laser_monte_carlo.h"
 #include "benchmarks/bench_bearing.h"
+#include "benchmarks/bench_common.h"
+#include "benchmarks/bench_diagnose.h"
+#include "benchmarks/bench_laser_monte_carlo.h"
 #include "benchmarks/bench_laser_real.h"
 #include "benchmarks/bench_plot.h"
 #include "benchmarks/bench_speed.h"
 
 DEFINE_bool(quick, false, "Reduced grid and seeds (CI smoke test, under a minute)");
 DEFINE_string(json, "", "Write every result to this JSON file (and the RMSE plot beside it)");
-DEFINE_string(sections, "laser_mc,laser_real,bearing,speed", "Comma-separated sections to run");
-DEFINE_int32(seeds, 0, "Seeds per Monte Carlo scenario (0: 100, or 10 with --quick)");
+DEFINE_string(sections, "laser_mc,laser_real,bearing,diagnose,speed",
+              "Comma-separated sections to run");
+DEFINE_int32(
+    seeds, 0,
+    "Seeds (logs) per Monte Carlo scenario (0: each section's default, fewer with --quick)");
 DEFINE_string(censi_dir, CALIB_CENSI_DATA_DIR, "Folder with the Censi et al. recordings");
 DEFINE_int32(threads, 2, "Monte Carlo seeds run in parallel on this many threads");
 // Internal: the speed section re-executes this binary once per N to measure its memory peak.
@@ -30,11 +34,12 @@ namespace calib::bench {
 namespace {
 
 constexpr const char* kUsage =
-    "calib_bench [--quick] [--json OUT.json] [--sections laser_mc,laser_real,bearing,speed] [--seeds N] "
+    "calib_bench [--quick] [--json OUT.json] [--sections "
+    "laser_mc,laser_real,bearing,diagnose,speed] [--seeds N] "
     "[--censi_dir DIR]";
 
 std::set<std::string> ParseSections(const std::string& text, bool* ok) {
-  const std::set<std::string> known = {"laser_mc", "laser_real", "bearing", "speed"};
+  const std::set<std::string> known = {"laser_mc", "laser_real", "bearing", "diagnose", "speed"};
   std::set<std::string> sections;
   std::stringstream stream(text);
   std::string name;
@@ -42,8 +47,10 @@ std::set<std::string> ParseSections(const std::string& text, bool* ok) {
   while (std::getline(stream, name, ',')) {
     if (name.empty()) continue;
     if (known.count(name) == 0) {
-      std::fprintf(stderr, "unknown section '%s' (expected laser_mc, laser_real, bearing, speed)\n",
-                   name.c_str());
+      std::fprintf(
+          stderr,
+          "unknown section '%s' (expected laser_mc, laser_real, bearing, diagnose, speed)\n",
+          name.c_str());
       *ok = false;
     }
     sections.insert(name);
@@ -126,6 +133,8 @@ int Main(int argc, char** argv) {
   if (sections.count("laser_real")) root["laser_real"] = RunLaserReal(config);
   std::fflush(stdout);
   if (sections.count("bearing")) root["bearing"] = RunBearingBench(config.quick, FLAGS_seeds);
+  std::fflush(stdout);
+  if (sections.count("diagnose")) root["diagnose"] = RunDiagnoseBench(config.quick, FLAGS_seeds);
   std::fflush(stdout);
   if (sections.count("speed")) root["speed"] = RunSpeed(config);
   root["seconds"] = total.Seconds();
