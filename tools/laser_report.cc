@@ -75,7 +75,7 @@ std::string LaserResultSummary(const LaserCalibrationResult& result, const std::
   std::snprintf(line, sizeof(line), "%s: laser–odometry calibration, %d intervals, loss %s\n",
                 input.c_str(), result.samples, loss.c_str());
   text += line;
-  std::snprintf(line, sizeof(line), "  %-14s %12s   %-10s %12s\n", "parameter", "estimate", "± σ",
+  std::snprintf(line, sizeof(line), "  %-18s %12s   %-10s %12s\n", "parameter", "estimate", "± σ",
                 "closed form");
   text += line;
   const LaserParamVector estimate = result.estimate.ToVector();
@@ -83,7 +83,7 @@ std::string LaserResultSummary(const LaserCalibrationResult& result, const std::
   for (int i = 0; i < kNumLaserParams; ++i) {
     const double k = DisplayScale(i);
     const std::string name = kLaserParamNames[i] + " [" + DisplayUnit(i) + "]";
-    std::snprintf(line, sizeof(line), "  %-14s %12.4f ± %-10.4f %12.4f\n", name.c_str(),
+    std::snprintf(line, sizeof(line), "  %-18s %12.4f ± %-10.4f %12.4f\n", name.c_str(),
                   estimate(i) * k, result.stddev(i) * k, closed(i) * k);
     text += line;
   }
