@@ -34,6 +34,11 @@ DEFINE_string(trajectory, "rich", "simulate: rich, straight, rotation or arc");
 DEFINE_double(noise_xy, 0.001, "simulate: scan-matching noise sigma on x and y (m)");
 DEFINE_double(noise_theta, 0.002, "simulate: scan-matching noise sigma on theta (rad)");
 DEFINE_double(outliers, 0.0, "simulate: fraction of slip outliers");
+DEFINE_double(speed_time_constant, 0.5,
+              "simulate: wheel speeds follow their targets with this lag (s); 0: speeds constant "
+              "within each interval");
+DEFINE_double(segment_mean, 6.0, "simulate: mean time between new speed targets (s)");
+DEFINE_double(max_wheel_speed, 0.5, "simulate: largest commanded wheel speed (rad/s)");
 DEFINE_double(time_offset, 0.0, "simulate: scans stamped t were taken at t + this (s)");
 DEFINE_double(lateral_slip, 0.0, "simulate: lateral velocity = this * v * omega (s)");
 DEFINE_double(longitudinal_slip, 0.0, "simulate: forward velocity = v - this * dv/dt (s)");
@@ -132,6 +137,13 @@ int Simulate() {
   if (FLAGS_intervals <= 0) return Fail("--intervals must be positive");
   options.scan_noise_sigma = Eigen::Vector3d(FLAGS_noise_xy, FLAGS_noise_xy, FLAGS_noise_theta);
   options.outlier_fraction = FLAGS_outliers;
+  options.speed_time_constant_s = FLAGS_speed_time_constant;
+  options.segment_mean_s = FLAGS_segment_mean;
+  options.max_wheel_speed = FLAGS_max_wheel_speed;
+  if (FLAGS_speed_time_constant < 0.0 || !(FLAGS_segment_mean > 0.0) ||
+      !(FLAGS_max_wheel_speed > 0.0)) {
+    return Fail("--speed_time_constant must be >= 0, --segment_mean and --max_wheel_speed > 0");
+  }
   options.effects.time_offset_s = FLAGS_time_offset;
   options.effects.lateral_slip_s = FLAGS_lateral_slip;
   options.effects.longitudinal_slip_s = FLAGS_longitudinal_slip;
@@ -158,9 +170,15 @@ int Simulate() {
                        {"wheel_radius_change", truth.effects.radius_change_time_s},
                        {"r_l_after", truth.effects.left_radius_after_m},
                        {"r_r_after", truth.effects.right_radius_after_m}};
-    json["simulation"] = {{"intervals", FLAGS_intervals},     {"seed", FLAGS_seed},
-                          {"trajectory", FLAGS_trajectory},   {"noise_xy", FLAGS_noise_xy},
-                          {"noise_theta", FLAGS_noise_theta}, {"outliers", FLAGS_outliers}};
+    json["simulation"] = {{"intervals", FLAGS_intervals},
+                          {"seed", FLAGS_seed},
+                          {"trajectory", FLAGS_trajectory},
+                          {"noise_xy", FLAGS_noise_xy},
+                          {"noise_theta", FLAGS_noise_theta},
+                          {"outliers", FLAGS_outliers},
+                          {"speed_time_constant", FLAGS_speed_time_constant},
+                          {"segment_mean", FLAGS_segment_mean},
+                          {"max_wheel_speed", FLAGS_max_wheel_speed}};
     std::ofstream out(FLAGS_truth);
     out << json.dump(2) << "\n";
     if (!out) return Fail("cannot write " + FLAGS_truth);
