@@ -73,21 +73,8 @@ std::vector<LaserInterval> MakeLog(const Regime& regime, const LaserEffects& eff
   sim.seed = seed;
   std::vector<LaserInterval> log = SimulateLaserLog(sim).intervals;
   if (regime.forward_only) {
-    std::vector<LaserInterval> kept;
-    bool dropped = false;
-    for (const LaserInterval& in : log) {
-      const double v =
-          sim.odometry.left_radius_m * in.left_speed + sim.odometry.right_radius_m * in.right_speed;
-      if (v < -1e-9) {
-        dropped = true;
-        continue;
-      }
-      kept.push_back(in);
-      kept.back().gap_before = dropped && kept.size() > 1;
-      dropped = false;
-    }
-    if (kept.size() > static_cast<size_t>(intervals)) kept.resize(intervals);
-    log = std::move(kept);
+    log = DropBackwardIntervals(log, sim.odometry);
+    if (log.size() > static_cast<size_t>(intervals)) log.resize(intervals);
   }
   for (size_t k = 0; k < log.size(); ++k) log[k].record = static_cast<int>(k + 1);
   return log;

@@ -418,9 +418,9 @@ void AddOutliers(const LaserSimOptions& options, const std::vector<Pose2d>& robo
     const Pose2d slipped_match = SensorMotionFromRobotMotion(
         options.base_T_sensor, Pose2d(random.Uniform(0.0, 0.5) * robot_motions[k]));
     const Eigen::Vector3d slip_error = slipped_match - simulation->matched[k];
-    const bool gross_slip =
-        !has_noise || (slip_error.cwiseAbs().array() >
-                       0.5 * options.outlier_scale * sigma.cwiseAbs().array()).any();
+    const bool gross_slip = !has_noise || (slip_error.cwiseAbs().array() >
+                                           0.5 * options.outlier_scale * sigma.cwiseAbs().array())
+                                              .any();
     if (slip && gross_slip) {
       simulation->matched[k] = slipped_match;
     } else {
@@ -570,6 +570,24 @@ LaserStreams SimulateLaserStreams(const LaserSimOptions& options, double encoder
     }
   }
   return streams;
+}
+
+std::vector<LaserInterval> DropBackwardIntervals(const std::vector<LaserInterval>& intervals,
+                                                 const OdometryParams& odometry) {
+  std::vector<LaserInterval> kept;
+  bool dropped = false;
+  for (const LaserInterval& interval : intervals) {
+    const double v = odometry.left_radius_m * interval.left_speed +
+                     odometry.right_radius_m * interval.right_speed;
+    if (v < -1e-9) {
+      dropped = true;
+      continue;
+    }
+    kept.push_back(interval);
+    kept.back().gap_before = dropped && kept.size() > 1;
+    dropped = false;
+  }
+  return kept;
 }
 
 }  // namespace calib

@@ -1,10 +1,9 @@
 #ifndef CALIB_CORE_LASER_SIMULATOR_H_
 #define CALIB_CORE_LASER_SIMULATOR_H_
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/diff_drive.h"
 #include "core/laser_log.h"
@@ -45,11 +44,11 @@ struct LaserSimOptions {
   double speed_time_constant_s = 0.5;
   double segment_mean_s = 6.0;  // Mean time between new commanded targets.
   Eigen::Vector3d scan_noise_sigma = Eigen::Vector3d(0.001, 0.001, 0.002);  // x, y (m), θ (rad).
-  double outlier_fraction = 0.0;  // Intervals whose scan match is replaced by a slip outlier.
-  double outlier_scale = 20.0;    // Outlier error in multiples of the scan noise sigma.
+  double outlier_fraction = 0.0;       // Intervals whose scan match is replaced by a slip outlier.
+  double outlier_scale = 20.0;         // Outlier error in multiples of the scan noise sigma.
   double encoder_ticks_per_rad = 0.0;  // > 0: cumulative wheel angles are quantized.
   double wheel_speed_noise = 0.0;      // Std of white noise added to the reported φ (rad/s).
-  int record_steps = 0;   // > 0: store this many encoder sub-steps per interval in `steps`.
+  int record_steps = 0;  // > 0: store this many encoder sub-steps per interval in `steps`.
   // Shortest quadrature panel; panels otherwise break at every speed target, scan time and
   // radius change and span at most half of min(speed time constant, 1/ω).
   double integration_step_s = 0.002;
@@ -66,6 +65,12 @@ struct LaserSimTruth {
 
 // A log of consecutive intervals (has_timestamps = true, start_s on the odometry clock).
 LaserLog SimulateLaserLog(const LaserSimOptions& options, LaserSimTruth* truth = nullptr);
+
+// Keeps only the intervals that do not drive backward (v ≥ 0 for the given odometry), marking the
+// interval after each dropped run with gap_before: a forward-only robot, on which a lateral slip
+// γ·v·ω cannot cancel between directions.
+std::vector<LaserInterval> DropBackwardIntervals(const std::vector<LaserInterval>& intervals,
+                                                 const OdometryParams& odometry);
 
 // The same motion as raw streams: encoder samples at `encoder_rate_hz` and scan-matcher poses
 // (world_T_sensor, noisy, one per interval end), for the stream reader.

@@ -513,23 +513,8 @@ Generated Generate(const Recipe& recipe, bool with_effects) {
     }
   }
   if (recipe.forward_only) {
-    // Drop intervals driving backward; the next kept interval starts after a gap.
-    std::vector<LaserInterval> kept;
-    bool dropped = false;
-    for (const LaserInterval& in : intervals) {
-      const double v =
-          sim.odometry.left_radius_m * in.left_speed + sim.odometry.right_radius_m * in.right_speed;
-      if (v < -1e-9) {
-        dropped = true;
-        continue;
-      }
-      kept.push_back(in);
-      kept.back().gap_before = dropped && !kept.empty();
-      dropped = false;
-    }
-    if (!kept.empty()) kept.front().gap_before = false;
-    if (kept.size() > 2000) kept.resize(2000);  // data/diagnose files stay small.
-    intervals = kept;
+    intervals = DropBackwardIntervals(intervals, sim.odometry);
+    if (intervals.size() > 2000) intervals.resize(2000);  // data/diagnose files stay small.
   }
   for (size_t k = 0; k < intervals.size(); ++k) intervals[k].record = static_cast<int>(k + 1);
   return out;

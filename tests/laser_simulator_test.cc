@@ -664,5 +664,29 @@ TEST(LaserSimulatorTest, StreamOutliersCorruptOnlyTheirDisplacement) {
   EXPECT_EQ(std::count(truth.is_outlier.begin(), truth.is_outlier.end(), true), 100);
 }
 
+TEST(LaserSimulatorTest, DropBackwardIntervalsMarksGaps) {
+  LaserSimOptions sim;
+  sim.num_intervals = 400;
+  const LaserLog log = SimulateLaserLog(sim);
+  const std::vector<LaserInterval> kept = DropBackwardIntervals(log.intervals, sim.odometry);
+  ASSERT_FALSE(kept.empty());
+  ASSERT_LT(kept.size(), log.intervals.size());  // The rich trajectory drives both ways.
+  EXPECT_FALSE(kept.front().gap_before);
+  size_t k = 0;  // Walk the original log alongside the kept intervals.
+  bool dropped = false;
+  for (const LaserInterval& interval : kept) {
+    while (log.intervals[k].record != interval.record) {
+      dropped = true;
+      ++k;
+    }
+    EXPECT_GE(sim.odometry.left_radius_m * interval.left_speed +
+                  sim.odometry.right_radius_m * interval.right_speed,
+              -1e-9);
+    EXPECT_EQ(interval.gap_before, dropped && &interval != &kept.front());
+    dropped = false;
+    ++k;
+  }
+}
+
 }  // namespace
 }  // namespace calib
