@@ -9,22 +9,14 @@
 #include <sstream>
 #include <string>
 
+#include "tests/cli_runner.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
+using ::calib::testing::CliRun;
+using ::calib::testing::ReadFile;
 
 class CalibCliTest : public ::testing::Test {
  protected:
@@ -43,17 +35,7 @@ class CalibCliTest : public ::testing::Test {
     return path;
   }
 
-  CliRun Calib(const std::string& args) {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string command = std::string(CALIB_BINARY_DIR) + "/bin/calib " + args + " >" +
-                                out.string() + " 2>" + err.string() + " </dev/null";
-    const int status = std::system(command.c_str());
-    CliRun run;
-    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    run.out = ReadFile(out);
-    run.err = ReadFile(err);
-    return run;
-  }
+  CliRun Calib(const std::string& args) { return ::calib::testing::RunCalib(args, dir_); }
 
   // Expects a clean failure: non-zero exit, no crash, and a message holding every `needle`.
   void ExpectFailure(const std::string& args, const std::vector<std::string>& needles) {

@@ -21,6 +21,7 @@
 #include "core/bearing_log_io.h"
 #include "core/bearing_simulator.h"
 #include "solvers/bearing_crlb.h"
+#include "tests/cli_runner.h"
 
 namespace calib {
 namespace {
@@ -291,17 +292,8 @@ TEST(CalibrateBearingTest, DegenerateLogsAreRejected) {
 // ---------------------------------------------------------------------------------------------
 // The command line.
 
-struct CliRun {
-  int exit_code = -1;
-  std::string out, err;
-};
-
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
+using ::calib::testing::CliRun;
+using ::calib::testing::ReadFile;
 
 class CalibrateBearingCliTest : public ::testing::Test {
  protected:
@@ -314,17 +306,7 @@ class CalibrateBearingCliTest : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  CliRun Calib(const std::string& args) {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string command = std::string(CALIB_BINARY_DIR) + "/bin/calib " + args + " >" +
-                                out.string() + " 2>" + err.string() + " </dev/null";
-    const int status = std::system(command.c_str());
-    CliRun run;
-    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    run.out = ReadFile(out);
-    run.err = ReadFile(err);
-    return run;
-  }
+  CliRun Calib(const std::string& args) { return ::calib::testing::RunCalib(args, dir_); }
 
   // A small valid bearing log in dir_/log (two short circles and a third run), for breaking.
   fs::path WriteLog() {
