@@ -355,64 +355,68 @@ inline BearingCircle CircleFromStart(const BearingMetricParams& m, double wheelb
 // Encoder integration (for odometry terms): the displacement between two times.
 
 // Cumulative wheel rotations at t by linear interpolation (clamped to the samples' span).
-// `odometry` must be sorted by time and non-empty.
-inline void InterpolateWheelAngles(const std::vector<EncoderSample>& odometry, double t_s,
-                                   double* left_rad, double* right_rad) {
-  if (t_s <= odometry.front().t_s) {
-    *left_rad = odometry.front().left_rad;
-    *right_rad = odometry.front().right_rad;
+// `odometry` must be sorted by time and non-empty. Time is a double or any scalar ordered
+// against doubles (a ceres::Jet: the rotations then carry d/dt, the step's wheel speeds).
+template <typename Time>
+void InterpolateWheelAngles(const std::vector<EncoderSample>& odometry, const Time& t_s,
+                            Time* left_rad, Time* right_rad) {
+  if (!(odometry.front().t_s < t_s)) {
+    *left_rad = Time(odometry.front().left_rad);
+    *right_rad = Time(odometry.front().right_rad);
     return;
   }
-  if (t_s >= odometry.back().t_s) {
-    *left_rad = odometry.back().left_rad;
-    *right_rad = odometry.back().right_rad;
+  if (!(t_s < odometry.back().t_s)) {
+    *left_rad = Time(odometry.back().left_rad);
+    *right_rad = Time(odometry.back().right_rad);
     return;
   }
   const auto after =
       std::upper_bound(odometry.begin(), odometry.end(), t_s,
-                       [](double t, const EncoderSample& sample) { return t < sample.t_s; });
+                       [](const Time& t, const EncoderSample& sample) { return t < sample.t_s; });
   const EncoderSample& b = *after;
   const EncoderSample& a = *(after - 1);
-  const double f = (t_s - a.t_s) / (b.t_s - a.t_s);
+  const Time f = (t_s - a.t_s) / (b.t_s - a.t_s);
   *left_rad = a.left_rad + f * (b.left_rad - a.left_rad);
   *right_rad = a.right_rad + f * (b.right_rad - a.right_rad);
 }
 
 // The robot displacement over one step in which the wheels turn by (left, right) rad at
 // constant speed, for nominal r, B and the correction factors of eq. 2.
-template <typename T>
+template <typename T, typename Angle>
 Pose2<T> EncoderStepDisplacement(double wheel_radius_m, double wheelbase_m, const T& delta_r,
-                                 const T& delta_l, const T& delta_b, double left_rad,
-                                 double right_rad) {
-  const T right = delta_r * T(wheel_radius_m * right_rad);
-  const T left = delta_l * T(wheel_radius_m * left_rad);
+                                 const T& delta_l, const T& delta_b, const Angle& left_rad,
+                                 const Angle& right_rad) {
+  const T right = delta_r * (wheel_radius_m * right_rad);
+  const T left = delta_l * (wheel_radius_m * left_rad);
   return ArcDisplacement((right + left) / T(2), (right - left) / (delta_b * T(wheelbase_m)));
 }
 
 // The robot displacement from its pose at t0 to its pose at t1, expressed in the frame at t0
 // (a⁻¹ ∘ c), integrating the encoder steps between as constant-speed arcs (eqs. 1–2). Times are
-// clamped to the samples' span; t1 < t0 gives the inverse displacement.
-template <typename T>
-Pose2<T> IntegrateEncoders(const std::vector<EncoderSample>& odometry, double t0_s, double t1_s,
-                           double wheel_radius_m, double wheelbase_m, const T& delta_r,
-                           const T& delta_l, const T& delta_b) {
+// clamped to the samples' span; t1 < t0 gives the inverse displacement. Times are doubles, or of
+// the scalar T when the displacement is differentiated with respect to them (a time offset).
+template <typename T, typename Time>
+Pose2<T> IntegrateEncoders(const std::vector<EncoderSample>& odometry, const Time& t0_s,
+                           const Time& t1_s, double wheel_radius_m, double wheelbase_m,
+                           const T& delta_r, const T& delta_l, const T& delta_b) {
   if (odometry.empty()) return Pose2<T>::Zero();
   if (t1_s < t0_s) {
     return Inverse(IntegrateEncoders(odometry, t1_s, t0_s, wheel_radius_m, wheelbase_m, delta_r,
                                      delta_l, delta_b));
   }
-  double left = 0.0, right = 0.0, left_end = 0.0, right_end = 0.0;
+  Time left, right, left_end, right_end;
   InterpolateWheelAngles(odometry, t0_s, &left, &right);
   InterpolateWheelAngles(odometry, t1_s, &left_end, &right_end);
   Pose2<T> motion = Pose2<T>::Zero();
-  auto it = std::upper_bound(odometry.begin(), odometry.end(), t0_s,
-                             [](double t, const EncoderSample& sample) { return t < sample.t_s; });
+  auto it =
+      std::upper_bound(odometry.begin(), odometry.end(), t0_s,
+                       [](const Time& t, const EncoderSample& sample) { return t < sample.t_s; });
   for (; it != odometry.end() && it->t_s < t1_s; ++it) {
     motion = Compose(motion,
                      EncoderStepDisplacement(wheel_radius_m, wheelbase_m, delta_r, delta_l, delta_b,
                                              it->left_rad - left, it->right_rad - right));
-    left = it->left_rad;
-    right = it->right_rad;
+    left = Time(it->left_rad);
+    right = Time(it->right_rad);
   }
   return Compose(motion, EncoderStepDisplacement(wheel_radius_m, wheelbase_m, delta_r, delta_l,
                                                  delta_b, left_end - left, right_end - right));

@@ -112,18 +112,19 @@ BearingLog SimulateBearingLog(const BearingSimOptions& options, BearingSimTruth*
     run_truth.world_T_robot_start = spec.world_T_robot_start;
     run_truth.initial_distance_m = spec.world_T_robot_start.head<2>().norm();
 
-    // Bearings at the sensor rate from the run's start, at the exact true pose.
+    // Bearings at the sensor rate from the run's start (stamps), each taken at the exact true
+    // pose of its stamp + the time offset.
     const double bearing_dt = 1.0 / options.bearing_rate_hz;
     size_t step_index = 0;
     for (int j = 0;; ++j) {
       const double tb = j * bearing_dt;
       if (tb > duration + 1e-9) break;
-      while (step_index + 1 < steps.size() && steps[step_index + 1].t_s <= tb) ++step_index;
+      const double taken = std::clamp(tb + options.time_offset_s, 0.0, duration);
+      while (step_index + 1 < steps.size() && steps[step_index + 1].t_s <= taken) ++step_index;
       Pose2d at = spec.world_T_robot_start;
       if (!steps.empty()) {
         const Step& step = steps[step_index];
-        at = AdvanceTruth(options, step.world_T_robot_start, step.speeds,
-                          std::min(tb, duration) - step.t_s);
+        at = AdvanceTruth(options, step.world_T_robot_start, step.speeds, taken - step.t_s);
       }
       const double clean = BearingFromPose(at, m.phi_rad, m.rho_m, m.psi_rad);
       const double noisy = WrapAngle(clean + options.bearing_noise_rad * unit(rng));

@@ -41,6 +41,9 @@ struct BearingSimOptions {
   double bearing_rate_hz = 1.0;
   double bearing_noise_rad = 0.0;  // σβ.
   double start_time_s = 0.0;       // Clock value at the start of the first run.
+  // A bearing stamped t was taken at t + time_offset_s on the odometry clock (the contract's
+  // `time_offset`); the robot stands still before its run starts and after it ends.
+  double time_offset_s = 0.0;
   double gap_between_runs_s = 10.0;
   BearingMetricParams truth{0.0, 0.3, M_PI / 2.0, 0.99, 1.006, 0.97};  // Table 2.
   std::vector<BearingRunSpec> runs;  // Empty: Martinelli's q = 0.9, 0, −1, one loop each.

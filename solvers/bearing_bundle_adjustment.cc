@@ -7,6 +7,7 @@
 
 #include "core/whitening.h"
 #include "problems/bearing_odometry_residual.h"
+#include "problems/bearing_time_offset_residual.h"
 #include "problems/positive_manifold.h"
 #include "solvers/martinelli_closed_form.h"
 
@@ -148,6 +149,11 @@ BearingProblem::BearingProblem(const BearingLog& log, const BearingParams& initi
   unit_covariance_.reserve(num_intervals);
   sqrt_information_.assign(num_intervals, Eigen::Matrix3d::Identity());
 
+  time_offset_[0] = options.model_time_offset ? options.time_offset_s : 0.0;
+  if (options.model_time_offset) {
+    problem_->AddParameterBlock(time_offset_, 1);
+    if (options.fix_time_offset) problem_->SetParameterBlockConstant(time_offset_);
+  }
   const double r = log.meta.wheel_radius_m;
   const double b = log.meta.wheelbase_m;
   for (size_t i = 0; i < log.runs.size(); ++i) {
@@ -165,11 +171,19 @@ BearingProblem::BearingProblem(const BearingLog& log, const BearingParams& initi
         problem_->AddResidualBlock(cost, nullptr, Node(i, k - 1), Node(i, k), calibration_);
         odometry_.push_back(OdometryTerm{static_cast<int>(i), static_cast<int>(k), cost});
       }
-      if (nodes.bearing[k] >= 0) {
-        const double beta = run.bearings[nodes.bearing[k]].bearing_rad;
-        ceres::CostFunction* cost =
-            BearingObservationResidual::Create(beta, &inverse_bearing_sigma_);
-        problem_->AddResidualBlock(cost, loss_.get(), Node(i, k), calibration_);
+      const int j = nodes.bearing[k];
+      const bool used = j >= 0 && (options.use_bearing.empty() || options.use_bearing[i][j]);
+      if (used) {
+        const double beta = run.bearings[j].bearing_rad;
+        ceres::CostFunction* cost = nullptr;
+        if (options.model_time_offset) {
+          cost = BearingTimeOffsetResidual::Create(beta, nodes.t_s[k], &odometry, r, b,
+                                                   &inverse_bearing_sigma_);
+          problem_->AddResidualBlock(cost, loss_.get(), Node(i, k), calibration_, time_offset_);
+        } else {
+          cost = BearingObservationResidual::Create(beta, &inverse_bearing_sigma_);
+          problem_->AddResidualBlock(cost, loss_.get(), Node(i, k), calibration_);
+        }
         bearings_.push_back(
             BearingTerm{static_cast<int>(i), static_cast<int>(k), nodes.bearing[k], beta, cost});
         ++num_bearings_;
@@ -260,16 +274,119 @@ std::vector<std::vector<Pose2d>> BearingProblem::poses() const {
   return out;
 }
 
+double BearingProblem::BearingError(int run, int node, int bearing) const {
+  const double beta = log_->runs[run].bearings[bearing].bearing_rad;
+  if (!options_.model_time_offset) {
+    return BearingObservationResidual::Error(beta, Node(run, node), calibration_);
+  }
+  const BearingTimeOffsetResidual model(beta, nodes_[run].t_s[node], &log_->runs[run].odometry,
+                                        log_->meta.wheel_radius_m, log_->meta.wheelbase_m,
+                                        &inverse_bearing_sigma_);
+  return model.Error(Node(run, node), calibration_, time_offset_);
+}
+
+std::vector<double*> BearingProblem::TermBlocks(const BearingTerm& term) const {
+  std::vector<double*> blocks = {const_cast<double*>(Node(term.run, term.node)),
+                                 const_cast<double*>(calibration_)};
+  if (options_.model_time_offset) blocks.push_back(time_offset_);
+  return blocks;
+}
+
 std::vector<std::vector<double>> BearingProblem::BearingErrors() const {
   std::vector<std::vector<double>> errors(log_->runs.size());
   for (size_t i = 0; i < log_->runs.size(); ++i) {
     errors[i].assign(log_->runs[i].bearings.size(), 0.0);
-  }
-  for (const BearingTerm& term : bearings_) {
-    errors[term.run][term.bearing] = BearingObservationResidual::Error(
-        term.bearing_rad, Node(term.run, term.node), calibration_);
+    for (size_t k = 0; k < nodes_[i].t_s.size(); ++k) {
+      const int j = nodes_[i].bearing[k];
+      if (j >= 0) errors[i][j] = BearingError(static_cast<int>(i), static_cast<int>(k), j);
+    }
   }
   return errors;
+}
+
+double BearingProblem::Cost(double* time_offset_gradient) const {
+  double cost = 0.0;
+  problem_->Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
+  if (time_offset_gradient != nullptr) {
+    // ∂(½Σρ)/∂τ = Σ ρ'·r·∂r/∂τ (also when τ is held constant, as for a score test).
+    double gradient = 0.0;
+    for (const BearingTermInfo& info : BearingTerms()) {
+      gradient += info.rho1 * info.residual * info.sensitivity;
+    }
+    *time_offset_gradient = gradient;
+  }
+  return cost;
+}
+
+std::vector<BearingProblem::BearingTermInfo> BearingProblem::BearingTerms() const {
+  std::vector<BearingTermInfo> out;
+  out.reserve(bearings_.size());
+  for (const BearingTerm& term : bearings_) {
+    BearingTermInfo info;
+    info.run = term.run;
+    info.bearing = term.bearing;
+    info.t_s = nodes_[term.run].t_s[term.node];
+    const std::vector<double*> blocks = TermBlocks(term);
+    double jacobian_offset = 0.0;
+    std::vector<double*> jacobians(blocks.size(), nullptr);
+    if (options_.model_time_offset) jacobians.back() = &jacobian_offset;
+    term.cost->Evaluate(blocks.data(), &info.residual, jacobians.data());
+    info.sensitivity = jacobian_offset;
+    double rho[3] = {0.0, 1.0, 0.0};
+    if (loss_) loss_->Evaluate(info.residual * info.residual, rho);
+    info.rho1 = rho[1];
+    info.rho2 = rho[2];
+    out.push_back(info);
+  }
+  return out;
+}
+
+void BearingProblem::LossConstants(double* likelihood_ratio_scale, double* lambda) const {
+  double weight = 0.0, meat = 0.0, bread = 0.0;
+  for (const BearingTermInfo& info : BearingTerms()) {
+    const double s = info.residual * info.residual;
+    weight += info.rho1;
+    meat += info.rho1 * info.rho1 * s;
+    bread += info.rho1 + 2.0 * info.rho2 * s;
+  }
+  *likelihood_ratio_scale =
+      bread > 0.0 && meat > 0.0 ? meat / bread / bearing_redundancy_fraction_ : 1.0;
+  *lambda = weight > 0.0 && bread > 0.0 ? bread / weight : 1.0;
+}
+
+StatusOr<BearingProblem::TimeOffsetCovariance> BearingProblem::CovarianceWithTimeOffset() const {
+  if (!options_.model_time_offset) return Status::Error("the problem does not model τ");
+  // A constant block has no covariance: free τ while Ceres computes it.
+  const bool was_constant = problem_->IsParameterBlockConstant(time_offset_);
+  if (was_constant) problem_->SetParameterBlockVariable(time_offset_);
+  ceres::Covariance::Options covariance_options;
+  covariance_options.num_threads = options_.num_threads;
+  covariance_options.algorithm_type = ceres::SPARSE_QR;
+  covariance_options.apply_loss_function = true;
+  ceres::Covariance covariance(covariance_options);
+  std::vector<std::pair<const double*, const double*>> pairs = {
+      {calibration_, calibration_}, {calibration_, time_offset_}, {time_offset_, time_offset_}};
+  for (size_t i = 0; i < poses_.size(); ++i) {
+    for (size_t k = 0; k < poses_[i].size(); ++k) pairs.emplace_back(Node(i, k), time_offset_);
+  }
+  const bool computed = covariance.Compute(pairs, problem_.get());
+  TimeOffsetCovariance out;
+  if (computed) {
+    Eigen::Matrix<double, kNumBearingParams + 1, kNumBearingParams + 1, Eigen::RowMajor> joint;
+    covariance.GetCovarianceMatrix({calibration_, time_offset_}, joint.data());
+    out.joint = joint;
+    out.pose_with_offset.resize(poses_.size());
+    for (size_t i = 0; i < poses_.size(); ++i) {
+      for (size_t k = 0; k < poses_[i].size(); ++k) {
+        Eigen::Vector3d c;
+        covariance.GetCovarianceBlock(Node(i, k), time_offset_, c.data());
+        out.pose_with_offset[i].push_back(c);
+      }
+    }
+  }
+  if (was_constant) problem_->SetParameterBlockConstant(time_offset_);
+  if (!computed) return Status::Error(kSingular);
+  return out;
 }
 
 double BearingProblem::LossWeight(double s) const {
@@ -282,9 +399,7 @@ double BearingProblem::LossWeight(double s) const {
 void BearingProblem::UpdateKappa() const {
   double sum_weight = 0.0, sum_meat = 0.0, sum_bread = 0.0;
   for (const BearingTerm& term : bearings_) {
-    const double e = BearingObservationResidual::Error(term.bearing_rad, Node(term.run, term.node),
-                                                       calibration_) *
-                     inverse_bearing_sigma_;
+    const double e = BearingError(term.run, term.node, term.bearing) * inverse_bearing_sigma_;
     const double s = e * e;
     double rho[3] = {s, 1.0, 0.0};
     if (loss_) loss_->Evaluate(s, rho);
@@ -358,10 +473,16 @@ StatusOr<BearingVarianceComponents> BearingProblem::VarianceComponents(
   ceres::Covariance covariance(covariance_options);
   std::vector<std::pair<const double*, const double*>> pairs;
   pairs.emplace_back(calibration_, calibration_);
+  const bool with_offset = options_.model_time_offset && !options_.fix_time_offset;
+  if (with_offset) {
+    pairs.emplace_back(calibration_, time_offset_);
+    pairs.emplace_back(time_offset_, time_offset_);
+  }
   for (size_t i = 0; i < poses_.size(); ++i) {
     for (size_t k = 0; k < poses_[i].size(); ++k) {
       pairs.emplace_back(Node(i, k), Node(i, k));
       pairs.emplace_back(Node(i, k), calibration_);
+      if (with_offset) pairs.emplace_back(Node(i, k), time_offset_);
       if (k > 0) pairs.emplace_back(Node(i, k - 1), Node(i, k));
     }
   }
@@ -381,21 +502,30 @@ StatusOr<BearingVarianceComponents> BearingProblem::VarianceComponents(
   // leverages then sum to the number of free parameters).
   for (const BearingTerm& term : bearings_) {
     const double* pose = Node(term.run, term.node);
-    const double* parameters[2] = {pose, calibration_};
+    const std::vector<double*> parameters = TermBlocks(term);
     double residual = 0.0;
     Eigen::Matrix<double, 1, 3, Eigen::RowMajor> j_pose;
     Eigen::Matrix<double, 1, kC, Eigen::RowMajor> j_cal;
-    double* jacobians[2] = {j_pose.data(), j_cal.data()};
-    if (!term.cost->Evaluate(parameters, &residual, jacobians)) {
+    double j_offset = 0.0;
+    double* jacobians[3] = {j_pose.data(), j_cal.data(), &j_offset};
+    if (!term.cost->Evaluate(parameters.data(), &residual, jacobians)) {
       return Status::Error("a bearing residual could not be evaluated");
     }
-    Eigen::Matrix<double, 1, 3 + kC> j;
-    j << j_pose, j_cal;
-    Eigen::Matrix<double, 3 + kC, 3 + kC> c;
+    // Blocks (pose, c[, τ]): J·C·Jᵀ.
+    const int size = 3 + kC + (with_offset ? 1 : 0);
+    Eigen::RowVectorXd j(size);
+    j << j_pose, j_cal, Eigen::RowVectorXd::Constant(size - 3 - kC, j_offset);
+    Eigen::MatrixXd c(size, size);
     c.topLeftCorner<3, 3>() = block(pose, pose, 3, 3);
-    c.topRightCorner<3, kC>() = block(pose, calibration_, 3, kC);
-    c.bottomLeftCorner<kC, 3>() = c.topRightCorner<3, kC>().transpose();
-    c.bottomRightCorner<kC, kC>() = cc;
+    c.block<3, kC>(0, 3) = block(pose, calibration_, 3, kC);
+    c.block<kC, 3>(3, 0) = c.block<3, kC>(0, 3).transpose();
+    c.block<kC, kC>(3, 3) = cc;
+    if (with_offset) {
+      c.block<3, 1>(0, 3 + kC) = block(pose, time_offset_, 3, 1);
+      c.block<kC, 1>(3, 3 + kC) = block(calibration_, time_offset_, kC, 1);
+      c.block<1, 3 + kC>(3 + kC, 0) = c.block<3 + kC, 1>(0, 3 + kC).transpose();
+      c(3 + kC, 3 + kC) = block(time_offset_, time_offset_, 1, 1)(0, 0);
+    }
     const double h = LossWeight(residual * residual) * (j * c * j.transpose())(0, 0);
     out.total_leverage += h;
     all_bearing_redundancy += 1.0 - h;
@@ -410,6 +540,7 @@ StatusOr<BearingVarianceComponents> BearingProblem::VarianceComponents(
     const double* p0 = Node(term.run, term.node - 1);
     const double* p1 = Node(term.run, term.node);
     const double* parameters[3] = {p0, p1, calibration_};
+    // (The odometry terms do not depend on τ.)
     Eigen::Vector3d residual;
     Eigen::Matrix<double, 3, 3, Eigen::RowMajor> j0, j1;
     Eigen::Matrix<double, 3, kC, Eigen::RowMajor> jc;

@@ -80,6 +80,15 @@ struct BearingAdjustmentOptions {
   // single encoder step (rank 2) or a robot standing still still whitens.
   double covariance_floor_relative = 1e-6;
   double covariance_floor_absolute = 1e-7;
+  // Models the bearings' clock offset τ (problems/bearing_time_offset_residual.h): a bearing
+  // stamped t was taken at t + τ. τ starts at `time_offset_s` and is estimated unless
+  // `fix_time_offset` (then it only adds its sensitivity, for score tests at τ = 0).
+  bool model_time_offset = false;
+  double time_offset_s = 0.0;
+  bool fix_time_offset = false;
+  // Per run (log order), per bearing: false leaves that bearing out of the fit (held-out
+  // blocks); its pose stays, tied by the odometry. Empty: every bearing is used.
+  std::vector<std::vector<bool>> use_bearing;
 };
 
 // The nodes of one run: times (s) and, per node, the index of its bearing in the run (−1 for the
@@ -137,8 +146,34 @@ class BearingProblem {
   // Recomputes the encoder covariances Σ₁ at the current (δ, ξ), then re-whitens.
   void Relinearize();
 
-  // wrap(β − β̂) (rad) of every bearing, per run in log order.
+  // wrap(β − β̂) (rad) of every bearing, per run in log order (left-out bearings included).
   std::vector<std::vector<double>> BearingErrors() const;
+  // τ (s; 0 unless the options model it).
+  double time_offset() const { return time_offset_[0]; }
+  // ½Σρ of the problem as it stands, and its gradient with respect to τ (0 without τ).
+  double Cost(double* time_offset_gradient = nullptr) const;
+  // ∂r/∂τ (whitened, per bearing term in the order of BearingTerms) and the loss's ρ', ρ''.
+  struct BearingTermInfo {
+    int run = 0;
+    int bearing = 0;
+    double t_s = 0.0;
+    double residual = 0.0;     // Whitened.
+    double sensitivity = 0.0;  // ∂r/∂τ (0 without τ).
+    double rho1 = 1.0, rho2 = 0.0;
+  };
+  std::vector<BearingTermInfo> BearingTerms() const;
+  // Robust-loss constants of the bearing terms, with the residuals' shrinkage by their leverage
+  // counted back (as the covariance's κ): the likelihood-ratio scale mean(ρ'²s)/mean(ρ' + 2ρ''s)
+  // (2·Δcost/scale is χ² under the null) and λ = mean(ρ' + 2ρ''s)/mean(ρ').
+  void LossConstants(double* likelihood_ratio_scale, double* lambda) const;
+  // Covariance of (φ, ψ, η, δ, ξ, τ) as ceres::Covariance gives it (no loss correction), and
+  // the covariances of every pose block with τ (per run, per node), for projecting the poses out
+  // of τ's sensitivity. Requires model_time_offset.
+  struct TimeOffsetCovariance {
+    Eigen::Matrix<double, kNumBearingParams + 1, kNumBearingParams + 1> joint;
+    std::vector<std::vector<Eigen::Vector3d>> pose_with_offset;
+  };
+  StatusOr<TimeOffsetCovariance> CovarianceWithTimeOffset() const;
   // The robust loss's weight ρ'(s) for a squared whitened residual s (1 without a loss).
   double LossWeight(double s) const;
 
@@ -179,6 +214,10 @@ class BearingProblem {
     double bearing_rad = 0.0;
     const ceres::CostFunction* cost = nullptr;
   };
+  // wrap(β − β̂) of bearing `bearing` of run `run` at node `node`.
+  double BearingError(int run, int node, int bearing) const;
+  // The parameter blocks of a bearing term.
+  std::vector<double*> TermBlocks(const BearingTerm& term) const;
 
   double* Node(int run, int node) { return poses_[run][node].data(); }
   const double* Node(int run, int node) const { return poses_[run][node].data(); }
@@ -193,6 +232,7 @@ class BearingProblem {
   BearingAdjustmentOptions options_;
   BearingNoise noise_;
   double calibration_[kNumBearingParams];
+  mutable double time_offset_[1] = {0.0};
   std::vector<std::vector<std::array<double, 3>>> poses_;
   std::vector<Eigen::Matrix3d> unit_covariance_;   // Σ₁ per odometry term.
   std::vector<Eigen::Matrix3d> sqrt_information_;  // Stable addresses (sized once).

@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <string>
 #include <vector>
 
 // Where a mismatch lives: change points of a series over time (CUSUM) and the dependence of
@@ -44,6 +45,48 @@ struct BinnedMeans {
 };
 BinnedMeans BinByCovariate(const std::vector<double>& covariate, const Eigen::MatrixXd& values,
                            const Eigen::VectorXd& weights, int bins);
+
+// Where a finding's mismatch lives.
+struct MismatchLocation {
+  // The covariate its signal follows best (LaserCovariateNames, BearingCovariateNames).
+  std::string covariate;
+  double explained = 0.0;  // Share of the signal the covariate's binned means explain.
+  struct Window {
+    double start_s = 0.0;  // From the log start.
+    double end_s = 0.0;
+    double share = 0.0;  // Of the score.
+    double rate = 0.0;   // Mean score contribution per sample.
+  };
+  std::vector<Window> windows;  // Time windows of different score rates (one: throughout).
+};
+
+// Binned residuals against one covariate, before (baseline) and after (final fit). Channels:
+// the unwhitened error components (laser: x, y (m), θ (rad); bearing: β (rad)) and, in a
+// finding's profile, one more: the whitened residual along the finding's signal (its score
+// density, σ units).
+struct CovariateProfile {
+  std::string name;
+  std::string unit;
+  // Per channel: axis label and display scale (empty: the laser's x, y, θ and signal).
+  std::vector<std::string> channel_labels;
+  std::vector<double> channel_scales;
+  std::vector<double> center;
+  std::vector<Eigen::VectorXd> before_mean, before_stderr;
+  std::vector<Eigen::VectorXd> after_mean, after_stderr;
+  double before_statistic = 0.0, after_statistic = 0.0;  // χ² of the bin means (error channels).
+  double before_p_value = 1.0, after_p_value = 1.0;
+  int dof = 0;
+};
+
+// Structure left in the residuals of a fit, whether or not a candidate explains it.
+struct ResidualStructure {
+  bool found = false;           // Some covariate or the time change point is significant (Holm).
+  std::string covariate;        // The most significant covariate ("" when none).
+  double p_value = 1.0;         // Its p-value.
+  double change_time_s = -1.0;  // A change of the mean residual over time (< 0: none).
+  double change_p_value = 1.0;
+  std::string statement;
+};
 
 }  // namespace calib
 

@@ -300,11 +300,11 @@ const std::vector<std::string>& CovariateWords() {
 }
 
 // A covariate profile of before/after residuals; `along` adds the residual projected on a signal.
-LaserCovariateProfile Profile(const std::string& name, const std::string& unit,
+CovariateProfile Profile(const std::string& name, const std::string& unit,
                               const std::vector<double>& covariate, const Eigen::MatrixXd& before,
                               const Eigen::VectorXd& before_weight, const Eigen::MatrixXd& after,
                               const Eigen::VectorXd& after_weight, int bins) {
-  LaserCovariateProfile profile;
+  CovariateProfile profile;
   profile.name = name;
   profile.unit = unit;
   const BinnedMeans b = BinByCovariate(covariate, before, before_weight, bins);
@@ -326,10 +326,10 @@ LaserCovariateProfile Profile(const std::string& name, const std::string& unit,
 
 // Residual structure of a fit: Holm over the covariates' binned-mean tests and the time
 // change-point test of the weighted whitened residuals.
-LaserResidualStructure Structure(const Context& context,
+ResidualStructure Structure(const Context& context,
                                  const std::vector<std::vector<double>>& covariates,
                                  const LaserEffectEvaluation& evaluation) {
-  LaserResidualStructure structure;
+  ResidualStructure structure;
   const Eigen::Index n = evaluation.residual.rows();
   Eigen::MatrixXd weighted(n, 3);
   for (Eigen::Index k = 0; k < n; ++k) {
@@ -947,7 +947,7 @@ StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& interva
           const std::vector<SeriesSegment> segments = SegmentMeans(
               a.contributions, 0.01, 3, options.change_trim, std::max<size_t>(20, n / 50));
           for (const SeriesSegment& s : segments) {
-            LaserLocation::Window w;
+            MismatchLocation::Window w;
             w.start_s = intervals[s.begin].start_s - context.log_start_s;
             w.end_s = intervals[s.end - 1].start_s + intervals[s.end - 1].duration_s -
                       context.log_start_s;

@@ -11,6 +11,7 @@
 #include "core/status.h"
 #include "problems/laser_effect_residual.h"
 #include "solvers/calibrate_laser.h"
+#include "solvers/change_point.h"
 #include "solvers/laser_effect_fit.h"
 
 // `calib diagnose` for the laser problem: finds physics that the base model leaves out, even
@@ -74,33 +75,6 @@ struct LaserFitReport {
   int inliers = 0;
 };
 
-// Where a finding's mismatch lives.
-struct LaserLocation {
-  std::string covariate;   // The covariate its signal follows best (see LaserCovariateNames).
-  double explained = 0.0;  // Share of the signal the covariate's binned means explain.
-  struct Window {
-    double start_s = 0.0;  // From the log start.
-    double end_s = 0.0;
-    double share = 0.0;  // Of the score.
-    double rate = 0.0;   // Mean score contribution per interval.
-  };
-  std::vector<Window> windows;  // Time windows of different score rates (one: throughout).
-};
-
-// Binned residuals against one covariate, before (baseline) and after (final fit). Channels:
-// the unwhitened error components x, y (m), θ (rad) and, in a finding's profile, a fourth: the
-// whitened residual along the finding's signal (its score density, σ units).
-struct LaserCovariateProfile {
-  std::string name;
-  std::string unit;
-  std::vector<double> center;
-  std::vector<Eigen::VectorXd> before_mean, before_stderr;
-  std::vector<Eigen::VectorXd> after_mean, after_stderr;
-  double before_statistic = 0.0, after_statistic = 0.0;  // χ² of the bin means (x, y, θ).
-  double before_p_value = 1.0, after_p_value = 1.0;
-  int dof = 0;
-};
-
 struct LaserFinding {
   LaserEffect effect = LaserEffect::kTimeOffset;
   std::string name;
@@ -144,18 +118,8 @@ struct LaserFinding {
   // parameters) that the base fit had hidden by shifting its parameters.
   double absorbed_share = 0.0;
   LaserParamVector base_shift_sigmas = LaserParamVector::Zero();
-  LaserLocation location;
-  LaserCovariateProfile profile;  // Adopted: residuals against location.covariate.
-  std::string statement;
-};
-
-// Structure left in the residuals of a fit, whether or not a candidate explains it.
-struct LaserResidualStructure {
-  bool found = false;           // Some covariate or the time change point is significant (Holm).
-  std::string covariate;        // The most significant covariate ("" when none).
-  double p_value = 1.0;         // Its p-value.
-  double change_time_s = -1.0;  // A change of the mean residual over time (< 0: none).
-  double change_p_value = 1.0;
+  MismatchLocation location;
+  CovariateProfile profile;  // Adopted: residuals against location.covariate.
   std::string statement;
 };
 
@@ -164,9 +128,9 @@ struct LaserDiagnosis {
   LaserFitReport final_fit;
   std::vector<LaserFinding> findings;  // One per candidate, adopted ones first (in order).
   std::vector<LaserEffect> adopted;
-  std::vector<LaserCovariateProfile> covariates;
-  LaserResidualStructure structure_before;
-  LaserResidualStructure structure_after;
+  std::vector<CovariateProfile> covariates;
+  ResidualStructure structure_before;
+  ResidualStructure structure_after;
   int samples = 0;
   int steps = 0;
   double seconds = 0.0;

@@ -24,8 +24,15 @@ nlohmann::ordered_json Matrix(const Eigen::MatrixXd& m) {
   return rows;
 }
 
-// The observable set, and the metric set after it when there is one.
-nlohmann::ordered_json ParamObject(const BearingParamVector& v, const BearingMetricVector* metric) {
+int Fail(const std::string& message) {
+  std::fprintf(stderr, "calib: error: %s\n", message.c_str());
+  return 1;
+}
+
+}  // namespace
+
+nlohmann::ordered_json BearingParamObject(const BearingParamVector& v,
+                                          const BearingMetricVector* metric) {
   nlohmann::ordered_json object;
   for (int i = 0; i < kNumBearingParams; ++i) object[kBearingParamNames[i]] = v(i);
   if (metric != nullptr) {
@@ -33,13 +40,6 @@ nlohmann::ordered_json ParamObject(const BearingParamVector& v, const BearingMet
   }
   return object;
 }
-
-int Fail(const std::string& message) {
-  std::fprintf(stderr, "calib: error: %s\n", message.c_str());
-  return 1;
-}
-
-}  // namespace
 
 bool IsBearingLogDirectory(const std::string& path) {
   namespace fs = std::filesystem;
@@ -57,10 +57,10 @@ nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
   out["units"] = "m, rad; eta and xi in 1/m";
   const BearingMetricVector metric = ToVector(result.metric);
   const BearingMetricVector seed_metric = ToVector(result.seed_metric);
-  out["estimate"] = ParamObject(ToVector(result.estimate), result.has_metric ? &metric : nullptr);
-  out["stddev"] = ParamObject(result.stddev, result.has_metric ? &result.metric_stddev : nullptr);
+  out["estimate"] = BearingParamObject(ToVector(result.estimate), result.has_metric ? &metric : nullptr);
+  out["stddev"] = BearingParamObject(result.stddev, result.has_metric ? &result.metric_stddev : nullptr);
   out["closed_form"] =
-      ParamObject(ToVector(result.seed), result.has_seed_metric ? &seed_metric : nullptr);
+      BearingParamObject(ToVector(result.seed), result.has_seed_metric ? &seed_metric : nullptr);
   out["closed_form_method"] =
       result.seed_method == "closed_form"
           ? "Martinelli's closed form on the circular runs"

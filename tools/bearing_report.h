@@ -12,6 +12,11 @@ namespace calib {
 // meta.json (a laser stream directory holds odometry.csv and sensor_poses.csv only).
 bool IsBearingLogDirectory(const std::string& path);
 
+// {PARAM: value} with the contract's names: the observable set, then ρ, δR, δL, δB when `metric`
+// is given.
+nlohmann::ordered_json BearingParamObject(const BearingParamVector& v,
+                                          const BearingMetricVector* metric);
+
 // The contract's OUT.json for the bearing problem (SI units, radians), with the detail a user
 // needs to check the result: covariance, noise levels, per-run fit, timings.
 nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,

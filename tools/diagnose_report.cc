@@ -11,6 +11,8 @@
 #include <sstream>
 
 #include "core/laser_log_io.h"
+#include "tools/bearing_diagnose_report.h"
+#include "tools/bearing_report.h"
 
 // Shared with `calib calibrate` (defined in calib_main.cc).
 DECLARE_string(input);
@@ -94,7 +96,9 @@ nlohmann::ordered_json FitJson(const LaserFitReport& fit) {
   return out;
 }
 
-nlohmann::ordered_json ProfileJson(const LaserCovariateProfile& profile) {
+}  // namespace
+
+nlohmann::ordered_json ProfileJson(const CovariateProfile& profile) {
   nlohmann::ordered_json out;
   out["covariate"] = profile.name;
   out["unit"] = profile.unit;
@@ -104,10 +108,16 @@ nlohmann::ordered_json ProfileJson(const LaserCovariateProfile& profile) {
     for (const Eigen::VectorXd& v : values) array.push_back(Vector(v));
     return array;
   };
-  out["channels"] =
-      profile.before_mean.empty() || profile.before_mean[0].size() == 3
+  const Eigen::Index channels = profile.before_mean.empty() ? 0 : profile.before_mean[0].size();
+  if (!profile.channel_labels.empty()) {
+    out["channels"] = channels == 1 ? nlohmann::ordered_json({"bearing [rad]"})
+                                    : nlohmann::ordered_json({"bearing [rad]", "along the effect [sigma]"});
+  } else {
+    out["channels"] =
+      channels == 0 || channels == 3
           ? nlohmann::ordered_json({"x [m]", "y [m]", "theta [rad]"})
           : nlohmann::ordered_json({"x [m]", "y [m]", "theta [rad]", "along the effect [sigma]"});
+  }
   out["before_mean"] = rows(profile.before_mean);
   out["before_stderr"] = rows(profile.before_stderr);
   out["after_mean"] = rows(profile.after_mean);
@@ -117,7 +127,7 @@ nlohmann::ordered_json ProfileJson(const LaserCovariateProfile& profile) {
   return out;
 }
 
-nlohmann::ordered_json StructureJson(const LaserResidualStructure& structure) {
+nlohmann::ordered_json StructureJson(const ResidualStructure& structure) {
   nlohmann::ordered_json out;
   out["found"] = structure.found;
   out["covariate"] = structure.covariate.empty() ? nlohmann::ordered_json(nullptr)
@@ -129,6 +139,8 @@ nlohmann::ordered_json StructureJson(const LaserResidualStructure& structure) {
   out["statement"] = structure.statement;
   return out;
 }
+
+namespace {
 
 std::string PlotName(const LaserFinding& finding) {
   return finding.name + "_vs_" + finding.location.covariate + ".svg";
@@ -178,7 +190,7 @@ nlohmann::ordered_json FindingJson(const LaserFinding& f, const std::vector<std:
     out["base_shift"] = shift;
     out["absorbed_share"] = f.absorbed_share;
     nlohmann::ordered_json windows = nlohmann::ordered_json::array();
-    for (const LaserLocation::Window& w : f.location.windows) {
+    for (const MismatchLocation::Window& w : f.location.windows) {
       windows.push_back(
           {{"start_s", w.start_s}, {"end_s", w.end_s}, {"share", w.share}, {"rate", w.rate}});
     }
@@ -240,12 +252,16 @@ std::string Escape(const std::string& text) {
 
 }  // namespace
 
-std::string CovariateProfileSvg(const LaserCovariateProfile& profile, const std::string& title) {
+std::string CovariateProfileSvg(const CovariateProfile& profile, const std::string& title) {
   const int channels =
       profile.before_mean.empty() ? 0 : static_cast<int>(profile.before_mean[0].size());
-  static const char* kLabels[] = {"x error [mm]", "y error [mm]", "θ error [mrad]",
-                                  "along the effect [σ]"};
-  static const double kScale[] = {1e3, 1e3, 1e3, 1.0};
+  std::vector<std::string> labels = {"x error [mm]", "y error [mm]", "θ error [mrad]",
+                                      "along the effect [σ]"};
+  std::vector<double> scales = {1e3, 1e3, 1e3, 1.0};
+  if (!profile.channel_labels.empty()) {
+    labels = profile.channel_labels;
+    scales = profile.channel_scales;
+  }
   const int columns = 2, rows = (channels + 1) / 2;
   const double panel_w = 430, panel_h = 250, left = 70, top = 84, gap_x = 40, gap_y = 84;
   const double width = left + columns * (panel_w + gap_x),
@@ -279,7 +295,7 @@ std::string CovariateProfileSvg(const LaserCovariateProfile& profile, const std:
         const auto& stderrs =
             series == &profile.before_mean ? profile.before_stderr : profile.after_stderr;
         if (b >= series->size()) continue;
-        const double m = (*series)[b](c) * kScale[c], e = 2.0 * stderrs[b](c) * kScale[c];
+        const double m = (*series)[b](c) * scales[c], e = 2.0 * stderrs[b](c) * scales[c];
         y_lo = std::min(y_lo, m - e);
         y_hi = std::max(y_hi, m + e);
       }
@@ -307,7 +323,7 @@ std::string CovariateProfileSvg(const LaserCovariateProfile& profile, const std:
           << oy + panel_h + 12 << ") rotate(-35)\">" << label << "</text>\n";
     }
     svg << "<text x=\"" << ox + panel_w / 2 << "\" y=\"" << oy - 8 << "\" text-anchor=\"middle\">"
-        << kLabels[c] << "</text>\n";
+        << labels[c] << "</text>\n";
     svg << "<text x=\"" << ox + panel_w / 2 << "\" y=\"" << oy + panel_h + 48
         << "\" text-anchor=\"middle\" fill=\"#555\">" << Escape(profile.name) << " ["
         << Escape(profile.unit) << "], bins of equal count</text>\n";
@@ -317,7 +333,7 @@ std::string CovariateProfileSvg(const LaserCovariateProfile& profile, const std:
       std::ostringstream line;
       for (size_t b = 0; b < means.size() && b < bins; ++b) {
         const double x = px_of(ox, b) + shift;
-        const double m = means[b](c) * kScale[c], e = 2.0 * stderrs[b](c) * kScale[c];
+        const double m = means[b](c) * scales[c], e = 2.0 * stderrs[b](c) * scales[c];
         line << (b ? " " : "") << x << "," << py(m);
         svg << "<line x1=\"" << x << "\" x2=\"" << x << "\" y1=\"" << py(m - e) << "\" y2=\""
             << py(m + e) << "\" stroke=\"" << colour << "\"/>";
@@ -362,7 +378,7 @@ StatusOr<std::vector<std::string>> WriteLaserDiagnosisPlots(const LaserDiagnosis
         CovariateProfileSvg(f.profile, f.name + ": residuals against " + f.location.covariate));
     if (!status.ok()) return status;
   }
-  for (const LaserCovariateProfile& profile : diagnosis.covariates) {
+  for (const CovariateProfile& profile : diagnosis.covariates) {
     if (profile.name != "time" && profile.name != diagnosis.structure_before.covariate &&
         profile.name != diagnosis.structure_after.covariate) {
       continue;
@@ -389,7 +405,7 @@ nlohmann::ordered_json LaserDiagnosisJson(const LaserDiagnosis& diagnosis, const
   out["residual_structure"] = {{"before", StructureJson(diagnosis.structure_before)},
                                {"after", StructureJson(diagnosis.structure_after)}};
   nlohmann::ordered_json profiles = nlohmann::ordered_json::array();
-  for (const LaserCovariateProfile& profile : diagnosis.covariates) {
+  for (const CovariateProfile& profile : diagnosis.covariates) {
     profiles.push_back(ProfileJson(profile));
   }
   out["figures"] = {
@@ -463,21 +479,30 @@ int RunDiagnoseCommand() {
   if (FLAGS_input.find(',') != std::string::npos) {
     return fail("diagnose takes one log (--input names several)");
   }
-  if (fs::is_directory(FLAGS_input) && fs::exists(fs::path(FLAGS_input) / "bearings.csv")) {
-    return fail(FLAGS_input +
-                ": the bearing problem's diagnosis is not available in this build "
-                "yet");
+  if (!(FLAGS_family_alpha > 0.0 && FLAGS_family_alpha < 1.0)) {
+    return fail("--family_alpha must be in (0, 1)");
+  }
+  if (FLAGS_cv_blocks < 2) return fail("--cv_blocks must be at least 2");
+  if (FLAGS_format == "auto" && IsBearingLogDirectory(FLAGS_input)) {
+    // One candidate (time_offset) for the bearing problem: --candidates, --max_effects and
+    // --boundary_speeds concern the laser's.
+    BearingDiagnoseFlags flags;
+    flags.input = FLAGS_input;
+    flags.output = FLAGS_output;
+    flags.plots_dir = FLAGS_plots_dir;
+    flags.loss = FLAGS_loss;
+    flags.loss_scale = FLAGS_loss_scale;
+    flags.alpha = FLAGS_family_alpha;
+    flags.cv_blocks = FLAGS_cv_blocks;
+    flags.quiet = FLAGS_quiet;
+    return DiagnoseBearingCommand(flags);
   }
   const StatusOr<LaserFormat> format = ParseLaserFormat(FLAGS_format);
   if (!format.ok()) return fail(format.message());
   const StatusOr<RobustLoss> loss = ParseRobustLoss(FLAGS_loss);
   if (!loss.ok()) return fail(loss.message());
   if (!(FLAGS_loss_scale > 0.0)) return fail("--loss_scale must be positive");
-  if (!(FLAGS_family_alpha > 0.0 && FLAGS_family_alpha < 1.0)) {
-    return fail("--family_alpha must be in (0, 1)");
-  }
   if (FLAGS_max_effects < 0) return fail("--max_effects must not be negative");
-  if (FLAGS_cv_blocks < 2) return fail("--cv_blocks must be at least 2");
 
   LaserDiagnosisOptions options;
   options.calibration.refinement.loss = *loss;

@@ -25,8 +25,12 @@ std::string LaserDiagnosisSummary(const LaserDiagnosis& diagnosis, const std::st
 StatusOr<std::vector<std::string>> WriteLaserDiagnosisPlots(const LaserDiagnosis& diagnosis,
                                                             const std::string& directory);
 
+// The JSON of a covariate profile and of a residual structure (shared by both problems).
+nlohmann::ordered_json ProfileJson(const CovariateProfile& profile);
+nlohmann::ordered_json StructureJson(const ResidualStructure& structure);
+
 // The SVG of one covariate profile (exposed for tests).
-std::string CovariateProfileSvg(const LaserCovariateProfile& profile, const std::string& title);
+std::string CovariateProfileSvg(const CovariateProfile& profile, const std::string& title);
 
 // The `calib diagnose` command (flags: --input, --output, --format, --loss, --loss_scale,
 // --quiet, and this file's --family_alpha, --max_effects, --cv_blocks, --candidates,
