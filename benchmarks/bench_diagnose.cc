@@ -11,7 +11,9 @@
 #include <vector>
 
 #include "benchmarks/bench_common.h"
+#include "core/bearing_simulator.h"
 #include "core/laser_simulator.h"
+#include "solvers/bearing_diagnosis.h"
 #include "solvers/laser_diagnosis.h"
 #include "solvers/score_test.h"
 
@@ -567,6 +569,103 @@ nlohmann::ordered_json RunPower(const PowerScenario& scenario, bool quick, int s
           {"wall_seconds", watch.Seconds()}};
 }
 
+// The bearing problem's one candidate, time_offset, on the weaving run of data/diagnose
+// (WeavingRun: 300 s, 2 Hz bearings, σβ = 1°, K = 1e-3): false alarms on null logs, and the
+// detection rate against τ next to the score test's power χ²₁(λ = τ²/σ_τ²) at the level, σ_τ the
+// mean one-step standard deviation of the null logs.
+nlohmann::ordered_json RunBearingTimeOffset(bool quick, int seeds) {
+  const int nulls = seeds > 0 ? seeds : (quick ? 4 : 100);
+  const int per_size = seeds > 0 ? seeds : (quick ? 2 : 30);
+  const std::vector<double> taus = {0.05, 0.1, 0.15};
+  struct Outcome {
+    bool ok = false;
+    bool adopted = false;
+    double value = 0.0, stddev = 0.0, one_step_stddev = 0.0;
+  };
+  const auto run = [](double tau, uint64_t seed) {
+    BearingSimOptions o;
+    o.seed = seed;
+    o.encoder_rate_hz = 5.0;
+    o.bearing_rate_hz = 2.0;
+    o.bearing_noise_rad = M_PI / 180.0;
+    o.initial_distance_run = 1;
+    o.time_offset_s = tau;
+    o.runs = {WeavingRun()};
+    Outcome out;
+    const StatusOr<BearingDiagnosis> d = DiagnoseBearing(SimulateBearingLog(o));
+    if (!d.ok()) return out;
+    out.ok = true;
+    const BearingFinding& f = d->findings[0];
+    out.adopted = f.significant;
+    out.value = f.value;
+    out.stddev = f.stddev;
+    out.one_step_stddev = f.one_step_stddev;
+    return out;
+  };
+  const BearingDiagnosisOptions defaults;
+  std::printf(
+      "\n== diagnose 3: bearing time_offset (weaving run, 300 s, 2 Hz bearings, σβ 1°; "
+      "alpha %.3g) ==\n",
+      defaults.alpha);
+  const Stopwatch watch;
+  std::vector<Outcome> null(nulls);
+  ParallelFor(nulls, kThreads, [&](int i) { null[i] = run(0.0, 50000 + i); });
+  Proportion alarms;
+  std::vector<double> sigmas;
+  int failed = 0;
+  for (const Outcome& o : null) {
+    if (!o.ok) {
+      ++failed;
+      continue;
+    }
+    ++alarms.n;
+    alarms.k += o.adopted ? 1 : 0;
+    sigmas.push_back(o.one_step_stddev);
+  }
+  const double sigma_tau = Mean(sigmas);
+  std::printf(
+      "  null logs (seeds 50000..%d): adopted %s = %s, 95%% CI %s; %d failed; one-step "
+      "σ_τ %.1f ms\n",
+      50000 + nulls - 1, alarms.Text().c_str(), alarms.Percent().c_str(), alarms.Interval().c_str(),
+      failed, sigma_tau * 1e3);
+  const double critical = ChiSquare1Critical(defaults.alpha);
+  TextTable table(
+      {"τ [ms]", "τ/σ_τ", "logs", "adopted", "rate", "theory", "mean τ̂ [ms]", "|τ̂ − τ| ≤ 2σ"});
+  nlohmann::ordered_json sizes = nlohmann::ordered_json::array();
+  for (size_t k = 0; k < taus.size(); ++k) {
+    const double tau = taus[k];
+    std::vector<Outcome> logs(per_size);
+    ParallelFor(per_size, kThreads, [&](int i) { logs[i] = run(tau, 60000 + 1000 * k + i); });
+    Proportion detected, covered;
+    std::vector<double> values;
+    for (const Outcome& o : logs) {
+      if (!o.ok) continue;
+      ++detected.n;
+      detected.k += o.adopted ? 1 : 0;
+      if (o.adopted) {
+        ++covered.n;
+        covered.k += std::abs(o.value - tau) <= 2.0 * o.stddev ? 1 : 0;
+        values.push_back(o.value);
+      }
+    }
+    const double theory = NoncentralChiSquare1Tail(critical, tau * tau / (sigma_tau * sigma_tau));
+    table.AddRow({Format("%.0f", tau * 1e3), Format("%.1f", tau / sigma_tau),
+                  Format("%d", detected.n), detected.Text(), detected.Percent(),
+                  Format("%.1f%%", 100.0 * theory),
+                  values.empty() ? "-" : Format("%.1f", Mean(values) * 1e3),
+                  covered.n > 0 ? covered.Text() : "-"});
+    sizes.push_back({{"tau_s", tau},
+                     {"detected", detected.Json()},
+                     {"theoretical_power", theory},
+                     {"mean_estimate_s", values.empty() ? NAN : Mean(values)},
+                     {"within_2_sigma", covered.Json()}});
+  }
+  table.Print();
+  std::printf("  (%.1f s)\n", watch.Seconds());
+  return {{"false_alarms", alarms.Json()}, {"failed", failed}, {"sigma_tau_s", sigma_tau},
+          {"alpha", defaults.alpha},       {"power", sizes},   {"wall_seconds", watch.Seconds()}};
+}
+
 }  // namespace
 
 nlohmann::ordered_json RunDiagnoseBench(bool quick, int seeds) {
@@ -595,6 +694,7 @@ nlohmann::ordered_json RunDiagnoseBench(bool quick, int seeds) {
   }
   j["power"] = power;
   j["power_skipped"] = "speed_dependent_radius: not modelled by the simulator";
+  j["bearing_time_offset"] = RunBearingTimeOffset(quick, seeds);
   j["wall_seconds"] = watch.Seconds();
   std::printf("diagnose section: %.1f s\n", watch.Seconds());
   return j;

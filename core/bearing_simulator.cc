@@ -38,6 +38,18 @@ std::vector<BearingRunSpec> MartinelliRuns(const Pose2d& world_T_robot_start) {
   return runs;
 }
 
+BearingRunSpec WeavingRun(double duration_s, double period_s, double swing, double speed_mps,
+                          const Pose2d& world_T_robot_start) {
+  BearingRunSpec spec;
+  spec.wheel_speeds = [=](double t) {
+    const double s = swing * std::sin(2.0 * M_PI * t / period_s);
+    return WheelSpeeds{speed_mps * (1.0 - s), speed_mps * (1.0 + s)};
+  };
+  spec.duration_s = duration_s;
+  spec.world_T_robot_start = world_T_robot_start;
+  return spec;
+}
+
 BearingLog SimulateBearingLog(const BearingSimOptions& options, BearingSimTruth* truth) {
   const BearingMetricParams& m = options.truth;
   const double r = options.wheel_radius_m;

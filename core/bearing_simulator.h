@@ -76,6 +76,13 @@ struct BearingSimTruth {
 // The runs of Martinelli's §8.1: q = 0.9, 0, −1, one loop each, from `start`.
 std::vector<BearingRunSpec> MartinelliRuns(const Pose2d& world_T_robot_start = Pose2d(0, -1, 0));
 
+// A run at constant nominal speed whose turn rate swings sinusoidally: wheel speeds
+// speed·(1 ∓ swing·sin(2πt/period)), so ω = 2·speed·swing/B·sin(2πt/period) (nominal). Its
+// curvature varies (the calibration is observable) while v stays constant.
+BearingRunSpec WeavingRun(double duration_s = 300.0, double period_s = 80.0, double swing = 0.9,
+                          double speed_mps = 0.05,
+                          const Pose2d& world_T_robot_start = Pose2d(0.0, -1.0, 0.0));
+
 BearingLog SimulateBearingLog(const BearingSimOptions& options, BearingSimTruth* truth = nullptr);
 
 }  // namespace calib

@@ -26,12 +26,6 @@ std::string Format(const char* format, double a, double b = 0.0, double c = 0.0)
   return text;
 }
 
-std::string PValueText(double p) {
-  if (p < 1e-9) return "p < 1e-9";
-  if (p < 1e-3) return Format("p = %.1e", p);
-  return Format("p = %.3f", p);
-}
-
 // Display: angles in degrees, η and ξ in 1/m, δ unitless.
 double ParamScale(int i) { return i == kBearingPhi || i == kBearingPsi ? kDegrees : 1.0; }
 const char* ParamUnit(int i) {
@@ -85,14 +79,14 @@ std::pair<double, int> InlierRms(const std::vector<std::vector<double>>& errors,
 
 // Per bearing (in log order, runs concatenated): what the location and the plots need.
 struct BearingSeries {
-  std::vector<double> t_s;       // From the log start.
-  std::vector<double> speed;     // v (m/s, nominal wheel radius, gauge δR = 1).
-  std::vector<double> turn;      // ω (rad/s).
-  std::vector<double> rate;      // Predicted bearing rate (rad/s).
-  std::vector<double> error;     // wrap(β − β̂) (rad).
-  std::vector<double> signal;    // ρ'·r·∂r/∂τ (score density; 0 for left-out bearings).
-  std::vector<double> weight;    // ρ'.
-  std::vector<size_t> index;     // Flat index → (run, bearing) in log order.
+  std::vector<double> t_s;     // From the log start.
+  std::vector<double> speed;   // v (m/s, nominal wheel radius, gauge δR = 1).
+  std::vector<double> turn;    // ω (rad/s).
+  std::vector<double> rate;    // Predicted bearing rate (rad/s).
+  std::vector<double> error;   // wrap(β − β̂) (rad).
+  std::vector<double> signal;  // ρ'·r·∂r/∂τ (score density; 0 for left-out bearings).
+  std::vector<double> weight;  // ρ'.
+  std::vector<size_t> index;   // Flat index → (run, bearing) in log order.
 };
 
 double LogStart(const BearingLog& log) {
@@ -121,9 +115,8 @@ BearingSeries Series(const BearingLog& log, const BearingProblem& problem, doubl
     const BearingRun& run = log.runs[i];
     for (size_t j = 0; j < run.bearings.size(); ++j) {
       const double t = run.bearings[j].t_s;
-      const Pose2d motion =
-          IntegrateEncoders(run.odometry, t - kHalfWindow, t + kHalfWindow, r, b, 1.0, p.delta,
-                            delta_b);
+      const Pose2d motion = IntegrateEncoders(run.odometry, t - kHalfWindow, t + kHalfWindow, r, b,
+                                              1.0, p.delta, delta_b);
       series.t_s.push_back(t - log_start_s);
       series.speed.push_back(motion(0) / (2.0 * kHalfWindow));
       series.turn.push_back(motion(2) / (2.0 * kHalfWindow));
@@ -189,17 +182,19 @@ CovariateProfile Profile(size_t which, const BearingSeries& before, const Bearin
     Eigen::VectorXd w = Column(s.weight);
     return w;
   };
-  const BinnedMeans b = BinByCovariate(Covariate(before, which), values(before), weights(before), bins);
-  const BinnedMeans a = BinByCovariate(Covariate(before, which), values(after), weights(after), bins);
+  const BinnedMeans b =
+      BinByCovariate(Covariate(before, which), values(before), weights(before), bins);
+  const BinnedMeans a =
+      BinByCovariate(Covariate(before, which), values(after), weights(after), bins);
   profile.center = b.center;
   profile.before_mean = b.mean;
   profile.before_stderr = b.standard_error;
   profile.after_mean = a.mean;
   profile.after_stderr = a.standard_error;
-  const BinnedMeans be = BinByCovariate(Covariate(before, which), Column(before.error),
-                                        weights(before), bins);
-  const BinnedMeans ae = BinByCovariate(Covariate(before, which), Column(after.error),
-                                        weights(after), bins);
+  const BinnedMeans be =
+      BinByCovariate(Covariate(before, which), Column(before.error), weights(before), bins);
+  const BinnedMeans ae =
+      BinByCovariate(Covariate(before, which), Column(after.error), weights(after), bins);
   profile.before_statistic = be.statistic;
   profile.after_statistic = ae.statistic;
   profile.before_p_value = be.p_value;
@@ -240,17 +235,17 @@ ResidualStructure Structure(const BearingSeries& s, int bins, double alpha) {
     }
   }
   if (!out.found) {
-    out.statement = "The bearing residuals follow none of time, speed, angular rate and bearing "
-                    "rate, and their mean does not change over time (smallest " +
-                    PValueText(tests[0].first) + ", family-wise level " +
-                    Format("%.2g", alpha) + ").";
+    out.statement =
+        "The bearing residuals follow none of time, speed, angular rate and bearing "
+        "rate, and their mean does not change over time (smallest " +
+        PValueText(tests[0].first) + ", family-wise level " + Format("%.2g", alpha) + ").";
     return out;
   }
   std::string text = "The bearing residuals still ";
   if (!out.covariate.empty()) {
-    const size_t c = std::find(BearingCovariateNames().begin(), BearingCovariateNames().end(),
-                               out.covariate) -
-                     BearingCovariateNames().begin();
+    const size_t c =
+        std::find(BearingCovariateNames().begin(), BearingCovariateNames().end(), out.covariate) -
+        BearingCovariateNames().begin();
     text += std::string("follow ") + CovariateWords(c) + " (binned means, " +
             PValueText(out.p_value) + ")";
   }
@@ -317,28 +312,29 @@ std::string ShiftWords(const BearingParamVector& shift, const BearingParamVector
     const int i = order[rank];
     if (rank > 0 && std::abs(sigmas(i)) < 1.0) break;
     if (rank > 0) text += " and ";
-    text += std::string(kBearingParamNames[i]) + " " +
-            Format("%+.3g", shift(i) * ParamScale(i)) + ParamUnit(i) +
-            Format(" (%.1f σ)", std::abs(sigmas(i)));
+    text += std::string(kBearingParamNames[i]) + " " + Format("%+.3g", shift(i) * ParamScale(i)) +
+            ParamUnit(i) + Format(" (%.1f σ)", std::abs(sigmas(i)));
   }
   return text;
 }
 
 void WriteStatement(BearingFinding* f) {
   if (f->no_information) {
-    f->statement = "The log's motion does not excite time_offset at all (no sensitivity): it can "
-                   "be neither found nor excluded.";
+    f->statement =
+        "The log's motion does not excite time_offset at all (no sensitivity): it can "
+        "be neither found nor excluded.";
     return;
   }
   if (f->confounded) {
-    f->statement = "A clock offset of the bearings is exactly absorbed by the runs' start poses "
-                   "(constant-speed motion only moves each run along its path): this log cannot "
-                   "see it, so it is not a finding.";
+    f->statement =
+        "A clock offset of the bearings is exactly absorbed by the runs' start poses "
+        "(constant-speed motion only moves each run along its path): this log cannot "
+        "see it, so it is not a finding.";
     return;
   }
-  const std::string tested =
-      Format("score test %.1f, ", f->statistic) + PValueText(f->p_value) +
-      Format(", %.0f %% of it absorbable by the base unknowns", 100.0 * std::max(0.0, f->concealment));
+  const std::string tested = Format("score test %.1f, ", f->statistic) + PValueText(f->p_value) +
+                             Format(", %.0f %% of it absorbable by the base unknowns",
+                                    100.0 * std::max(0.0, f->concealment));
   if (f->significant) {
     std::string text = Format(f->value >= 0.0 ? "The bearings are stamped %.1f ± %.1f ms early "
                                                 "relative to the encoders"
@@ -354,22 +350,15 @@ void WriteStatement(BearingFinding* f) {
                                  f->location.covariate) -
                        BearingCovariateNames().begin();
       text += std::string("; it follows ") + CovariateWords(c);
-      if (f->location.windows.size() > 1) {
-        const auto strongest =
-            std::max_element(f->location.windows.begin(), f->location.windows.end(),
-                             [](const auto& a, const auto& b) { return a.rate < b.rate; });
-        text += Format(", concentrated in t = %.0f–%.0f s", strongest->start_s, strongest->end_s);
-      } else {
-        text += ", throughout the log";
-      }
+      text += WindowWords(f->location);
     }
     f->statement = text + ".";
     return;
   }
   std::string text = "No time_offset adopted: " + tested;
   if (f->one_step_stddev > 0.0) {
-    text += Format("; one-step estimate %.1f ± %.1f ms", f->one_step * 1e3,
-                   f->one_step_stddev * 1e3);
+    text +=
+        Format("; one-step estimate %.1f ± %.1f ms", f->one_step * 1e3, f->one_step_stddev * 1e3);
   }
   if (f->refitted) {
     if (f->lr_p_value > f->holm_level) {
@@ -403,8 +392,9 @@ MismatchLocation Locate(const BearingSeries& s, int bins, double alpha) {
     MismatchLocation::Window w;
     w.start_s = s.t_s[segment.begin];
     w.end_s = s.t_s[segment.end - 1];
-    w.share = total != 0.0 ? signal.segment(segment.begin, segment.end - segment.begin).sum() / total
-                           : 0.0;
+    w.share = total != 0.0
+                  ? signal.segment(segment.begin, segment.end - segment.begin).sum() / total
+                  : 0.0;
     w.rate = segment.mean(0) * scale;
     location.windows.push_back(w);
   }
@@ -414,8 +404,7 @@ MismatchLocation Locate(const BearingSeries& s, int bins, double alpha) {
 }  // namespace
 
 const std::vector<std::string>& BearingCovariateNames() {
-  static const std::vector<std::string> names = {"time", "speed", "angular_rate",
-                                                 "bearing_rate"};
+  static const std::vector<std::string> names = {"time", "speed", "angular_rate", "bearing_rate"};
   return names;
 }
 
@@ -458,8 +447,8 @@ StatusOr<BearingDiagnosis> DiagnoseBearing(const BearingLog& log,
   out.final_fit = out.baseline;
 
   // Score test of τ = 0: τ added, held at 0.
-  ProblemPtr p1 = MakeProblem(log, p0->params(), p0->poses(), p0->noise(), adjustment,
-                              Model{true, 0.0, true});
+  ProblemPtr p1 =
+      MakeProblem(log, p0->params(), p0->poses(), p0->noise(), adjustment, Model{true, 0.0, true});
   if (!p1->VarianceComponents(inlier).ok()) {
     return Status::Error(source + ": the base fit's leverages could not be computed");
   }
@@ -468,7 +457,8 @@ StatusOr<BearingDiagnosis> DiagnoseBearing(const BearingLog& log,
   double score = 0.0;
   p1->Cost(&score);
   double a_tt = 0.0;
-  for (const auto& info : p1->BearingTerms()) a_tt += info.rho1 * info.sensitivity * info.sensitivity;
+  for (const auto& info : p1->BearingTerms())
+    a_tt += info.rho1 * info.sensitivity * info.sensitivity;
   const BearingSeries before = Series(log, *p1, log_start);
   out.structure_before = Structure(before, options.covariate_bins, options.alpha);
   StatusOr<BearingProblem::TimeOffsetCovariance> cov = p1->CovarianceWithTimeOffset();
@@ -518,8 +508,7 @@ StatusOr<BearingDiagnosis> DiagnoseBearing(const BearingLog& log,
     f.heldout_rms_before = held_before->rms();
     f.heldout_rms_after = held_after->rms();
     f.heldout_reduction = 1.0 - held_after->cost / held_before->cost;
-    const bool confirmed =
-        f.lr_p_value <= f.holm_level && held_after->cost < held_before->cost;
+    const bool confirmed = f.lr_p_value <= f.holm_level && held_after->cost < held_before->cost;
     report(Format("  LR %.1f, held-out %+.3f %%", f.lr_statistic, -100.0 * f.heldout_reduction) +
            (confirmed ? " → adopted" : ""));
     if (confirmed) {
@@ -551,20 +540,17 @@ StatusOr<BearingDiagnosis> DiagnoseBearing(const BearingLog& log,
     p2.SetNoise(reported);
     if (log.meta.initial_distance) {
       const InitialDistance& d = *log.meta.initial_distance;
-      const size_t run =
-          std::find_if(log.runs.begin(), log.runs.end(),
-                       [&](const BearingRun& r) { return r.id == d.run; }) -
-          log.runs.begin();
+      const size_t run = std::find_if(log.runs.begin(), log.runs.end(),
+                                      [&](const BearingRun& r) { return r.id == d.run; }) -
+                         log.runs.begin();
       StatusOr<BearingScaledWithDistanceMatrix> joint = p2.CovarianceWithStartDistance(run);
       if (!joint.ok()) return Status::Error(source + ": " + joint.message());
       fit.stddev = joint->diagonal().head<kNumBearingParams>().cwiseMax(0.0).cwiseSqrt();
       Eigen::Matrix<double, kNumBearingMetricParams, kNumBearingParams + 1> jacobian;
       fit.metric = BearingMetricFromScaled(fit.estimate, p2.StartDistance(run), d.meters,
                                            log.meta.wheelbase_m, &jacobian);
-      fit.metric_stddev = (jacobian * *joint * jacobian.transpose())
-                              .diagonal()
-                              .cwiseMax(0.0)
-                              .cwiseSqrt();
+      fit.metric_stddev =
+          (jacobian * *joint * jacobian.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
       fit.has_metric = true;
     } else {
       StatusOr<BearingParamMatrix> c = p2.Covariance();
@@ -574,9 +560,9 @@ StatusOr<BearingDiagnosis> DiagnoseBearing(const BearingLog& log,
     StatusOr<BearingProblem::TimeOffsetCovariance> with_offset = p2.CovarianceWithTimeOffset();
     if (!with_offset.ok()) return Status::Error(source + ": " + with_offset.message());
     fit.time_offset_s = p2.time_offset();
-    fit.time_offset_stddev_s = std::sqrt(
-        std::max(0.0, with_offset->joint(kNumBearingParams, kNumBearingParams)) *
-        p2.covariance_scale());
+    fit.time_offset_stddev_s =
+        std::sqrt(std::max(0.0, with_offset->joint(kNumBearingParams, kNumBearingParams)) *
+                  p2.covariance_scale());
     f.value = fit.time_offset_s;
     f.stddev = fit.time_offset_stddev_s;
     f.base_shift = ToVector(out.baseline.estimate) - ToVector(fit.estimate);
@@ -603,8 +589,7 @@ StatusOr<BearingDiagnosis> DiagnoseBearing(const BearingLog& log,
   }
   WriteStatement(&f);
   out.findings.push_back(f);
-  out.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
   return out;
 }
 

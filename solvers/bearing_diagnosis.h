@@ -38,8 +38,8 @@ namespace calib {
 
 struct BearingDiagnosisOptions {
   BearingCalibrationOptions calibration;  // The base fit.
-  double alpha = 0.01;  // Family-wise error rate (one candidate: its level).
-  int cv_blocks = 5;    // Contiguous held-out blocks per run.
+  double alpha = 0.01;                    // Family-wise error rate (one candidate: its level).
+  int cv_blocks = 5;                      // Contiguous held-out blocks per run.
   int covariate_bins = 10;
   std::function<void(const std::string&)> progress;
 };
@@ -54,8 +54,8 @@ struct BearingFitReport {
   BearingMetricVector metric_stddev = BearingMetricVector::Zero();
   double time_offset_s = 0.0;
   double time_offset_stddev_s = 0.0;
-  double rms_rad = 0.0;       // Of the inlier bearings' errors.
-  double robust_cost = 0.0;   // ½Σρ (whitened, bearings and odometry).
+  double rms_rad = 0.0;      // Of the inlier bearings' errors.
+  double robust_cost = 0.0;  // ½Σρ (whitened, bearings and odometry).
   int inliers = 0;
 };
 

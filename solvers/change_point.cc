@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 
 #include "solvers/score_test.h"
@@ -141,6 +142,24 @@ BinnedMeans BinByCovariate(const std::vector<double>& covariate, const Eigen::Ma
   result.p_value = ChiSquareSurvival(result.statistic, result.dof);
   result.explained = total > 0.0 ? std::min(1.0, explained / total) : 0.0;
   return result;
+}
+
+std::string PValueText(double p) {
+  char text[64];
+  if (p < 1e-9) return "p < 1e-9";
+  std::snprintf(text, sizeof(text), p < 1e-3 ? "p = %.1e" : "p = %.3f", p);
+  return text;
+}
+
+std::string WindowWords(const MismatchLocation& location) {
+  if (location.windows.size() <= 1) return ", throughout the log";
+  const auto strongest =
+      std::max_element(location.windows.begin(), location.windows.end(),
+                       [](const auto& a, const auto& b) { return a.rate < b.rate; });
+  char text[96];
+  std::snprintf(text, sizeof(text), ", concentrated in t = %.0f–%.0f s", strongest->start_s,
+                strongest->end_s);
+  return text;
 }
 
 }  // namespace calib

@@ -88,6 +88,13 @@ struct ResidualStructure {
   std::string statement;
 };
 
+// "p < 1e-9", "p = 3.2e-05", "p = 0.214": a p-value for a sentence.
+std::string PValueText(double p);
+
+// Where a finding's score concentrates, for its sentence: ", concentrated in t = a–b s" (the
+// window of the highest rate) or ", throughout the log".
+std::string WindowWords(const MismatchLocation& location);
+
 }  // namespace calib
 
 #endif  // CALIB_SOLVERS_CHANGE_POINT_H_

@@ -33,12 +33,6 @@ std::string Format(const char* format, double a, double b) {
   return text;
 }
 
-std::string PValueText(double p) {
-  if (p < 1e-9) return "p < 1e-9";
-  if (p < 1e-3) return Format("p = %.1e", p);
-  return Format("p = %.3f", p);
-}
-
 // Display units of the base parameters: mm and degrees.
 double ParamScale(int i) { return i == 5 ? 180.0 / M_PI : 1000.0; }
 const char* ParamUnit(int i) { return i == 5 ? "°" : "mm"; }
@@ -301,9 +295,9 @@ const std::vector<std::string>& CovariateWords() {
 
 // A covariate profile of before/after residuals; `along` adds the residual projected on a signal.
 CovariateProfile Profile(const std::string& name, const std::string& unit,
-                              const std::vector<double>& covariate, const Eigen::MatrixXd& before,
-                              const Eigen::VectorXd& before_weight, const Eigen::MatrixXd& after,
-                              const Eigen::VectorXd& after_weight, int bins) {
+                         const std::vector<double>& covariate, const Eigen::MatrixXd& before,
+                         const Eigen::VectorXd& before_weight, const Eigen::MatrixXd& after,
+                         const Eigen::VectorXd& after_weight, int bins) {
   CovariateProfile profile;
   profile.name = name;
   profile.unit = unit;
@@ -327,8 +321,8 @@ CovariateProfile Profile(const std::string& name, const std::string& unit,
 // Residual structure of a fit: Holm over the covariates' binned-mean tests and the time
 // change-point test of the weighted whitened residuals.
 ResidualStructure Structure(const Context& context,
-                                 const std::vector<std::vector<double>>& covariates,
-                                 const LaserEffectEvaluation& evaluation) {
+                            const std::vector<std::vector<double>>& covariates,
+                            const LaserEffectEvaluation& evaluation) {
   ResidualStructure structure;
   const Eigen::Index n = evaluation.residual.rows();
   Eigen::MatrixXd weighted(n, 3);
@@ -543,14 +537,7 @@ void WriteStatement(LaserFinding* f, double typical_wheel_speed) {
       const size_t index =
           std::find(names.begin(), names.end(), f->location.covariate) - names.begin();
       text += "; it follows " + CovariateWords()[index];
-      if (f->location.windows.size() > 1) {
-        const auto strongest =
-            std::max_element(f->location.windows.begin(), f->location.windows.end(),
-                             [](const auto& a, const auto& b) { return a.rate < b.rate; });
-        text += Format(", concentrated in t = %.0f–%.0f s", strongest->start_s, strongest->end_s);
-      } else {
-        text += ", throughout the log";
-      }
+      text += WindowWords(f->location);
     }
     f->statement = text + ".";
     return;

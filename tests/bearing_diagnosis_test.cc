@@ -45,14 +45,7 @@ BearingSimOptions RecipeOptions(const BearingRecipe& recipe) {
   o.encoder_noise_k = 1e-3;
   o.initial_distance_run = 1;
   o.time_offset_s = recipe.time_offset_s;
-  BearingRunSpec run;
-  run.wheel_speeds = [](double t) {
-    const double s = 0.9 * std::sin(2.0 * M_PI * t / 80.0);
-    return WheelSpeeds{0.05 * (1.0 - s), 0.05 * (1.0 + s)};
-  };
-  run.duration_s = 300.0;
-  run.world_T_robot_start = Pose2d(0.0, -1.0, 0.0);
-  o.runs = {run};
+  o.runs = {WeavingRun()};
   return o;
 }
 
@@ -92,8 +85,8 @@ TEST(BearingTimeOffsetModel, IntegrationDifferentiatesTheEndTime) {
   const std::vector<EncoderSample>& odometry = log.runs[0].odometry;
   using Jet = ceres::Jet<double, 1>;
   for (double t1 : {10.05, 10.13, 33.33}) {  // Off the samples (a kink there).
-    const Pose2<Jet> jet =
-        IntegrateEncoders(odometry, Jet(10.0), Jet(t1, 0), 0.3, 0.5, Jet(1.0), Jet(1.01), Jet(0.97));
+    const Pose2<Jet> jet = IntegrateEncoders(odometry, Jet(10.0), Jet(t1, 0), 0.3, 0.5, Jet(1.0),
+                                             Jet(1.01), Jet(0.97));
     const Pose2d value = IntegrateEncoders(odometry, 10.0, t1, 0.3, 0.5, 1.0, 1.01, 0.97);
     const double h = 1e-6;
     const Pose2d plus = IntegrateEncoders(odometry, 10.0, t1 + h, 0.3, 0.5, 1.0, 1.01, 0.97);
@@ -123,10 +116,10 @@ TEST(BearingTimeOffsetModel, ReducesToTheBaseAtZeroAndIsExactAtTheTruth) {
     const BearingSample& b = run.bearings[j];
     // The true pose at the stamp: dead reckoning of the exact encoders from the start.
     const Pose2d start = truth.runs[0].world_T_robot_start;
-    Pose2d at_stamp = Compose(Pose2d(start(0) * scale, start(1) * scale, start(2)),
-                              IntegrateEncoders(run.odometry, run.odometry.front().t_s, b.t_s,
-                                                0.3, 0.5, 1.0, c(kBearingDelta),
-                                                1.0 / (0.5 * c(kBearingXi))));
+    Pose2d at_stamp =
+        Compose(Pose2d(start(0) * scale, start(1) * scale, start(2)),
+                IntegrateEncoders(run.odometry, run.odometry.front().t_s, b.t_s, 0.3, 0.5, 1.0,
+                                  c(kBearingDelta), 1.0 / (0.5 * c(kBearingXi))));
     const BearingTimeOffsetResidual model(b.bearing_rad, b.t_s, &run.odometry, 0.3, 0.5, &one);
     const double zero = 0.0;
     // At τ = 0 it is the base term exactly.
@@ -257,8 +250,8 @@ TEST(BearingDiagnosisData, FindsTheConcealedTimeOffset) {
   double worst_bias = 0.0;
   const BearingParamVector base = ToVector(d->baseline.estimate);
   for (int i = 0; i < kNumBearingParams; ++i) {
-    worst_bias = std::max(worst_bias,
-                          std::abs(ParamError(i, base(i), truth(i))) / d->baseline.stddev(i));
+    worst_bias =
+        std::max(worst_bias, std::abs(ParamError(i, base(i), truth(i))) / d->baseline.stddev(i));
   }
   EXPECT_GE(worst_bias, 3.0);
 
@@ -369,7 +362,8 @@ TEST(BearingDiagnoseCliTest, WritesTheContractJsonAndPlots) {
                           " 2>" + (out / "err.txt").string();
   EXPECT_NE(std::system(bad.c_str()), 0);
   std::ifstream err(out / "err.txt");
-  const std::string message((std::istreambuf_iterator<char>(err)), std::istreambuf_iterator<char>());
+  const std::string message((std::istreambuf_iterator<char>(err)),
+                            std::istreambuf_iterator<char>());
   EXPECT_NE(message.find("bearings.csv"), std::string::npos) << message;
 }
 

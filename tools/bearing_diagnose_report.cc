@@ -43,9 +43,8 @@ nlohmann::ordered_json FitJson(const BearingFitReport& fit) {
   out["inliers"] = fit.inliers;
   nlohmann::ordered_json values = nlohmann::ordered_json::object();
   if (fit.with_time_offset) {
-    values["time_offset"] = {{"value", fit.time_offset_s},
-                             {"stddev", Number(fit.time_offset_stddev_s)},
-                             {"unit", "s"}};
+    values["time_offset"] = {
+        {"value", fit.time_offset_s}, {"stddev", Number(fit.time_offset_stddev_s)}, {"unit", "s"}};
   }
   out["effect_values"] = values;
   return out;
@@ -66,8 +65,10 @@ nlohmann::ordered_json FindingJson(const BearingFinding& f, const std::vector<st
   out["statement"] = f.statement;
   if (f.confounded) out["confounded_with"] = f.confounded_with;
   out["no_information"] = f.no_information;
-  out["score_test"] = {{"statistic", f.statistic},  {"dof", f.dof},
-                       {"p_value", f.p_value},      {"holm_level", f.holm_level},
+  out["score_test"] = {{"statistic", f.statistic},
+                       {"dof", f.dof},
+                       {"p_value", f.p_value},
+                       {"holm_level", f.holm_level},
                        {"significant", f.score_significant}};
   out["concealment"] = Number(f.concealment);
   out["one_step"] = {{"value", Number(f.one_step)}, {"stddev", Number(f.one_step_stddev)}};
@@ -92,11 +93,11 @@ nlohmann::ordered_json FindingJson(const BearingFinding& f, const std::vector<st
     windows.push_back(
         {{"start_s", w.start_s}, {"end_s", w.end_s}, {"share", w.share}, {"rate", w.rate}});
   }
-  out["location"] = {{"covariate", f.location.covariate.empty()
-                                       ? nlohmann::ordered_json(nullptr)
-                                       : nlohmann::ordered_json(f.location.covariate)},
-                     {"explained", f.location.explained},
-                     {"windows", windows}};
+  out["location"] = {
+      {"covariate", f.location.covariate.empty() ? nlohmann::ordered_json(nullptr)
+                                                 : nlohmann::ordered_json(f.location.covariate)},
+      {"explained", f.location.explained},
+      {"windows", windows}};
   if (f.significant) {
     out["profile"] = ProfileJson(f.profile);
     for (const std::string& plot : plots) {
@@ -188,38 +189,16 @@ std::string BearingDiagnosisSummary(const BearingDiagnosis& diagnosis, const std
 
 StatusOr<std::vector<std::string>> WriteBearingDiagnosisPlots(const BearingDiagnosis& diagnosis,
                                                               const std::string& directory) {
-  std::error_code error;
-  fs::create_directories(directory, error);
-  if (error) {
-    return Status::Error("cannot create the plot folder " + directory + ": " + error.message());
-  }
-  std::vector<std::string> written;
-  const auto write = [&](const std::string& name, const std::string& svg) -> Status {
-    const std::string path = (fs::path(directory) / name).string();
-    std::ofstream out(path);
-    out << svg;
-    if (!out) return Status::Error("cannot write " + path);
-    written.push_back(path);
-    return Status::Ok();
-  };
+  PlotFiles files;
   for (const BearingFinding& f : diagnosis.findings) {
     if (!f.significant) continue;
-    const Status status =
-        write(PlotName(f), CovariateProfileSvg(f.profile, f.name + ": bearing residuals against " +
-                                                              f.location.covariate));
-    if (!status.ok()) return status;
+    files.emplace_back(PlotName(f),
+                       CovariateProfileSvg(f.profile, f.name + ": bearing residuals against " +
+                                                          f.location.covariate));
   }
-  for (const CovariateProfile& profile : diagnosis.covariates) {
-    if (profile.name != "time" && profile.name != diagnosis.structure_before.covariate &&
-        profile.name != diagnosis.structure_after.covariate) {
-      continue;
-    }
-    const Status status =
-        write("residuals_vs_" + profile.name + ".svg",
-              CovariateProfileSvg(profile, "bearing residuals against " + profile.name));
-    if (!status.ok()) return status;
-  }
-  return written;
+  AddResidualPlots(diagnosis.covariates, diagnosis.structure_before, diagnosis.structure_after,
+                   "bearing residuals", &files);
+  return WritePlotFiles(directory, files);
 }
 
 int DiagnoseBearingCommand(const BearingDiagnoseFlags& flags) {

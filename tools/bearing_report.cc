@@ -57,8 +57,10 @@ nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
   out["units"] = "m, rad; eta and xi in 1/m";
   const BearingMetricVector metric = ToVector(result.metric);
   const BearingMetricVector seed_metric = ToVector(result.seed_metric);
-  out["estimate"] = BearingParamObject(ToVector(result.estimate), result.has_metric ? &metric : nullptr);
-  out["stddev"] = BearingParamObject(result.stddev, result.has_metric ? &result.metric_stddev : nullptr);
+  out["estimate"] =
+      BearingParamObject(ToVector(result.estimate), result.has_metric ? &metric : nullptr);
+  out["stddev"] =
+      BearingParamObject(result.stddev, result.has_metric ? &result.metric_stddev : nullptr);
   out["closed_form"] =
       BearingParamObject(ToVector(result.seed), result.has_seed_metric ? &seed_metric : nullptr);
   out["closed_form_method"] =

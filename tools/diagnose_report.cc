@@ -110,13 +110,14 @@ nlohmann::ordered_json ProfileJson(const CovariateProfile& profile) {
   };
   const Eigen::Index channels = profile.before_mean.empty() ? 0 : profile.before_mean[0].size();
   if (!profile.channel_labels.empty()) {
-    out["channels"] = channels == 1 ? nlohmann::ordered_json({"bearing [rad]"})
-                                    : nlohmann::ordered_json({"bearing [rad]", "along the effect [sigma]"});
+    out["channels"] = channels == 1
+                          ? nlohmann::ordered_json({"bearing [rad]"})
+                          : nlohmann::ordered_json({"bearing [rad]", "along the effect [sigma]"});
   } else {
     out["channels"] =
-      channels == 0 || channels == 3
-          ? nlohmann::ordered_json({"x [m]", "y [m]", "theta [rad]"})
-          : nlohmann::ordered_json({"x [m]", "y [m]", "theta [rad]", "along the effect [sigma]"});
+        channels == 0 || channels == 3
+            ? nlohmann::ordered_json({"x [m]", "y [m]", "theta [rad]"})
+            : nlohmann::ordered_json({"x [m]", "y [m]", "theta [rad]", "along the effect [sigma]"});
   }
   out["before_mean"] = rows(profile.before_mean);
   out["before_stderr"] = rows(profile.before_stderr);
@@ -256,7 +257,7 @@ std::string CovariateProfileSvg(const CovariateProfile& profile, const std::stri
   const int channels =
       profile.before_mean.empty() ? 0 : static_cast<int>(profile.before_mean[0].size());
   std::vector<std::string> labels = {"x error [mm]", "y error [mm]", "θ error [mrad]",
-                                      "along the effect [σ]"};
+                                     "along the effect [σ]"};
   std::vector<double> scales = {1e3, 1e3, 1e3, 1.0};
   if (!profile.channel_labels.empty()) {
     labels = profile.channel_labels;
@@ -355,39 +356,48 @@ std::string CovariateProfileSvg(const CovariateProfile& profile, const std::stri
   return svg.str();
 }
 
-StatusOr<std::vector<std::string>> WriteLaserDiagnosisPlots(const LaserDiagnosis& diagnosis,
-                                                            const std::string& directory) {
+StatusOr<std::vector<std::string>> WritePlotFiles(const std::string& directory,
+                                                  const PlotFiles& files) {
   std::error_code error;
   fs::create_directories(directory, error);
   if (error) {
     return Status::Error("cannot create the plot folder " + directory + ": " + error.message());
   }
   std::vector<std::string> written;
-  const auto write = [&](const std::string& name, const std::string& text) -> Status {
+  for (const auto& [name, svg] : files) {
     const std::string path = (fs::path(directory) / name).string();
     std::ofstream out(path);
-    out << text;
+    out << svg;
     if (!out) return Status::Error("cannot write " + path);
     written.push_back(path);
-    return Status::Ok();
-  };
-  for (const LaserFinding& f : diagnosis.findings) {
-    if (!f.significant) continue;
-    const Status status = write(
-        PlotName(f),
-        CovariateProfileSvg(f.profile, f.name + ": residuals against " + f.location.covariate));
-    if (!status.ok()) return status;
-  }
-  for (const CovariateProfile& profile : diagnosis.covariates) {
-    if (profile.name != "time" && profile.name != diagnosis.structure_before.covariate &&
-        profile.name != diagnosis.structure_after.covariate) {
-      continue;
-    }
-    const Status status = write("residuals_vs_" + profile.name + ".svg",
-                                CovariateProfileSvg(profile, "residuals against " + profile.name));
-    if (!status.ok()) return status;
   }
   return written;
+}
+
+void AddResidualPlots(const std::vector<CovariateProfile>& covariates,
+                      const ResidualStructure& before, const ResidualStructure& after,
+                      const std::string& title, PlotFiles* files) {
+  for (const CovariateProfile& profile : covariates) {
+    if (profile.name != "time" && profile.name != before.covariate &&
+        profile.name != after.covariate) {
+      continue;
+    }
+    files->emplace_back("residuals_vs_" + profile.name + ".svg",
+                        CovariateProfileSvg(profile, title + " against " + profile.name));
+  }
+}
+
+StatusOr<std::vector<std::string>> WriteLaserDiagnosisPlots(const LaserDiagnosis& diagnosis,
+                                                            const std::string& directory) {
+  PlotFiles files;
+  for (const LaserFinding& f : diagnosis.findings) {
+    if (!f.significant) continue;
+    files.emplace_back(PlotName(f), CovariateProfileSvg(f.profile, f.name + ": residuals against " +
+                                                                       f.location.covariate));
+  }
+  AddResidualPlots(diagnosis.covariates, diagnosis.structure_before, diagnosis.structure_after,
+                   "residuals", &files);
+  return WritePlotFiles(directory, files);
 }
 
 nlohmann::ordered_json LaserDiagnosisJson(const LaserDiagnosis& diagnosis, const std::string& input,

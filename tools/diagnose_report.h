@@ -3,6 +3,7 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "solvers/laser_diagnosis.h"
@@ -28,6 +29,17 @@ StatusOr<std::vector<std::string>> WriteLaserDiagnosisPlots(const LaserDiagnosis
 // The JSON of a covariate profile and of a residual structure (shared by both problems).
 nlohmann::ordered_json ProfileJson(const CovariateProfile& profile);
 nlohmann::ordered_json StructureJson(const ResidualStructure& structure);
+
+// SVG files to write, (file name, content), and the writer (creates the folder; returns the
+// paths written, or an error naming the file that failed).
+using PlotFiles = std::vector<std::pair<std::string, std::string>>;
+StatusOr<std::vector<std::string>> WritePlotFiles(const std::string& directory,
+                                                  const PlotFiles& files);
+// Adds the residual profiles worth drawing: against time and against the covariates that the
+// residual structure before or after names ("residuals_vs_<covariate>.svg").
+void AddResidualPlots(const std::vector<CovariateProfile>& covariates,
+                      const ResidualStructure& before, const ResidualStructure& after,
+                      const std::string& title, PlotFiles* files);
 
 // The SVG of one covariate profile (exposed for tests).
 std::string CovariateProfileSvg(const CovariateProfile& profile, const std::string& title);
