@@ -366,23 +366,12 @@ StatusOr<BearingProblem::TimeOffsetCovariance> BearingProblem::CovarianceWithTim
   ceres::Covariance covariance(covariance_options);
   std::vector<std::pair<const double*, const double*>> pairs = {
       {calibration_, calibration_}, {calibration_, time_offset_}, {time_offset_, time_offset_}};
-  for (size_t i = 0; i < poses_.size(); ++i) {
-    for (size_t k = 0; k < poses_[i].size(); ++k) pairs.emplace_back(Node(i, k), time_offset_);
-  }
   const bool computed = covariance.Compute(pairs, problem_.get());
   TimeOffsetCovariance out;
   if (computed) {
     Eigen::Matrix<double, kNumBearingParams + 1, kNumBearingParams + 1, Eigen::RowMajor> joint;
     covariance.GetCovarianceMatrix({calibration_, time_offset_}, joint.data());
     out.joint = joint;
-    out.pose_with_offset.resize(poses_.size());
-    for (size_t i = 0; i < poses_.size(); ++i) {
-      for (size_t k = 0; k < poses_[i].size(); ++k) {
-        Eigen::Vector3d c;
-        covariance.GetCovarianceBlock(Node(i, k), time_offset_, c.data());
-        out.pose_with_offset[i].push_back(c);
-      }
-    }
   }
   if (was_constant) problem_->SetParameterBlockConstant(time_offset_);
   if (!computed) return Status::Error(kSingular);

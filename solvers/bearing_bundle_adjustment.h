@@ -166,12 +166,10 @@ class BearingProblem {
   // counted back (as the covariance's κ): the likelihood-ratio scale mean(ρ'²s)/mean(ρ' + 2ρ''s)
   // (2·Δcost/scale is χ² under the null) and λ = mean(ρ' + 2ρ''s)/mean(ρ').
   void LossConstants(double* likelihood_ratio_scale, double* lambda) const;
-  // Covariance of (φ, ψ, η, δ, ξ, τ) as ceres::Covariance gives it (no loss correction), and
-  // the covariances of every pose block with τ (per run, per node), for projecting the poses out
-  // of τ's sensitivity. Requires model_time_offset.
+  // Covariance of (φ, ψ, η, δ, ξ, τ) as ceres::Covariance gives it (no loss correction; the
+  // poses eliminated), also while τ is held constant. Requires model_time_offset.
   struct TimeOffsetCovariance {
     Eigen::Matrix<double, kNumBearingParams + 1, kNumBearingParams + 1> joint;
-    std::vector<std::vector<Eigen::Vector3d>> pose_with_offset;
   };
   StatusOr<TimeOffsetCovariance> CovarianceWithTimeOffset() const;
   // The robust loss's weight ρ'(s) for a squared whitened residual s (1 without a loss).
