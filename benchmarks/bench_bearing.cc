@@ -8,10 +8,10 @@
 #include <vector>
 
 #include "benchmarks/bench_common.h"
-#include "core/bearing_simulator.h"
-#include "solvers/bearing_crlb.h"
-#include "solvers/calibrate_bearing.h"
-#include "solvers/martinelli_closed_form.h"
+#include <calib/core/bearing/bearing_simulator.h>
+#include <calib/solvers/bearing/bearing_crlb.h>
+#include <calib/solvers/bearing/calibrate_bearing.h>
+#include <calib/solvers/bearing/martinelli_closed_form.h>
 
 namespace calib::bench {
 namespace {

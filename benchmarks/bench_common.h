@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "core/laser_calibration.h"
+#include <calib/core/laser/laser_params.h>
 
 // Shared pieces of calib_bench: run settings, timing, a parallel loop and plain-text tables.
 namespace calib::bench {

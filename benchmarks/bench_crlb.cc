@@ -4,7 +4,7 @@
 #include <cmath>
 #include <memory>
 
-#include "problems/laser_residual.h"
+#include <calib/problems/laser/laser_residual.h>
 
 namespace calib::bench {
 

@@ -4,9 +4,9 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "core/laser_calibration.h"
-#include "core/laser_log.h"
-#include "core/status.h"
+#include <calib/core/laser/laser_params.h>
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/status.h>
 
 namespace calib::bench {
 

@@ -11,11 +11,11 @@
 #include <vector>
 
 #include "benchmarks/bench_common.h"
-#include "core/bearing_simulator.h"
-#include "core/laser_simulator.h"
-#include "solvers/bearing_diagnosis.h"
-#include "solvers/laser_diagnosis.h"
-#include "solvers/score_test.h"
+#include <calib/core/bearing/bearing_simulator.h>
+#include <calib/core/laser/laser_simulator.h>
+#include <calib/solvers/bearing/bearing_diagnosis.h>
+#include <calib/solvers/laser/laser_diagnosis.h>
+#include <calib/solvers/stats/score_test.h>
 
 namespace calib::bench {
 namespace {

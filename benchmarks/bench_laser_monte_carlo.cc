@@ -6,9 +6,9 @@
 
 #include "benchmarks/bench_crlb.h"
 #include "benchmarks/bench_laser_mc_report.h"
-#include "core/laser_simulator.h"
-#include "solvers/calibrate_laser.h"
-#include "solvers/censi_closed_form.h"
+#include <calib/core/laser/laser_simulator.h>
+#include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/solvers/laser/censi_closed_form.h>
 
 namespace calib::bench {
 

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "benchmarks/bench_common.h"
-#include "core/laser_calibration.h"
+#include <calib/core/laser/laser_params.h>
 
 // Section laser_mc: Monte Carlo accuracy of the closed form, the trimmed closed form and the two
 // Ceres refinements against the Cramér–Rao bound, over seeds, on simulated logs.

@@ -6,8 +6,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "core/laser_log_io.h"
-#include "solvers/calibrate_laser.h"
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/solvers/laser/calibrate_laser.h>
 
 namespace calib::bench {
 namespace {

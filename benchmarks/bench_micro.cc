@@ -5,9 +5,9 @@
 #include <memory>
 #include <vector>
 
-#include "core/laser_simulator.h"
-#include "problems/laser_residual.h"
-#include "solvers/censi_closed_form.h"
+#include <calib/core/laser/laser_simulator.h>
+#include <calib/problems/laser/laser_residual.h>
+#include <calib/solvers/laser/censi_closed_form.h>
 
 namespace calib::bench {
 namespace {

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "core/status.h"
+#include <calib/core/status.h>
 
 // A minimal SVG writer for log-log line plots (no plotting dependency for one figure).
 namespace calib::bench {

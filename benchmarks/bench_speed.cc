@@ -9,9 +9,9 @@
 #include <fstream>
 
 #include "benchmarks/bench_micro.h"
-#include "core/laser_log_io.h"
-#include "core/laser_simulator.h"
-#include "solvers/calibrate_laser.h"
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/core/laser/laser_simulator.h>
+#include <calib/solvers/laser/calibrate_laser.h>
 
 namespace calib::bench {
 namespace {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <vector>
 
-#include "core/se2.h"
+#include <calib/core/se2.h>
 
 // Differential-drive kinematics (Censi et al. 2008, §II-A). Wheel speeds are positive when the
 // wheel drives the robot forward: v = (r_l·φ_l + r_r·φ_r)/2, ω = (r_r·φ_r − r_l·φ_l)/b.

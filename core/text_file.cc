@@ -1,4 +1,4 @@
-#include "core/text_file.h"
+#include <calib/core/text_file.h>
 
 #include <filesystem>
 #include <fstream>

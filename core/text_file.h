@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include "core/status.h"
+#include <calib/core/status.h>
 
 namespace calib {
 

@@ -9,12 +9,12 @@
 #include <string>
 #include <vector>
 
-#include "core/laser_log_io.h"
-#include "core/laser_simulator.h"
-#include "solvers/calibrate_laser.h"
-#include "tools/bearing_report.h"
-#include "tools/diagnose_report.h"
-#include "tools/laser_report.h"
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/core/laser/laser_simulator.h>
+#include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/tools/report/bearing_report.h>
+#include <calib/tools/report/laser_diagnose_report.h>
+#include <calib/tools/report/laser_report.h>
 
 DEFINE_string(input, "",
               "A laser log file (tuples or CSV), a laser raw-stream directory, several laser logs "

@@ -1,6 +1,6 @@
 // Calibrates a laser log in a few lines: calib_consumer LOG
-#include <calib/core/laser_log_io.h>
-#include <calib/solvers/calibrate_laser.h>
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/solvers/laser/calibrate_laser.h>
 
 #include <cstdio>
 

@@ -1,0 +1,40 @@
+#ifndef CALIB_CORE_BEARING_BEARING_LOG_IO_H_
+#define CALIB_CORE_BEARING_BEARING_LOG_IO_H_
+
+#include <string>
+#include <vector>
+
+#include <calib/core/bearing/bearing_log.h>
+#include <calib/core/status.h>
+
+// Reader and writer for bearing logs (CONTRACT.md): a directory with odometry.csv
+// (run,t,left,right), bearings.csv (run,t,bearing) and meta.json. Every error message names the
+// file, the line where there is one, and what is wrong.
+namespace calib {
+
+// Reads and validates a log directory: ReadBearingLog = the three parsers + ValidateBearingLog.
+StatusOr<BearingLog> ReadBearingLog(const std::string& directory);
+
+// Parsers over in-memory text; `source` is the file name used in messages. CSV: a header naming
+// the columns (any order, extra columns ignored), then one sample per line; blank lines and lines
+// starting with '#' are skipped. Runs come back sorted by id, samples in file order.
+StatusOr<std::vector<BearingRun>> ParseBearingOdometryCsv(const std::string& text,
+                                                          const std::string& source);
+// Adds the bearings to `runs` (from ParseBearingOdometryCsv), checking each against its run.
+Status ParseBearingsCsv(const std::string& text, const std::string& source,
+                        std::vector<BearingRun>* runs);
+StatusOr<BearingLogMeta> ParseBearingMeta(const std::string& text, const std::string& source);
+
+// The invariants every consumer may rely on, for logs built in memory: positive finite nominal
+// r and B; per run at least two encoder samples with strictly increasing finite times and finite
+// angles, at least one bearing, bearings finite, in (−π, π], strictly increasing in time and
+// inside the run's odometry time span; unique run ids in increasing order; an initial distance
+// that names an existing run and is positive.
+Status ValidateBearingLog(const BearingLog& log);
+
+// Writes the three files (creating the directory), numbers in shortest round-trip form.
+Status WriteBearingLog(const BearingLog& log, const std::string& directory);
+
+}  // namespace calib
+
+#endif  // CALIB_CORE_BEARING_BEARING_LOG_IO_H_

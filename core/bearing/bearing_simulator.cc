@@ -1,0 +1,174 @@
+#include <calib/core/bearing/bearing_simulator.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace calib {
+namespace {
+
+// One integration step: wheel speeds held constant from `t_s` for `duration_s`.
+struct Step {
+  double t_s = 0.0;
+  double duration_s = 0.0;
+  WheelSpeeds speeds;
+  Pose2d world_T_robot_start = Pose2d::Zero();
+};
+
+Pose2d AdvanceTruth(const BearingSimOptions& o, const Pose2d& pose, const WheelSpeeds& speeds,
+                    double dt_s) {
+  const BearingMetricParams& m = o.truth;
+  const double r = o.wheel_radius_m;
+  return Compose(pose,
+                 EncoderStepDisplacement(r, o.wheelbase_m, m.delta_r, m.delta_l, m.delta_b,
+                                         speeds.left_mps * dt_s / r, speeds.right_mps * dt_s / r));
+}
+
+}  // namespace
+
+std::vector<BearingRunSpec> MartinelliRuns(const Pose2d& world_T_robot_start) {
+  std::vector<BearingRunSpec> runs;
+  for (double q : {0.9, 0.0, -1.0}) {
+    BearingRunSpec spec;
+    spec.q = q;
+    spec.loops = 1.0;
+    spec.world_T_robot_start = world_T_robot_start;
+    runs.push_back(spec);
+  }
+  return runs;
+}
+
+BearingRunSpec WeavingRun(double duration_s, double period_s, double swing, double speed_mps,
+                          const Pose2d& world_T_robot_start) {
+  BearingRunSpec spec;
+  spec.wheel_speeds = [=](double t) {
+    const double s = swing * std::sin(2.0 * M_PI * t / period_s);
+    return WheelSpeeds{speed_mps * (1.0 - s), speed_mps * (1.0 + s)};
+  };
+  spec.duration_s = duration_s;
+  spec.world_T_robot_start = world_T_robot_start;
+  return spec;
+}
+
+BearingLog SimulateBearingLog(const BearingSimOptions& options, BearingSimTruth* truth) {
+  const BearingMetricParams& m = options.truth;
+  const double r = options.wheel_radius_m;
+  const double b = options.wheelbase_m;
+  const BearingParams params = ObservableParams(m, b);
+  const std::vector<BearingRunSpec> specs = options.runs.empty() ? MartinelliRuns() : options.runs;
+  std::mt19937_64 rng(options.seed);
+  std::normal_distribution<double> unit(0.0, 1.0);
+
+  BearingLog log;
+  log.source = "simulation";
+  log.meta.wheel_radius_m = r;
+  log.meta.wheelbase_m = b;
+  if (truth != nullptr) {
+    truth->metric = m;
+    truth->params = params;
+    truth->runs.clear();
+  }
+
+  const double encoder_dt = 1.0 / options.encoder_rate_hz;
+  const int substeps = std::max(1, options.integration_substeps);
+  double clock_s = options.start_time_s;
+  for (size_t i = 0; i < specs.size(); ++i) {
+    const BearingRunSpec& spec = specs[i];
+    const bool circular = !spec.wheel_speeds;
+    const double nu = options.right_wheel_speed_mps;
+    const auto speeds_at = [&](double t) {
+      return circular ? WheelSpeeds{spec.q * nu, nu} : spec.wheel_speeds(t);
+    };
+    double duration = spec.duration_s;
+    if (!(duration > 0.0)) {
+      const double omega = (m.delta_r * nu - m.delta_l * spec.q * nu) / (m.delta_b * b);
+      duration = circular && omega != 0.0 ? spec.loops * 2.0 * M_PI / std::abs(omega) : 60.0;
+    }
+
+    BearingRun run;
+    run.id = spec.id != 0 ? spec.id : static_cast<int>(i) + 1;
+
+    // Truth: integrate in steps; encoder samples at the end of each encoder period.
+    std::vector<Step> steps;
+    Pose2d pose = spec.world_T_robot_start;
+    double left_read = 0.0, right_read = 0.0;
+    run.odometry.push_back(EncoderSample{clock_s, 0.0, 0.0, 0});
+    for (int k = 0;; ++k) {
+      const double t = k * encoder_dt;
+      if (t >= duration - 1e-9 * encoder_dt) break;
+      double t_next = std::min((k + 1) * encoder_dt, duration);
+      if (duration - t_next < 1e-9 * encoder_dt) t_next = duration;
+      const double period = t_next - t;
+      double left_true = 0.0, right_true = 0.0;
+      for (int j = 0; j < substeps; ++j) {
+        Step step;
+        step.t_s = t + period * j / substeps;
+        step.duration_s = period / substeps;
+        step.speeds = speeds_at(step.t_s + 0.5 * step.duration_s);
+        step.world_T_robot_start = pose;
+        pose = AdvanceTruth(options, pose, step.speeds, step.duration_s);
+        left_true += step.speeds.left_mps * step.duration_s / r;
+        right_true += step.speeds.right_mps * step.duration_s / r;
+        steps.push_back(step);
+      }
+      const double k2 = options.encoder_noise_k * options.encoder_noise_k / r;
+      left_read += left_true + std::sqrt(k2 * std::abs(left_true)) * unit(rng);
+      right_read += right_true + std::sqrt(k2 * std::abs(right_true)) * unit(rng);
+      run.odometry.push_back(EncoderSample{clock_s + t_next, left_read, right_read, 0});
+    }
+
+    BearingRunTruth run_truth;
+    run_truth.id = run.id;
+    run_truth.q = spec.q;
+    run_truth.circular = circular;
+    run_truth.world_T_robot_start = spec.world_T_robot_start;
+    run_truth.initial_distance_m = spec.world_T_robot_start.head<2>().norm();
+
+    // Bearings at the sensor rate from the run's start (stamps), each taken at the exact true
+    // pose of its stamp + the time offset.
+    const double bearing_dt = 1.0 / options.bearing_rate_hz;
+    size_t step_index = 0;
+    for (int j = 0;; ++j) {
+      const double tb = j * bearing_dt;
+      if (tb > duration + 1e-9) break;
+      const double taken = std::clamp(tb + options.time_offset_s, 0.0, duration);
+      while (step_index + 1 < steps.size() && steps[step_index + 1].t_s <= taken) ++step_index;
+      Pose2d at = spec.world_T_robot_start;
+      if (!steps.empty()) {
+        const Step& step = steps[step_index];
+        at = AdvanceTruth(options, step.world_T_robot_start, step.speeds, taken - step.t_s);
+      }
+      const double clean = BearingFromPose(at, m.phi_rad, m.rho_m, m.psi_rad);
+      const double noisy = WrapAngle(clean + options.bearing_noise_rad * unit(rng));
+      run.bearings.push_back(BearingSample{clock_s + tb, noisy, 0});
+      run_truth.world_T_robot_at_bearings.push_back(at);
+    }
+
+    if (circular) {
+      run_truth.eta_q_per_m = EtaQ(params.eta_per_m, params.delta, spec.q);
+      run_truth.xi_q_per_m = XiQ(params.xi_per_m, params.delta, spec.q);
+      GammaMuFromPose(spec.world_T_robot_start, m.phi_rad, m.rho_m, &run_truth.gamma0_rad,
+                      &run_truth.mu0);
+      if (run_truth.xi_q_per_m != 0.0) {
+        run_truth.circle = CircleFromStart(m, b, spec.q, spec.world_T_robot_start);
+        run_truth.state0 =
+            CircularStateFromGammaMu(run_truth.mu0, run_truth.gamma0_rad, m.phi_rad, m.psi_rad,
+                                     run_truth.eta_q_per_m, run_truth.xi_q_per_m);
+        run_truth.k_per_m =
+            KFromState(run_truth.state0.A, run_truth.state0.V, run_truth.xi_q_per_m);
+        run_truth.c_rad = CFromKV(run_truth.k_per_m, run_truth.state0.V, run_truth.xi_q_per_m);
+      }
+    }
+    if (options.initial_distance_run == run.id) {
+      log.meta.initial_distance = InitialDistance{run.id, run_truth.initial_distance_m};
+    }
+    if (truth != nullptr) truth->runs.push_back(run_truth);
+    clock_s += duration + options.gap_between_runs_s;
+    log.runs.push_back(std::move(run));
+  }
+  std::sort(log.runs.begin(), log.runs.end(),
+            [](const BearingRun& x, const BearingRun& y) { return x.id < y.id; });
+  return log;
+}
+
+}  // namespace calib

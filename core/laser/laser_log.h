@@ -1,0 +1,50 @@
+#ifndef CALIB_CORE_LASER_LASER_LOG_H_
+#define CALIB_CORE_LASER_LASER_LOG_H_
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include <calib/core/diff_drive.h>
+#include <calib/core/se2.h>
+
+namespace calib {
+
+// One sample of the laser–odometry problem: over an interval of `duration_s` the wheels turn at
+// mean speeds (left_speed, right_speed) rad/s, and the scan matcher reports the sensor
+// displacement `sensor_motion` = ℓ⁻¹ ∘ o ∘ ℓ, expressed in the sensor frame at the start.
+struct LaserInterval {
+  double start_s = 0.0;  // Interval start on the odometry clock.
+  double duration_s = 0.0;
+  double left_speed = 0.0;   // φ_l, rad/s.
+  double right_speed = 0.0;  // φ_r, rad/s.
+  Pose2d sensor_motion = Pose2d::Zero();
+  // Optional finer wheel profile within the interval (sums to duration and φ·T); empty means
+  // constant speeds over the interval.
+  std::vector<WheelStep> steps;
+  bool gap_before = false;  // True when time jumps between the previous interval and this one.
+  int line = 0;             // 1-based line of the source where the record starts (0: none).
+  int record = 0;           // 1-based record number in the source.
+};
+
+struct LaserLog {
+  std::string source;           // File name, for messages.
+  bool has_timestamps = false;  // True when start_s came from the input, not from summing T.
+  std::vector<LaserInterval> intervals;
+};
+
+// The robot displacement over an interval for the given odometry parameters.
+template <typename T>
+Pose2<T> IntervalRobotMotion(const T& left_radius, const T& right_radius, const T& wheelbase,
+                             const LaserInterval& interval) {
+  if (interval.steps.empty()) {
+    return WheelStepDisplacement(left_radius, right_radius, wheelbase,
+                                 T(interval.left_speed * interval.duration_s),
+                                 T(interval.right_speed * interval.duration_s));
+  }
+  return IntegrateWheelSteps(left_radius, right_radius, wheelbase, interval.steps);
+}
+
+}  // namespace calib
+
+#endif  // CALIB_CORE_LASER_LASER_LOG_H_

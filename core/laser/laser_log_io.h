@@ -1,0 +1,64 @@
+#ifndef CALIB_CORE_LASER_LASER_LOG_IO_H_
+#define CALIB_CORE_LASER_LASER_LOG_IO_H_
+
+#include <string>
+#include <vector>
+
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/se2.h>
+#include <calib/core/status.h>
+
+// Readers and writers for laser–odometry logs (formats in CONTRACT.md). Every error message names
+// the file, the line (and record where there is one) and what is wrong.
+namespace calib {
+
+enum class LaserFormat {
+  kAuto,    // Detected from content: '{' first → tuples; a directory → stream; else CSV.
+  kTuples,  // Published JSON tuples {"T","phi_l","phi_r","sm":[x,y,theta]}, any white space.
+  kCsv,     // Header naming at least T,phi_l,phi_r,sm_x,sm_y,sm_theta (any order), optional t.
+  kStream,  // Directory with odometry.csv (t,left,right) and sensor_poses.csv (t,x,y,theta).
+};
+
+// "auto", "tuples" (or "json"), "csv", "stream".
+StatusOr<LaserFormat> ParseLaserFormat(const std::string& name);
+
+StatusOr<LaserLog> ReadLaserLog(const std::string& path, LaserFormat format = LaserFormat::kAuto);
+
+// Parsers over in-memory text; `source` is the name used in messages.
+StatusOr<LaserLog> ParseLaserTuples(const std::string& text, const std::string& source);
+StatusOr<LaserLog> ParseLaserCsv(const std::string& text, const std::string& source);
+
+// Raw streams: cumulative wheel rotations (rad, positive forward) on the odometry clock, and
+// sensor poses in any fixed world frame from a scan matcher or lidar odometry.
+struct WheelAngleSample {
+  double t_s = 0.0;
+  double left_rad = 0.0;
+  double right_rad = 0.0;
+};
+struct StampedPose {
+  double t_s = 0.0;
+  Pose2d world_T_sensor = Pose2d::Zero();
+};
+
+// One interval per pair of consecutive sensor poses: sm = pose_k⁻¹ ∘ pose_{k+1}; the wheel
+// rotations over the interval are integrated from the encoder samples inside it (linear
+// interpolation of the cumulative angles at the interval ends), kept as constant-speed steps.
+// Intervals that contain an encoder gap (a sample period longer than 5x the median period) are
+// dropped and the next kept one is marked gap_before. Poses outside the encoder time span are
+// dropped. `steps` is filled only when encoder samples fall strictly inside the interval.
+StatusOr<LaserLog> LaserLogFromStreams(const std::vector<WheelAngleSample>& odometry,
+                                       const std::vector<StampedPose>& sensor_poses,
+                                       const std::string& source);
+StatusOr<LaserLog> ReadLaserStream(const std::string& directory);
+
+// Writers emit the shortest decimal form that reads back bit-exact. They write the interval
+// values only: `steps`, `line` and `record` are not stored. WriteLaserTuples adds the key "t"
+// when log.has_timestamps, so gaps survive a round trip; the CSV always has the t column.
+Status WriteLaserTuples(const LaserLog& log, const std::string& path);
+Status WriteLaserCsv(const LaserLog& log, const std::string& path);  // Includes the t column.
+Status WriteLaserStream(const std::vector<WheelAngleSample>& odometry,
+                        const std::vector<StampedPose>& sensor_poses, const std::string& directory);
+
+}  // namespace calib
+
+#endif  // CALIB_CORE_LASER_LASER_LOG_IO_H_

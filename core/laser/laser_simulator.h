@@ -1,0 +1,86 @@
+#ifndef CALIB_CORE_LASER_LASER_SIMULATOR_H_
+#define CALIB_CORE_LASER_LASER_SIMULATOR_H_
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include <calib/core/diff_drive.h>
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/core/se2.h>
+
+// Simulated laser–odometry logs with known truth, for tests, benchmarks and diagnosis. The robot
+// is integrated finely in continuous time, so physical effects that the base model leaves out
+// (CONTRACT.md, `calib diagnose`) appear in the data as they would on a real robot.
+namespace calib {
+
+enum class LaserTrajectory {
+  kRich,          // Straight runs, pure rotations and arcs of both signs, smooth speed changes.
+  kStraight,      // Only straight driving (no turning).
+  kPureRotation,  // Only turning on the spot (v = 0).
+  kConstantArc,   // One arc at constant wheel speeds.
+};
+
+// Effects of the contract's `calib diagnose`; zero means absent.
+struct LaserEffects {
+  double time_offset_s = 0.0;        // A scan stamped t was taken at t + offset (odometry clock).
+  double lateral_slip_s = 0.0;       // Lateral velocity = γ·v·ω (+y left).
+  double longitudinal_slip_s = 0.0;  // Forward velocity = v − γ·dv/dt.
+  double radius_change_time_s = -1;  // < 0: no change. Otherwise radii switch at this time.
+  double left_radius_after_m = 0.0;
+  double right_radius_after_m = 0.0;
+};
+
+struct LaserSimOptions {
+  OdometryParams odometry{0.0206, 0.0207, 0.088};
+  Pose2d base_T_sensor = Pose2d(-0.005, 0.006, -1.55);
+  int num_intervals = 1000;
+  double mean_interval_s = 0.8;
+  double interval_jitter_s = 0.02;  // Uniform ± jitter on each interval length.
+  LaserTrajectory trajectory = LaserTrajectory::kRich;
+  double max_wheel_speed = 0.5;  // rad/s, the largest commanded wheel speed.
+  // Khepera-like speed changes: wheel speeds follow commanded targets through a first-order lag.
+  double speed_time_constant_s = 0.5;
+  double segment_mean_s = 6.0;  // Mean time between new commanded targets.
+  Eigen::Vector3d scan_noise_sigma = Eigen::Vector3d(0.001, 0.001, 0.002);  // x, y (m), θ (rad).
+  double outlier_fraction = 0.0;       // Intervals whose scan match is replaced by a slip outlier.
+  double outlier_scale = 20.0;         // Outlier error in multiples of the scan noise sigma.
+  double encoder_ticks_per_rad = 0.0;  // > 0: cumulative wheel angles are quantized.
+  double wheel_speed_noise = 0.0;      // Std of white noise added to the reported φ (rad/s).
+  int record_steps = 0;  // > 0: store this many encoder sub-steps per interval in `steps`.
+  // Shortest quadrature panel; panels otherwise break at every speed target, scan time and
+  // radius change and span at most half of min(speed time constant, 1/ω).
+  double integration_step_s = 0.002;
+  LaserEffects effects;
+  uint64_t seed = 1;
+};
+
+struct LaserSimTruth {
+  OdometryParams odometry;
+  Pose2d base_T_sensor = Pose2d::Zero();
+  LaserEffects effects;
+  std::vector<bool> is_outlier;  // Per interval.
+};
+
+// A log of consecutive intervals (has_timestamps = true, start_s on the odometry clock).
+LaserLog SimulateLaserLog(const LaserSimOptions& options, LaserSimTruth* truth = nullptr);
+
+// Keeps only the intervals that do not drive backward (v ≥ 0 for the given odometry), marking the
+// interval after each dropped run with gap_before: a forward-only robot, on which a lateral slip
+// γ·v·ω cannot cancel between directions.
+std::vector<LaserInterval> DropBackwardIntervals(const std::vector<LaserInterval>& intervals,
+                                                 const OdometryParams& odometry);
+
+// The same motion as raw streams: encoder samples at `encoder_rate_hz` and scan-matcher poses
+// (world_T_sensor, noisy, one per interval end), for the stream reader.
+struct LaserStreams {
+  std::vector<WheelAngleSample> odometry;
+  std::vector<StampedPose> sensor_poses;
+};
+LaserStreams SimulateLaserStreams(const LaserSimOptions& options, double encoder_rate_hz,
+                                  LaserSimTruth* truth = nullptr);
+
+}  // namespace calib
+
+#endif  // CALIB_CORE_LASER_LASER_SIMULATOR_H_

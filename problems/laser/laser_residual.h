@@ -1,0 +1,70 @@
+#ifndef CALIB_PROBLEMS_LASER_LASER_RESIDUAL_H_
+#define CALIB_PROBLEMS_LASER_LASER_RESIDUAL_H_
+
+#include <ceres/autodiff_cost_function.h>
+
+#include <Eigen/Core>
+
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/se2.h>
+
+namespace calib {
+
+// The mismatch ŝ ⊖ ŝ_pred between a measured and a predicted sensor displacement, expressed in
+// the sensor frame at the interval start, where the scan matcher reports ŝ and its noise lives:
+//   e = R(ŝ_pred,θ)·(ŝ_pred⁻¹ ∘ ŝ)_xy , wrap(ŝ_θ − ŝ_pred,θ)  =  (ŝ_xy − ŝ_pred,xy, wrap(ŝ_θ − ŝ_pred,θ)).
+// (Whitening ŝ_pred⁻¹ ∘ ŝ itself would apply an anisotropic noise model in a frame rotated by
+// ŝ_pred,θ.)
+template <typename T>
+Eigen::Matrix<T, 3, 1> SensorMotionError(const Pose2<T>& predicted, const Pose2d& measured) {
+  return Eigen::Matrix<T, 3, 1>(T(measured(0)) - predicted(0), T(measured(1)) - predicted(1),
+                                WrapAngle(T(measured(2)) - predicted(2)));
+}
+
+// Pose-composition residual of one laser interval (Censi eq. 9 as a measurement model):
+//   ŝ_pred = ℓ⁻¹ ∘ o(Δφ_l, Δφ_r; r_l, r_r, b) ∘ ℓ,   r = L·SensorMotionError(ŝ_pred, ŝ),
+// with LᵀL the information of the scan-matching noise.
+// Parameter blocks: odometry = (r_l, r_r, b), base_T_sensor = (x, y, θ).
+// The interval and `sqrt_information` are held by pointer (a million intervals are not copied, and
+// a re-estimated noise level applies without rebuilding the problem); both must outlive the cost
+// function.
+class LaserResidual {
+ public:
+  LaserResidual(const LaserInterval& interval, const Eigen::Matrix3d* sqrt_information)
+      : interval_(&interval), sqrt_information_(sqrt_information) {}
+
+  template <typename T>
+  bool operator()(const T* const odometry, const T* const base_T_sensor, T* residual) const {
+    const Pose2<T> robot_motion =
+        IntervalRobotMotion(odometry[0], odometry[1], odometry[2], *interval_);
+    const Pose2<T> mounting(base_T_sensor[0], base_T_sensor[1], base_T_sensor[2]);
+    const Pose2<T> predicted = SensorMotionFromRobotMotion(mounting, robot_motion);
+    const Eigen::Matrix<T, 3, 1> error = SensorMotionError(predicted, interval_->sensor_motion);
+    Eigen::Map<Eigen::Matrix<T, 3, 1>> whitened(residual);
+    whitened = sqrt_information_->cast<T>() * error;
+    return true;
+  }
+
+  // Unwhitened error e for given parameters, for noise estimation and diagnostics.
+  static Eigen::Vector3d Error(const LaserInterval& interval, const double* odometry,
+                               const double* base_T_sensor) {
+    const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d error;
+    LaserResidual(interval, &identity)(odometry, base_T_sensor, error.data());
+    return error;
+  }
+
+  static ceres::CostFunction* Create(const LaserInterval& interval,
+                                     const Eigen::Matrix3d* sqrt_information) {
+    return new ceres::AutoDiffCostFunction<LaserResidual, 3, 3, 3>(
+        new LaserResidual(interval, sqrt_information));
+  }
+
+ private:
+  const LaserInterval* interval_;
+  const Eigen::Matrix3d* sqrt_information_;
+};
+
+}  // namespace calib
+
+#endif  // CALIB_PROBLEMS_LASER_LASER_RESIDUAL_H_

@@ -1,0 +1,255 @@
+#ifndef CALIB_SOLVERS_BEARING_BEARING_BUNDLE_ADJUSTMENT_H_
+#define CALIB_SOLVERS_BEARING_BEARING_BUNDLE_ADJUSTMENT_H_
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <calib/core/bearing/bearing_log.h>
+#include <calib/core/bearing/bearing_model.h>
+#include <calib/core/se2.h>
+#include <calib/core/status.h>
+#include <calib/problems/bearing/bearing_observation_residual.h>
+#include <calib/solvers/laser/laser_refinement.h>
+
+// Bundle adjustment of the bearing-only calibration (Martinelli 2009, eqs. 1–6) with Ceres.
+//
+// Unknowns. The calibration c = (φ, ψ, η, δ, ξ) and, for every run, the robot poses (x, y, θ) in
+// the landmark's frame (landmark at the origin) at its nodes: the run's start (its first encoder
+// sample, when no bearing is taken there) and every bearing time. Runs are independent
+// trajectories sharing c.
+//
+// Gauge. Bearings are angles and the encoders count wheel rotations, so scaling every length
+// (poses, ρ) and the wheel factors δR, δL, δB together changes no measurement: the metric scale
+// is unobservable. The problem is posed in the gauge δR ≡ 1, where lengths are in units of δR
+// metres and the parameters are exactly the observable set of eq. 5:
+//   v = r(Δα_R + δ·Δα_L)/2,  ω = r·ξ(Δα_R − δ·Δα_L),  ρ = 1/(2η)  (in δR metres),  δB = 1/(B·ξ).
+// An initial distance D0 of run R's start fixes the scale: with D0' the same distance in the
+// gauge, δR = D0/D0', ρ = δR/(2η), δL = δ·δR, δB = δR/(B·ξ). Because D0 carries no information on
+// the observable set, this is the maximum-likelihood estimate of the metric set too, and its
+// covariance follows from that of (c, D0') (BearingMetricFromScaled).
+// Each run can also be turned about the landmark without changing a measurement: its start pose
+// is held on the y axis (x ≡ 0), which removes that freedom and nothing else.
+//
+// Residuals. (a) Odometry terms between consecutive nodes (BearingOdometryResidual): the encoder
+// displacement integrated with (δ, ξ) against the displacement between the two pose blocks,
+// whitened by the propagated encoder covariance K²·Σ₁ (+ a small floor). (b) Bearing terms
+// (BearingObservationResidual) whitened by σβ, under a robust loss.
+//
+// Circular runs are treated like any trajectory. The closed form further assumes that their
+// wheels keep the ratio q exactly; with q itself estimated from the same encoders, its error
+// turns the heading by a ramp as large as the random walk the encoders' noise makes, and δ acts
+// on the heading as a ramp too, so that premise adds little information (and plugging in the
+// estimated q as if exact overstates it: sigmas too small).
+namespace calib {
+
+using BearingParamVector = Eigen::Matrix<double, kNumBearingParams, 1>;
+using BearingParamMatrix = Eigen::Matrix<double, kNumBearingParams, kNumBearingParams>;
+// The metric set (φ, ψ, ρ, δR, δL, δB).
+constexpr int kNumBearingMetricParams = 6;
+using BearingMetricVector = Eigen::Matrix<double, kNumBearingMetricParams, 1>;
+using BearingMetricMatrix = Eigen::Matrix<double, kNumBearingMetricParams, kNumBearingMetricParams>;
+
+// The contract's names (CONTRACT.md), in the order of the vectors above.
+extern const std::array<const char*, kNumBearingParams> kBearingParamNames;
+extern const std::array<const char*, kNumBearingMetricParams> kBearingMetricNames;
+
+BearingParamVector ToVector(const BearingParams& p);
+BearingParams BearingParamsFromVector(const BearingParamVector& v);
+BearingMetricVector ToVector(const BearingMetricParams& m);
+
+// The two noise levels of the model: bearings N(0, σβ²); each encoder increment Δα read with
+// variance K²/r·|Δα| (§8.1).
+struct BearingNoise {
+  double bearing_sigma_rad = 1.0 * M_PI / 180.0;
+  double encoder_k = 1e-3;  // K (m^½).
+};
+
+struct BearingAdjustmentOptions {
+  RobustLoss loss = RobustLoss::kCauchy;
+  double loss_scale = 3.0;  // Of the bearing loss, in units of σβ.
+  int max_iterations = 200;
+  int num_threads = 1;
+  double initial_trust_region_radius = 1e10;
+  // Floor added to each odometry covariance: relative·trace/3 + absolute² (m², rad²), so that a
+  // single encoder step (rank 2) or a robot standing still still whitens.
+  double covariance_floor_relative = 1e-6;
+  double covariance_floor_absolute = 1e-7;
+  // Models the bearings' clock offset τ (problems/bearing_time_offset_residual.h): a bearing
+  // stamped t was taken at t + τ. τ starts at `time_offset_s` and is estimated unless
+  // `fix_time_offset` (then it only adds its sensitivity, for score tests at τ = 0).
+  bool model_time_offset = false;
+  double time_offset_s = 0.0;
+  bool fix_time_offset = false;
+  // Per run (log order), per bearing: false leaves that bearing out of the fit (held-out
+  // blocks); its pose stays, tied by the odometry. Empty: every bearing is used.
+  std::vector<std::vector<bool>> use_bearing;
+};
+
+// The nodes of one run: times (s) and, per node, the index of its bearing in the run (−1 for the
+// start node when no bearing is taken at the run's first encoder sample).
+struct BearingRunNodes {
+  int run = 0;
+  std::vector<double> t_s;
+  std::vector<int> bearing;
+};
+std::vector<BearingRunNodes> BearingNodes(const BearingLog& log);
+
+// What the variance-component estimate needs: per class the squared residuals and their
+// redundancy Σ(1 − leverage) (the residual degrees of freedom that class carries).
+struct BearingVarianceComponents {
+  double bearing_sum_sq_rad2 = 0.0;  // Σ wrap(β − β̂)² over the inlier bearings.
+  double bearing_redundancy = 0.0;   // Σ (1 − h) over the inlier bearings.
+  int bearing_count = 0;
+  double odometry_sum_sq = 0.0;  // Σ ‖L·e‖² over the odometry terms (whitened at current K).
+  double odometry_redundancy = 0.0;  // Σ (3 − tr h) over the odometry terms.
+  double total_leverage = 0.0;       // Σ h over every residual = free parameters (a check).
+};
+
+// Joint covariance of (φ, ψ, η, δ, ξ, D0') with D0' the distance of a run's start (gauge units).
+using BearingScaledWithDistance = Eigen::Matrix<double, kNumBearingParams + 1, 1>;
+using BearingScaledWithDistanceMatrix =
+    Eigen::Matrix<double, kNumBearingParams + 1, kNumBearingParams + 1>;
+
+// The metric set from the observable set, D0' (gauge units) and D0 (m), with the Jacobian
+// ∂(φ, ψ, ρ, δR, δL, δB)/∂(φ, ψ, η, δ, ξ, D0') when `jacobian` is not null.
+BearingMetricParams BearingMetricFromScaled(
+    const BearingParams& p, double start_distance_gauge, double start_distance_m,
+    double wheelbase_m,
+    Eigen::Matrix<double, kNumBearingMetricParams, kNumBearingParams + 1>* jacobian = nullptr);
+
+class BearingProblem {
+ public:
+  // `log` must be valid (ValidateBearingLog) and outlive the problem. `world_T_robot[i][k]` is the
+  // initial pose of run i (log order) at node k of BearingNodes(log)[i], in gauge units. Each run
+  // is turned about the landmark so that its start lies on the negative y axis.
+  BearingProblem(const BearingLog& log, const BearingParams& initial,
+                 const std::vector<std::vector<Pose2d>>& world_T_robot, const BearingNoise& noise,
+                 const BearingAdjustmentOptions& options = {});
+  ~BearingProblem();
+  BearingProblem(const BearingProblem&) = delete;
+  BearingProblem& operator=(const BearingProblem&) = delete;
+
+  Status Solve(ceres::Solver::Summary* summary = nullptr);
+
+  BearingParams params() const;
+  std::vector<std::vector<Pose2d>> poses() const;
+  const std::vector<BearingRunNodes>& nodes() const { return nodes_; }
+  const BearingNoise& noise() const { return noise_; }
+  // New noise levels: re-whitens every term (the problem is not rebuilt).
+  void SetNoise(const BearingNoise& noise);
+  // Recomputes the encoder covariances Σ₁ at the current (δ, ξ), then re-whitens.
+  void Relinearize();
+
+  // wrap(β − β̂) (rad) of every bearing, per run in log order (left-out bearings included).
+  std::vector<std::vector<double>> BearingErrors() const;
+  // τ (s; 0 unless the options model it).
+  double time_offset() const { return time_offset_[0]; }
+  // ½Σρ of the problem as it stands, and its gradient with respect to τ (0 without τ).
+  double Cost(double* time_offset_gradient = nullptr) const;
+  // ∂r/∂τ (whitened, per bearing term in the order of BearingTerms) and the loss's ρ', ρ''.
+  struct BearingTermInfo {
+    int run = 0;
+    int bearing = 0;
+    double t_s = 0.0;
+    double residual = 0.0;     // Whitened.
+    double sensitivity = 0.0;  // ∂r/∂τ (0 without τ).
+    double rho1 = 1.0, rho2 = 0.0;
+  };
+  std::vector<BearingTermInfo> BearingTerms() const;
+  // Robust-loss constants of the bearing terms, with the residuals' shrinkage by their leverage
+  // counted back (as the covariance's κ): the likelihood-ratio scale mean(ρ'²s)/mean(ρ' + 2ρ''s)
+  // (2·Δcost/scale is χ² under the null) and λ = mean(ρ' + 2ρ''s)/mean(ρ').
+  void LossConstants(double* likelihood_ratio_scale, double* lambda) const;
+  // Covariance of (φ, ψ, η, δ, ξ, τ) as ceres::Covariance gives it (no loss correction; the
+  // poses eliminated), also while τ is held constant. Requires model_time_offset.
+  struct TimeOffsetCovariance {
+    Eigen::Matrix<double, kNumBearingParams + 1, kNumBearingParams + 1> joint;
+  };
+  StatusOr<TimeOffsetCovariance> CovarianceWithTimeOffset() const;
+  // The robust loss's weight ρ'(s) for a squared whitened residual s (1 without a loss).
+  double LossWeight(double s) const;
+
+  // Covariance of (φ, ψ, η, δ, ξ): ceres::Covariance of the robustified problem (the poses are
+  // nuisance: Ceres eliminates them in its factorization of the whole Jacobian). With
+  // `loss_correction`, times the correction of the bearing terms, as the laser side does:
+  //   κ = mean(ρ')·mean(ρ'²·s)/mean(ρ' + 2ρ''·s)² · n/Σ(1 − h)
+  // (s the squared whitened bearing residuals, n their number, h their leverages from the last
+  // VarianceComponents call): the M-estimator's sandwich H⁻¹·B·H⁻¹, with residuals shrunk by
+  // their leverage counted back; 1 for the plain squared loss at the estimated σβ. Without it,
+  // (JᵀJ)⁻¹ alone, which at the truth with the true noise is the Cramér–Rao bound.
+  StatusOr<BearingParamMatrix> Covariance(bool loss_correction = true) const;
+  // The same with D0', the distance of run `run_index`'s start node, appended.
+  StatusOr<BearingScaledWithDistanceMatrix> CovarianceWithStartDistance(
+      size_t run_index, bool loss_correction = true) const;
+  double StartDistance(size_t run_index) const;
+  double covariance_scale() const { return covariance_scale_; }
+
+  // Leverages of every residual from the covariance of all blocks (with the loss's weights, as
+  // the solution has them), summed per class; bearings with inlier[i][j] false are left out of
+  // the bearing class.
+  StatusOr<BearingVarianceComponents> VarianceComponents(
+      const std::vector<std::vector<bool>>& inlier) const;
+
+  int num_bearings() const { return num_bearings_; }
+  int num_odometry_terms() const { return static_cast<int>(odometry_.size()); }
+
+ private:
+  struct OdometryTerm {
+    int run = 0;
+    int node = 0;  // Between node − 1 and node.
+    const ceres::CostFunction* cost = nullptr;
+  };
+  struct BearingTerm {
+    int run = 0;
+    int node = 0;
+    int bearing = 0;
+    double bearing_rad = 0.0;
+    const ceres::CostFunction* cost = nullptr;
+  };
+  // wrap(β − β̂) of bearing `bearing` of run `run` at node `node`.
+  double BearingError(int run, int node, int bearing) const;
+  // The parameter blocks of a bearing term.
+  std::vector<double*> TermBlocks(const BearingTerm& term) const;
+
+  double* Node(int run, int node) { return poses_[run][node].data(); }
+  const double* Node(int run, int node) const { return poses_[run][node].data(); }
+  // Σ₁ of one odometry term of run `run`.
+  Eigen::Matrix3d UnitCovariance(size_t run, double t0_s, double t1_s, double delta,
+                                 double xi) const;
+  StatusOr<Eigen::MatrixXd> BlockCovariance(const std::vector<const double*>& blocks) const;
+  void UpdateKappa() const;
+
+  const BearingLog* log_;
+  std::vector<BearingRunNodes> nodes_;
+  BearingAdjustmentOptions options_;
+  BearingNoise noise_;
+  double calibration_[kNumBearingParams];
+  mutable double time_offset_[1] = {0.0};
+  std::vector<std::vector<std::array<double, 3>>> poses_;
+  std::vector<Eigen::Matrix3d> unit_covariance_;   // Σ₁ per odometry term.
+  std::vector<Eigen::Matrix3d> sqrt_information_;  // Stable addresses (sized once).
+  double inverse_bearing_sigma_ = 1.0;
+  std::unique_ptr<ceres::LossFunction> loss_;
+  std::unique_ptr<ceres::Problem> problem_;
+  std::vector<OdometryTerm> odometry_;
+  std::vector<BearingTerm> bearings_;
+  int num_bearings_ = 0;
+  mutable double covariance_scale_ = 1.0;
+  mutable double bearing_redundancy_fraction_ = 1.0;  // Σ(1 − h)/n over all bearings.
+};
+
+// The poses at the nodes of every run obtained by dead reckoning with `params` from a start
+// pose given by the landmark's position in the robot frame at the run's start (gauge units).
+std::vector<std::vector<Pose2d>> DeadReckonedPoses(
+    const BearingLog& log, const BearingParams& params,
+    const std::vector<Eigen::Vector2d>& landmark_in_start);
+
+}  // namespace calib
+
+#endif  // CALIB_SOLVERS_BEARING_BEARING_BUNDLE_ADJUSTMENT_H_

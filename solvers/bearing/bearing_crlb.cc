@@ -1,0 +1,65 @@
+#include <calib/solvers/bearing/bearing_crlb.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <calib/core/bearing/bearing_log_io.h>
+
+namespace calib {
+
+StatusOr<BearingBound> BearingCramerRaoBound(const BearingLog& log, const BearingSimTruth& truth,
+                                             const BearingNoise& noise) {
+  Status status = ValidateBearingLog(log);
+  if (!status.ok()) return status;
+  if (!(noise.bearing_sigma_rad > 0.0) || !(noise.encoder_k >= 0.0)) {
+    return Status::Error("the bound needs σβ > 0 and K ≥ 0");
+  }
+  const std::vector<BearingRunNodes> nodes = BearingNodes(log);
+  const double delta_r = truth.metric.delta_r;
+  std::vector<std::vector<Pose2d>> poses(log.runs.size());
+  for (size_t i = 0; i < log.runs.size(); ++i) {
+    const auto run = std::find_if(truth.runs.begin(), truth.runs.end(),
+                                  [&](const BearingRunTruth& t) { return t.id == log.runs[i].id; });
+    if (run == truth.runs.end() ||
+        run->world_T_robot_at_bearings.size() != log.runs[i].bearings.size()) {
+      return Status::Error("the truth does not match run " + std::to_string(log.runs[i].id));
+    }
+    for (int bearing : nodes[i].bearing) {
+      Pose2d p = bearing < 0 ? run->world_T_robot_start : run->world_T_robot_at_bearings[bearing];
+      p.head<2>() /= delta_r;  // Gauge units (δR ≡ 1).
+      poses[i].push_back(p);
+    }
+  }
+  BearingAdjustmentOptions options;
+  options.loss = RobustLoss::kNone;
+  // With K = 0 the odometry is exact up to the covariance floor of BearingAdjustmentOptions.
+  BearingProblem problem(log, truth.params, poses, noise, options);
+
+  BearingBound bound;
+  if (log.meta.initial_distance) {
+    const InitialDistance& d = *log.meta.initial_distance;
+    const auto it = std::find_if(log.runs.begin(), log.runs.end(),
+                                 [&](const BearingRun& r) { return r.id == d.run; });
+    const size_t index = static_cast<size_t>(it - log.runs.begin());
+    StatusOr<BearingScaledWithDistanceMatrix> joint =
+        problem.CovarianceWithStartDistance(index, /*loss_correction=*/false);
+    if (!joint.ok()) return joint.status();
+    bound.covariance = joint->topLeftCorner<kNumBearingParams, kNumBearingParams>();
+    Eigen::Matrix<double, kNumBearingMetricParams, kNumBearingParams + 1> jacobian;
+    BearingMetricFromScaled(truth.params, problem.StartDistance(index), d.meters,
+                            log.meta.wheelbase_m, &jacobian);
+    bound.metric_covariance = jacobian * *joint * jacobian.transpose();
+    bound.metric_stddev = bound.metric_covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+    bound.has_metric = true;
+  } else {
+    StatusOr<BearingParamMatrix> cov = problem.Covariance(/*loss_correction=*/false);
+    if (!cov.ok()) return cov.status();
+    bound.covariance = *cov;
+  }
+  bound.stddev = bound.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  return bound;
+}
+
+}  // namespace calib

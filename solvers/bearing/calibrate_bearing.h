@@ -1,0 +1,172 @@
+#ifndef CALIB_SOLVERS_BEARING_CALIBRATE_BEARING_H_
+#define CALIB_SOLVERS_BEARING_CALIBRATE_BEARING_H_
+
+#include <Eigen/Core>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <calib/core/bearing/bearing_log.h>
+#include <calib/core/bearing/bearing_model.h>
+#include <calib/core/status.h>
+#include <calib/solvers/bearing/bearing_bundle_adjustment.h>
+#include <calib/solvers/bearing/martinelli_closed_form.h>
+
+// Bearing-only calibration in one call (Martinelli 2009): seed → bundle adjustment with the noise
+// levels estimated from the data → covariance.
+//
+//   calib::StatusOr<calib::BearingLog> log = calib::ReadBearingLog("run_dir");
+//   calib::StatusOr<calib::BearingCalibrationResult> result = calib::CalibrateBearing(*log);
+//   if (result.ok()) use(result->estimate, result->stddev);
+//
+// Seed. When the log holds circular runs at three or more distinct q = vL/vR, Martinelli's closed
+// form on those runs (solvers/martinelli_closed_form.h); otherwise, or when the adjustment from
+// it does not explain the bearings, a coarse search (SearchBearingSeed) that handles arbitrary
+// trajectories. Each run's start is then placed from the seed calibration by a linear fit of the
+// landmark's position to its bearings (SeedLandmarks), and its poses at the bearing times by dead
+// reckoning. Both seeds are least squares: bearings that disagree with their neighbours in time
+// (gross outliers) are left out of them. A seed is accepted when the adjustment from it leaves
+// residuals no larger than twice the neighbours' own scatter; if none is, the log is rejected.
+//
+// Noise. σβ and the encoder constant K are unknown to the log; unless given they are estimated
+// by variance components: σβ² = Σe²/Σ(1 − h) over the inlier bearings (h the leverages, corrected
+// for the inlier cut), K² ← K²·Σ‖L·e‖²/Σ(3 − tr h) over the odometry terms, re-solving between
+// rounds. K rests on the few degrees of freedom the bearings leave to the odometry (about
+// ½√(q/r) per bearing, q and r the per-step odometry and bearing variances: a dozen on the §8.1
+// runs), so it is only as good as that count r_o allows. It is therefore taken one-sided,
+// K = max(K_floor, K̂) (BearingCalibrationOptions::encoder_noise_k_floor), and when the data
+// raise it, the covariance takes K at the upper end of its one-sigma range, K̂²·(1 + √(2/r_o)).
+//
+// Covariance. ceres::Covariance on the calibration block (the poses are nuisance), corrected for
+// the robust loss (BearingProblem::Covariance); with an initial distance, also on D0' and mapped
+// to the metric set by BearingMetricFromScaled.
+namespace calib {
+
+struct BearingSearchOptions {
+  // Ranges searched for δ = δL/δR and ξ·B = δR/δB (log-uniform).
+  double min_delta = 0.8;
+  double max_delta = 1.25;
+  double min_xi_b = 2.0 / 3.0;
+  double max_xi_b = 1.5;
+  // Grid steps turn the dead-reckoned heading by at most this anywhere in a run.
+  double heading_tolerance_rad = 0.15;
+  int max_grid_points = 20000;    // Coarser steps beyond.
+  int max_search_bearings = 300;  // The grid uses every k-th bearing to stay within this.
+  int candidates = 4;             // Grid minima refined on every bearing.
+  int refine_levels = 5;          // 5×5 refinements, the step halving each time.
+};
+
+struct BearingCalibrationOptions {
+  BearingAdjustmentOptions adjustment;
+  MartinelliOptions closed_form;
+  BearingSearchOptions search;
+  bool use_closed_form = true;  // Try the closed-form seed first when the runs allow it.
+  // Known noise levels; estimated from the data when empty.
+  std::optional<double> bearing_sigma_rad;
+  std::optional<double> encoder_noise_k;
+  // K is estimated from the data but not below this floor (m^½). The data hold few degrees of
+  // freedom for K (see above) and its estimate can collapse towards 0, which would make the
+  // sigmas of δ (the parameter the encoder noise limits) too small; the floor is Martinelli's
+  // Table 1 value, about twice that of real encoders (Chong and Kleeman), so conservative.
+  double encoder_noise_k_floor = 1e-3;
+  int noise_rounds = 6;           // At most this many re-solves for the noise levels.
+  double noise_tolerance = 0.03;  // ... while a level changes by more than this.
+  // Bearings whose squared whitened residual exceeds this are outliers (χ²₁ at 99.9 %).
+  double inlier_chi2 = 10.83;
+  // Seeding leaves out bearings that miss a quadratic through their neighbours in time by more
+  // than this many times the neighbours' scatter, and by 2° at least (the adjustment keeps them,
+  // under its loss).
+  double seed_outlier_cut = 5.0;
+  // A seed is rejected (and the next one tried) when the adjustment from it leaves residuals
+  // whose robust scale exceeds this many times the neighbours' scatter: a wrong minimum.
+  double max_fit_over_scatter = 2.0;
+  // Larger standard deviations mean the log does not determine the parameters: angles (rad),
+  // and η, δ, ξ relative to their value.
+  double max_angle_stddev_rad = 0.35;
+  double max_relative_stddev = 0.25;
+  std::function<void(const std::string&)> progress;  // Optional progress lines.
+};
+
+struct BearingRunSummary {
+  int run = 0;
+  int bearings = 0;
+  int inliers = 0;
+  bool circular = false;        // Used by the closed form as a circle at fixed q.
+  double q = 0.0;               // vL/vR of a circular run.
+  double start_distance = 0.0;  // Robot–landmark distance at the run's start, gauge units (δR m).
+  double rms_residual_rad = 0.0;  // Of its inlier bearings.
+};
+
+struct BearingCalibrationResult {
+  BearingParams estimate;  // φ, ψ, η, δ, ξ.
+  BearingParamMatrix covariance = BearingParamMatrix::Zero();
+  BearingParamVector stddev = BearingParamVector::Zero();
+  // With an initial distance: the metric set and its covariance (φ, ψ, ρ, δR, δL, δB).
+  bool has_metric = false;
+  BearingMetricParams metric;
+  BearingMetricMatrix metric_covariance = BearingMetricMatrix::Zero();
+  BearingMetricVector metric_stddev = BearingMetricVector::Zero();
+
+  // The seed: "closed_form" (Martinelli) or "search" (non-circular runs).
+  std::string seed_method;
+  BearingParams seed;
+  bool has_closed_form = false;
+  MartinelliEstimate closed_form;
+  std::string closed_form_message;   // Why the closed form was not used, when it was not.
+  int seed_excluded = 0;             // Bearings left out of the seeds (they miss their neighbours).
+  double bearing_scatter_rad = 0.0;  // σβ as the neighbours in time see it (CheckConsistency).
+
+  bool has_seed_metric = false;  // With an initial distance: the seed's metric set.
+  BearingMetricParams seed_metric;
+
+  BearingNoise noise;               // The noise levels of the estimate.
+  double encoder_k_estimate = 0.0;  // The variance-component value of K (0: too few dof).
+  double covariance_encoder_k = 0;  // K used for the covariance (see below).
+  bool bearing_sigma_estimated = false;
+  bool encoder_k_estimated = false;
+  double bearing_redundancy = 0.0;
+  double odometry_redundancy = 0.0;
+  int noise_rounds = 0;
+
+  int samples = 0;  // Bearings.
+  int inliers = 0;
+  std::vector<BearingRunSummary> runs;
+  std::vector<std::vector<double>> residuals_rad;  // Per run, per bearing: wrap(β − β̂).
+  std::vector<std::vector<Pose2d>> poses;          // Per run, at its nodes (gauge units).
+  double covariance_scale = 1.0;                   // κ.
+  int iterations = 0;
+  double seed_seconds = 0.0;
+  double adjustment_seconds = 0.0;
+  double covariance_seconds = 0.0;
+};
+
+StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
+                                                    const BearingCalibrationOptions& options = {});
+
+// ---------------------------------------------------------------------------------------------
+// The seeding steps.
+
+// The landmark's position in each run's start frame (gauge units) for a given calibration: with
+// dead-reckoned sensor positions s_j and measured directions d_j, cross(L − s_j, d_j) = 0 is linear
+// in L; solved by least squares, reweighted by 1/|L − s_j|² so that residuals are angles.
+StatusOr<std::vector<Eigen::Vector2d>> SeedLandmarks(const BearingLog& log,
+                                                     const BearingParams& params);
+
+// A calibration for arbitrary trajectories. For trial (δ, ξ) each run's path (p_j, θ_j) is
+// dead-reckoned from its first bearing, and the bearing condition
+//   cross(L − p_j − R(θ_j)·m, R(c + θ_j)·u(β_j)) = 0,   c = φ + ψ,  m = ρ(cos φ, sin φ),
+// with L the landmark in that frame, reads, with Q = R(−c − π/2) and w_j = R(θ_j)·u(β_j):
+//   (Q·L)·w_j − (Q·m)·u(β_j) + cos c·cross(p_j, w_j) + sin c·(p_j·w_j) = 0,
+// linear and homogeneous in (Q·L per run, Q·m, cos c, sin c). Eliminating Q·L and Q·m, the
+// constraint cos²c + sin²c = 1 leaves a 2×2 eigenproblem (rows reweighted by 1/distance² so that
+// they measure angles); the fit is scored by its bearing errors. (δ, ξ) come from a grid whose
+// steps turn the dead-reckoned heading by at most `heading_tolerance_rad` (the information on
+// them is the long-range agreement of odometry heading and bearings, so the basin is that
+// narrow), then from local refinement of the best minima.
+StatusOr<BearingParams> SearchBearingSeed(const BearingLog& log,
+                                          const BearingSearchOptions& options = {});
+
+}  // namespace calib
+
+#endif  // CALIB_SOLVERS_BEARING_CALIBRATE_BEARING_H_

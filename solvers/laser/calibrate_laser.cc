@@ -1,0 +1,207 @@
+#include <calib/solvers/laser/calibrate_laser.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+namespace calib {
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::string IntervalName(const LaserInterval& interval, size_t index) {
+  std::string name = interval.record > 0 ? "record " + std::to_string(interval.record)
+                                         : "interval " + std::to_string(index + 1);
+  if (interval.line > 0) name += " (line " + std::to_string(interval.line) + ")";
+  return name;
+}
+
+// A relative change of the noise level below which another fit would move the estimate by a
+// negligible fraction of its sigma.
+constexpr double kNoiseRefitChange = 0.01;
+
+Eigen::Matrix3d DiagonalSqrtInformation(const Eigen::Vector3d& sigma) {
+  return sigma.cwiseInverse().asDiagonal();
+}
+
+// Above this many intervals the refinement starts from a fit to a subset of this size.
+constexpr size_t kWarmStartAbove = 100000;
+constexpr size_t kWarmStartSubset = 50000;
+// ceres::Covariance factorizes the whole 3N×6 Jacobian and takes seconds for a million
+// intervals; above this size the sandwich, one pass over the Jacobians, gives the same matrix
+// (the tests check that the two agree).
+constexpr size_t kCeresCovarianceUpTo = 200000;
+
+// Fits, re-estimates each log's noise from the residuals (unless fixed), and fits again while
+// the noise level still moves enough to shift the weights.
+Status RefineWithNoise(const LaserCalibrationOptions& options, LaserProblem* problem,
+                       int* iterations, const std::function<void(const std::string&)>& report) {
+  // Whitens each log by its robust noise level; returns the largest relative change.
+  const auto estimate_noise = [&]() {
+    double change = 0.0;
+    for (size_t d = 0; d < problem->num_datasets(); ++d) {
+      const Eigen::Vector3d sigma =
+          options.noise_sigma ? *options.noise_sigma : RobustNoiseSigma(problem->Errors(d));
+      const Eigen::Vector3d old_sigma = problem->sqrt_information(d).diagonal().cwiseInverse();
+      change = std::max(change, ((sigma - old_sigma).cwiseQuotient(sigma)).cwiseAbs().maxCoeff());
+      problem->SetSqrtInformation(d, DiagonalSqrtInformation(sigma));
+    }
+    return change;
+  };
+  estimate_noise();
+  for (int round = 0; round < std::max(1, options.noise_rounds); ++round) {
+    ceres::Solver::Summary summary;
+    const Status solved = problem->Solve(&summary);
+    if (!solved.ok()) return solved;
+    *iterations += static_cast<int>(summary.iterations.size());
+    report("refinement round " + std::to_string(round + 1) + ": " +
+           std::to_string(summary.iterations.size()) + " iterations");
+    if (options.noise_sigma || estimate_noise() < kNoiseRefitChange) break;
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status ValidateLaserIntervals(const std::vector<LaserInterval>& intervals) {
+  if (intervals.empty()) return Status::Error("the log holds no intervals");
+  for (size_t k = 0; k < intervals.size(); ++k) {
+    const LaserInterval& interval = intervals[k];
+    if (!(interval.duration_s > 0.0) || !std::isfinite(interval.duration_s)) {
+      return Status::Error(IntervalName(interval, k) + ": T must be positive and finite");
+    }
+    if (!std::isfinite(interval.left_speed) || !std::isfinite(interval.right_speed) ||
+        !interval.sensor_motion.allFinite()) {
+      return Status::Error(IntervalName(interval, k) + ": wheel speeds and sm must be finite");
+    }
+    for (const WheelStep& step : interval.steps) {
+      if (!std::isfinite(step.left_rad) || !std::isfinite(step.right_rad)) {
+        return Status::Error(IntervalName(interval, k) + ": wheel steps must be finite");
+      }
+    }
+  }
+  return Status::Ok();
+}
+
+StatusOr<LaserCalibrationResult> CalibrateLaser(const std::vector<LaserInterval>& intervals,
+                                                const LaserCalibrationOptions& options) {
+  return CalibrateLaserJoint({&intervals}, options);
+}
+
+StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
+    const std::vector<const std::vector<LaserInterval>*>& logs,
+    const LaserCalibrationOptions& options) {
+  const auto report = [&](const std::string& line) {
+    if (options.progress) options.progress(line);
+  };
+  std::vector<LaserInterval> all;
+  for (size_t i = 0; i < logs.size(); ++i) {
+    const Status valid = ValidateLaserIntervals(*logs[i]);
+    if (!valid.ok()) {
+      return Status::Error(logs.size() > 1 ? "log " + std::to_string(i + 1) + ": " + valid.message()
+                                           : valid.message());
+    }
+    if (logs.size() > 1) all.insert(all.end(), logs[i]->begin(), logs[i]->end());
+  }
+  if (logs.empty()) return Status::Error("no logs to calibrate");
+  const std::vector<LaserInterval>& joined = logs.size() > 1 ? all : *logs[0];
+
+  LaserCalibrationResult result;
+  result.samples = static_cast<int>(joined.size());
+  result.census = CountLaserMotion(joined);
+
+  auto start = std::chrono::steady_clock::now();
+  StatusOr<CensiClosedFormResult> closed_form = CensiClosedForm(joined);
+  if (!closed_form.ok()) return closed_form.status();
+  result.closed_form = *closed_form;
+  // The refinement starts from the paper's trimmed closed form: slips can drag the plain one far
+  // enough (at a few hundred noisy intervals with 20 % slips) that LM settles in a wrong basin with
+  // near-zero radii. On huge logs an evenly spread subset suffices for a seed.
+  const size_t total = joined.size();
+  const size_t stride = (total + kWarmStartSubset - 1) / kWarmStartSubset;
+  std::vector<LaserInterval> seed_subset;
+  if (total > kWarmStartAbove) {
+    for (size_t k = 0; k < total; k += stride) seed_subset.push_back(joined[k]);
+  }
+  const StatusOr<TrimmedClosedFormResult> trimmed =
+      CensiClosedFormTrimmed(seed_subset.empty() ? joined : seed_subset);
+  result.closed_form_trimmed = trimmed.ok() ? trimmed->estimate : *closed_form;
+  result.closed_form_seconds = SecondsSince(start);
+  report("closed form done in " + std::to_string(result.closed_form_seconds) + " s");
+
+  start = std::chrono::steady_clock::now();
+  LaserCalibration initial = result.closed_form_trimmed.calibration;
+  std::vector<Eigen::Vector3d> initial_sigma;
+  if (total > kWarmStartAbove) {
+    // Refine on an evenly spread subset first: its optimum lies within a few full-data sigmas of
+    // the final one, so the full problem then converges in a few iterations.
+    std::vector<std::vector<LaserInterval>> subsets(logs.size());
+    std::vector<LaserDataset> subset_datasets;
+    for (size_t d = 0; d < logs.size(); ++d) {
+      for (size_t k = 0; k < logs[d]->size(); k += stride) subsets[d].push_back((*logs[d])[k]);
+      subset_datasets.push_back(LaserDataset{&subsets[d], Eigen::Matrix3d::Identity()});
+    }
+    LaserProblem warm(subset_datasets, initial, options.refinement);
+    const Status solved = RefineWithNoise(options, &warm, &result.iterations, report);
+    if (!solved.ok()) return solved;
+    initial = warm.calibration();
+    for (size_t d = 0; d < logs.size(); ++d) {
+      initial_sigma.push_back(warm.sqrt_information(d).diagonal().cwiseInverse());
+    }
+    report("warm start on " + std::to_string(total / stride) + " intervals done");
+  }
+  std::vector<LaserDataset> datasets;
+  for (size_t d = 0; d < logs.size(); ++d) {
+    datasets.push_back(LaserDataset{logs[d], initial_sigma.empty()
+                                                 ? Eigen::Matrix3d::Identity()
+                                                 : DiagonalSqrtInformation(initial_sigma[d])});
+  }
+  LaserProblem problem(datasets, initial, options.refinement);
+  const Status solved = RefineWithNoise(options, &problem, &result.iterations, report);
+  if (!solved.ok()) return solved;
+  result.estimate = problem.calibration();
+  result.refinement_seconds = SecondsSince(start);
+
+  // Inliers and their noise level.
+  for (size_t d = 0; d < logs.size(); ++d) {
+    const std::vector<Eigen::Vector3d> errors = problem.Errors(d);
+    const Eigen::Matrix3d& sqrt_information = problem.sqrt_information(d);
+    std::vector<bool> inlier(errors.size());
+    Eigen::Vector3d sum_sq = Eigen::Vector3d::Zero();
+    int count = 0;
+    for (size_t k = 0; k < errors.size(); ++k) {
+      inlier[k] = (sqrt_information * errors[k]).squaredNorm() < options.inlier_chi2;
+      if (inlier[k]) {
+        sum_sq += errors[k].cwiseAbs2();
+        ++count;
+      }
+    }
+    result.inliers += count;
+    result.noise_sigma.push_back(count > 0 ? Eigen::Vector3d((sum_sq / count).cwiseSqrt())
+                                           : Eigen::Vector3d::Constant(NAN));
+    result.is_inlier.push_back(std::move(inlier));
+  }
+
+  start = std::chrono::steady_clock::now();
+  StatusOr<LaserParamMatrix> covariance =
+      total <= kCeresCovarianceUpTo ? problem.Covariance() : problem.SandwichCovariance();
+  if (!covariance.ok()) return covariance.status();
+  result.covariance = *covariance;
+  result.covariance_scale = total <= kCeresCovarianceUpTo ? problem.covariance_scale() : 1.0;
+  result.stddev = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  result.covariance_seconds = SecondsSince(start);
+  result.observability =
+      AnalyzeLaserObservability(result.covariance, result.estimate, result.census);
+  if (result.inliers < result.samples / 2) {
+    result.observability.warnings.push_back(
+        "only " + std::to_string(result.inliers) + " of " + std::to_string(result.samples) +
+        " intervals agree with the model: check the wheel-speed signs, units and the scan "
+        "matcher");
+  }
+  return result;
+}
+
+}  // namespace calib

@@ -1,0 +1,73 @@
+#ifndef CALIB_SOLVERS_LASER_CALIBRATE_LASER_H_
+#define CALIB_SOLVERS_LASER_CALIBRATE_LASER_H_
+
+#include <Eigen/Core>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <calib/core/laser/laser_params.h>
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/status.h>
+#include <calib/solvers/laser/censi_closed_form.h>
+#include <calib/solvers/laser/laser_motion.h>
+#include <calib/solvers/laser/laser_observability.h>
+#include <calib/solvers/laser/laser_refinement.h>
+
+// Laser–odometry calibration in one call: closed form → robust Ceres refinement with the scan
+// noise estimated from the data → covariance → observability report.
+//
+//   calib::StatusOr<calib::LaserLog> log = calib::ReadLaserLog("robot.tuple");
+//   calib::StatusOr<calib::LaserCalibrationResult> result = calib::CalibrateLaser(log->intervals);
+//   if (result.ok()) use(result->estimate, result->stddev);
+namespace calib {
+
+struct LaserCalibrationOptions {
+  LaserRefinementOptions refinement;
+  // Fit, re-estimate the scan noise from the residuals, fit again while it changes by more than
+  // 1 %: at most this many fits.
+  int noise_rounds = 3;
+  // Scan-matching noise σ (x, y, θ) when known; estimated from the data when empty.
+  std::optional<Eigen::Vector3d> noise_sigma;
+  // Intervals whose squared whitened residual exceeds this are outliers (χ²₃ at 99.9 %).
+  double inlier_chi2 = 16.27;
+  // Called with a line of progress for long runs; may be empty.
+  std::function<void(const std::string&)> progress;
+};
+
+struct LaserCalibrationResult {
+  LaserCalibration estimate;
+  LaserParamMatrix covariance = LaserParamMatrix::Zero();
+  LaserParamVector stddev = LaserParamVector::Zero();
+  CensiClosedFormResult closed_form;          // The paper's closed form on all data.
+  CensiClosedFormResult closed_form_trimmed;  // With its trimming: the refinement's seed.
+  int samples = 0;
+  int inliers = 0;
+  std::vector<std::vector<bool>> is_inlier;  // Per log, per interval.
+  std::vector<Eigen::Vector3d> noise_sigma;  // Per log: the scan noise of its inliers.
+  LaserMotionCensus census;
+  LaserObservability observability;
+  double covariance_scale = 1.0;  // The loss correction κ applied to Ceres' covariance.
+  int iterations = 0;
+  double closed_form_seconds = 0.0;
+  double refinement_seconds = 0.0;
+  double covariance_seconds = 0.0;
+};
+
+StatusOr<LaserCalibrationResult> CalibrateLaser(const std::vector<LaserInterval>& intervals,
+                                                const LaserCalibrationOptions& options = {});
+
+// Several logs of the same robot calibrated jointly (shared parameters, each log with its own
+// noise level), as the paper joins its datasets.
+StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
+    const std::vector<const std::vector<LaserInterval>*>& logs,
+    const LaserCalibrationOptions& options = {});
+
+// Checks that intervals are usable (finite values, positive durations); the message names the
+// first bad interval.
+Status ValidateLaserIntervals(const std::vector<LaserInterval>& intervals);
+
+}  // namespace calib
+
+#endif  // CALIB_SOLVERS_LASER_CALIBRATE_LASER_H_

@@ -1,0 +1,158 @@
+#include <calib/solvers/laser/censi_closed_form.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <calib/core/se2.h>
+#include <calib/solvers/laser/laser_motion.h>
+
+namespace calib {
+namespace {
+
+using Vector5d = Eigen::Matrix<double, 5, 1>;
+using Matrix5d = Eigen::Matrix<double, 5, 5>;
+
+// Condition number of a symmetric positive semi-definite matrix after scaling it to unit
+// diagonal, so that parameters of different units compare fairly.
+double ScaledConditionNumber(const Eigen::MatrixXd& a) {
+  const Eigen::VectorXd d = a.diagonal();
+  if ((d.array() <= 0.0).any()) return std::numeric_limits<double>::infinity();
+  const Eigen::VectorXd inv_sqrt = d.cwiseSqrt().cwiseInverse();
+  const Eigen::MatrixXd scaled = inv_sqrt.asDiagonal() * a * inv_sqrt.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled);
+  const double lo = eig.eigenvalues().minCoeff();
+  const double hi = eig.eigenvalues().maxCoeff();
+  return lo > 0.0 ? hi / lo : std::numeric_limits<double>::infinity();
+}
+
+// The robot displacement per unit wheelbase (b = 1): o = (b·c_x, b·c_y, o_θ), eqs. 12–13 and
+// §II-D, with r_l = −J21, r_r = J22.
+Pose2d DisplacementPerUnitWheelbase(const LaserInterval& interval, double j21, double j22) {
+  return IntervalRobotMotion(-j21, j22, 1.0, interval);
+}
+
+}  // namespace
+
+StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>& intervals,
+                                                const std::vector<bool>* use,
+                                                const CensiClosedFormOptions& options) {
+  const LaserMotionCensus census = CountLaserMotion(intervals, use);
+  const std::string missing = DescribeMissingLaserMotion(census);
+  if (!missing.empty()) return Status::Error(missing);
+
+  // §II-B: [Δφ_l Δφ_r] [J21 J22]ᵀ = ŝ_θ, by linear least squares.
+  Eigen::Matrix2d ata = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d atb = Eigen::Vector2d::Zero();
+  for (size_t k = 0; k < intervals.size(); ++k) {
+    if (use != nullptr && !(*use)[k]) continue;
+    const Eigen::Vector2d a = IntervalWheelRotation(intervals[k]);
+    ata += a * a.transpose();
+    atb += a * intervals[k].sensor_motion(2);
+  }
+  CensiClosedFormResult result;
+  result.samples_used = census.total;
+  // Condition number of the stacked system itself is the square root of that of AᵀA.
+  result.j_condition_number = std::sqrt(ScaledConditionNumber(ata));
+  if (!(result.j_condition_number < options.max_condition_number)) {
+    return Status::Error("the rotation system for J21, J22 is degenerate (condition number " +
+                         std::to_string(result.j_condition_number) +
+                         "): the log needs turns with different wheel-speed ratios");
+  }
+  const Eigen::Vector2d j = ata.ldlt().solve(atb);
+  result.j21 = j(0);
+  result.j22 = j(1);
+
+  // §II-C: eq. 16 stacked into M = Σ L_kᵀ L_k over x = [b, ℓx, ℓy, cos ℓθ, sin ℓθ].
+  Matrix5d m = Matrix5d::Zero();
+  for (size_t k = 0; k < intervals.size(); ++k) {
+    if (use != nullptr && !(*use)[k]) continue;
+    const Pose2d c = DisplacementPerUnitWheelbase(intervals[k], result.j21, result.j22);
+    const double co = std::cos(c(2)), so = std::sin(c(2));
+    const Pose2d& s = intervals[k].sensor_motion;
+    Eigen::Matrix<double, 2, 5> l;
+    l << -c(0), 1.0 - co, so, s(0), -s(1),  //
+        -c(1), -so, 1.0 - co, s(1), s(0);
+    m += l.transpose() * l;
+  }
+
+  // §II-E: min xᵀMx subject to x4² + x5² = 1. With x = [p; q], the optimal p = −A⁻¹Bq, and q is
+  // the unit eigenvector of the Schur complement S = C − BᵀA⁻¹B with the smallest eigenvalue
+  // (equivalent to the paper's det(M + λW) = 0 with λ = −eigenvalue, but numerically stable).
+  const Eigen::Matrix3d a = m.topLeftCorner<3, 3>();
+  const Eigen::Matrix<double, 3, 2> b = m.topRightCorner<3, 2>();
+  const Eigen::Matrix2d cc = m.bottomRightCorner<2, 2>();
+  const double a_condition = ScaledConditionNumber(a);
+  if (!(a_condition < options.max_condition_number * options.max_condition_number)) {
+    return Status::Error(
+        "the system for b and the sensor position is degenerate (condition number " +
+        std::to_string(a_condition) + "): the log needs both arcs (or straight runs) and turns");
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> a_ldlt(a);
+  const Eigen::Matrix2d schur = cc - b.transpose() * a_ldlt.solve(b);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(schur);
+  const Eigen::Vector2d q = eig.eigenvectors().col(0);  // Eigenvalues come sorted ascending.
+  result.lambda = -eig.eigenvalues()(0);
+  Vector5d x;
+  x.head<3>() = -a_ldlt.solve(b * q);
+  x.tail<2>() = q;
+  if (x(0) < 0.0) x = -x;  // Constraint (19): b > 0.
+  if (!(x(0) > 0.0) || !x.allFinite()) {
+    return Status::Error(
+        "the closed form gave a non-positive wheelbase: the data do not fit a "
+        "differential-drive robot (check the sign of the wheel speeds)");
+  }
+  // r_l = −b·J21 and r_r = +b·J22 (the paper's final formulas print the signs the wrong way).
+  result.calibration.odometry = OdometryParams{-x(0) * result.j21, x(0) * result.j22, x(0)};
+  result.calibration.base_T_sensor = Pose2d(x(1), x(2), std::atan2(x(4), x(3)));
+  if (result.calibration.odometry.left_radius_m <= 0.0 ||
+      result.calibration.odometry.right_radius_m <= 0.0) {
+    return Status::Error("the closed form gave a non-positive wheel radius (r_l = " +
+                         std::to_string(result.calibration.odometry.left_radius_m) +
+                         ", r_r = " + std::to_string(result.calibration.odometry.right_radius_m) +
+                         "): check that positive wheel speeds drive the robot forward");
+  }
+  return result;
+}
+
+StatusOr<TrimmedClosedFormResult> CensiClosedFormTrimmed(
+    const std::vector<LaserInterval>& intervals, const TrimmedClosedFormOptions& options) {
+  TrimmedClosedFormResult result;
+  result.kept.assign(intervals.size(), true);
+  for (int round = 0;; ++round) {
+    StatusOr<CensiClosedFormResult> estimate =
+        CensiClosedForm(intervals, &result.kept, options.closed_form);
+    if (!estimate.ok()) return estimate.status();
+    result.estimate = *estimate;
+    if (round == options.rounds) break;
+    // e = ℓ ⊕ ŝ − ô ⊕ ℓ (§III-B), in the robot frame.
+    const LaserCalibration& cal = estimate->calibration;
+    std::vector<double> xy_error(intervals.size()), theta_error(intervals.size());
+    std::vector<double> kept_xy, kept_theta;
+    for (size_t k = 0; k < intervals.size(); ++k) {
+      const Pose2d o = IntervalRobotMotion(cal.odometry.left_radius_m, cal.odometry.right_radius_m,
+                                           cal.odometry.wheelbase_m, intervals[k]);
+      const Pose2d e =
+          Compose(cal.base_T_sensor, intervals[k].sensor_motion) - Compose(o, cal.base_T_sensor);
+      xy_error[k] = e.head<2>().norm();
+      theta_error[k] = std::abs(WrapAngle(e(2)));
+      if (result.kept[k]) {
+        kept_xy.push_back(xy_error[k]);
+        kept_theta.push_back(theta_error[k]);
+      }
+    }
+    const auto quantile = [&](std::vector<double> v) {
+      const size_t n = static_cast<size_t>(std::floor((1.0 - options.fraction) * (v.size() - 1)));
+      std::nth_element(v.begin(), v.begin() + n, v.end());
+      return v[n];
+    };
+    const double xy_limit = quantile(kept_xy), theta_limit = quantile(kept_theta);
+    for (size_t k = 0; k < intervals.size(); ++k) {
+      if (xy_error[k] > xy_limit || theta_error[k] > theta_limit) result.kept[k] = false;
+    }
+  }
+  return result;
+}
+
+}  // namespace calib

@@ -1,0 +1,50 @@
+#ifndef CALIB_SOLVERS_LASER_CENSI_CLOSED_FORM_H_
+#define CALIB_SOLVERS_LASER_CENSI_CLOSED_FORM_H_
+
+#include <vector>
+
+#include <calib/core/laser/laser_params.h>
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/status.h>
+
+// The closed-form estimator of Censi, Marchionni, Oriolo (ICRA 2008), §II-B, C, D, E.
+namespace calib {
+
+struct CensiClosedFormOptions {
+  // Above this condition number the linear systems are treated as degenerate.
+  double max_condition_number = 1e7;
+};
+
+struct CensiClosedFormResult {
+  LaserCalibration calibration;
+  double j21 = 0.0;                 // −r_l/b
+  double j22 = 0.0;                 // +r_r/b
+  double j_condition_number = 0.0;  // Of the stacked [Δφ_l Δφ_r] system (eq. 8).
+  double lambda = 0.0;              // Lagrange multiplier of the constraint x4² + x5² = 1.
+  int samples_used = 0;
+};
+
+// Estimates all six parameters from the intervals with use[k] true (all when `use` is null).
+// Returns an error naming the missing motion on degenerate data; never exits.
+StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>& intervals,
+                                                const std::vector<bool>* use = nullptr,
+                                                const CensiClosedFormOptions& options = {});
+
+// The paper's §III-B outlier handling, kept as a baseline: estimate, drop the worst `fraction`
+// of the samples by the residual e = ℓ ⊕ ŝ − ô ⊕ ℓ (separately on |e_xy| and |e_θ|), repeat
+// `rounds` times (the paper: 5 % three times).
+struct TrimmedClosedFormOptions {
+  int rounds = 3;
+  double fraction = 0.05;
+  CensiClosedFormOptions closed_form;
+};
+struct TrimmedClosedFormResult {
+  CensiClosedFormResult estimate;
+  std::vector<bool> kept;
+};
+StatusOr<TrimmedClosedFormResult> CensiClosedFormTrimmed(
+    const std::vector<LaserInterval>& intervals, const TrimmedClosedFormOptions& options = {});
+
+}  // namespace calib
+
+#endif  // CALIB_SOLVERS_LASER_CENSI_CLOSED_FORM_H_

@@ -1,0 +1,212 @@
+#include <calib/solvers/laser/laser_effect_fit.h>
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+#include <calib/problems/positive_manifold.h>
+#include <calib/solvers/stats/score_test.h>
+
+namespace calib {
+
+bool LaserEffectModel::Has(LaserEffect effect) const {
+  return std::find(effects.begin(), effects.end(), effect) != effects.end();
+}
+
+std::vector<int> LaserEffectModel::FreeColumns() const {
+  std::vector<int> columns;
+  for (int i = 0; i < kNumLaserParams; ++i) columns.push_back(i);
+  for (LaserEffect effect : effects) {
+    const LaserEffectInfo& info = EffectInfo(effect);
+    for (int i = 0; i < info.size; ++i) columns.push_back(kNumLaserParams + info.offset + i);
+  }
+  return columns;
+}
+
+LaserEffectData::LaserEffectData(const std::vector<LaserInterval>& intervals,
+                                 const Eigen::Matrix3d& sqrt_information,
+                                 const LaserRefinementOptions& options)
+    : intervals_(&intervals), sqrt_information_(sqrt_information), options_(options) {
+  loss_ = MakeLossFunction(options.loss, options.loss_scale);
+  piecewise_ = BuildLaserEffectContexts(intervals, BoundarySpeedModel::kPiecewiseConstant);
+  smooth_ = BuildLaserEffectContexts(intervals, BoundarySpeedModel::kSmooth);
+}
+
+void LaserEffectData::Loss(double s, double rho[3]) const {
+  rho[0] = s;
+  rho[1] = 1.0;
+  rho[2] = 0.0;
+  if (loss_) loss_->Evaluate(s, rho);
+}
+
+std::vector<LaserEffectContext> LaserEffectData::Contexts(const LaserEffectModel& model) const {
+  std::vector<LaserEffectContext> contexts =
+      model.boundary == BoundarySpeedModel::kSmooth ? smooth_ : piecewise_;
+  // With γ_change = 0 the offset changes nothing but which Jacobian columns are non-zero.
+  for (LaserEffectContext& context : contexts) {
+    context.change_offset_s = model.change_time_s - context.interval->start_s;
+  }
+  return contexts;
+}
+
+StatusOr<LaserEffectFit> FitLaserEffects(const LaserEffectData& data, const LaserEffectModel& model,
+                                         const LaserCalibration& initial,
+                                         const std::vector<bool>* fit_mask) {
+  const std::vector<LaserEffectContext> contexts = data.Contexts(model);
+  double odometry[3] = {initial.odometry.left_radius_m, initial.odometry.right_radius_m,
+                        initial.odometry.wheelbase_m};
+  double mounting[3] = {initial.base_T_sensor(0), initial.base_T_sensor(1),
+                        initial.base_T_sensor(2)};
+  LaserEffectVector gamma = LaserEffectVector::Zero();
+  std::vector<bool> free(kNumLaserEffectParams, false);
+  for (LaserEffect effect : model.effects) {
+    const LaserEffectInfo& info = EffectInfo(effect);
+    for (int i = 0; i < info.size; ++i) {
+      free[info.offset + i] = true;
+      gamma(info.offset + i) = model.gamma(info.offset + i);
+    }
+  }
+
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.enable_fast_removal = false;
+  ceres::Problem problem(problem_options);
+  problem.AddParameterBlock(odometry, 3, new PositiveManifold<3>());
+  problem.AddParameterBlock(mounting, 3);
+  problem.AddParameterBlock(gamma.data(), kNumLaserEffectParams);
+  std::vector<int> constant;
+  for (int i = 0; i < kNumLaserEffectParams; ++i) {
+    if (!free[i]) constant.push_back(i);
+  }
+  if (static_cast<int>(constant.size()) == kNumLaserEffectParams) {
+    problem.SetParameterBlockConstant(gamma.data());
+  } else if (!constant.empty()) {
+    problem.SetManifold(gamma.data(), new ceres::SubsetManifold(kNumLaserEffectParams, constant));
+  }
+  ceres::LossFunction* loss = const_cast<ceres::LossFunction*>(data.loss());
+  size_t residuals = 0;
+  for (size_t k = 0; k < contexts.size(); ++k) {
+    if (fit_mask != nullptr && !(*fit_mask)[k]) continue;
+    problem.AddResidualBlock(LaserEffectResidual::Create(contexts[k], &data.sqrt_information()),
+                             loss, odometry, mounting, gamma.data());
+    ++residuals;
+  }
+  if (residuals == 0) return Status::Error("no intervals to fit");
+
+  ceres::Solver::Options options;
+  options.minimizer_type = ceres::TRUST_REGION;
+  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  options.max_num_iterations = data.options().max_iterations;
+  options.num_threads = data.options().num_threads;
+  // Costs are compared between models (likelihood ratios of a few units): stop when an
+  // iteration gains less than ~1e-3 in total.
+  options.function_tolerance = std::min(1e-8, 1e-3 / static_cast<double>(residuals));
+  options.gradient_tolerance = 1e-14;
+  options.parameter_tolerance = 1e-12;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  if (summary.termination_type == ceres::FAILURE || !std::isfinite(summary.final_cost)) {
+    return Status::Error("the refit with effects failed: " + summary.message);
+  }
+  if (!(odometry[0] > 0.0 && odometry[1] > 0.0 && odometry[2] > 0.0)) {
+    return Status::Error("the refit with effects drove a radius or the wheelbase non-positive");
+  }
+  LaserEffectFit fit;
+  fit.model = model;
+  fit.model.gamma = gamma;
+  fit.calibration.odometry = OdometryParams{odometry[0], odometry[1], odometry[2]};
+  fit.calibration.base_T_sensor = Pose2d(mounting[0], mounting[1], WrapAngle(mounting[2]));
+  fit.cost = summary.final_cost;
+  fit.iterations = static_cast<int>(summary.iterations.size());
+  return fit;
+}
+
+double LaserEffectEvaluation::Cost(const std::vector<bool>* mask) const {
+  double sum = 0.0;
+  for (Eigen::Index k = 0; k < rho0.size(); ++k) {
+    if (mask == nullptr || (*mask)[k]) sum += rho0(k);
+  }
+  return 0.5 * sum;
+}
+
+LaserEffectEvaluation EvaluateLaserEffects(const LaserEffectData& data,
+                                           const LaserEffectModel& model,
+                                           const LaserCalibration& calibration,
+                                           bool with_jacobian) {
+  const std::vector<LaserEffectContext> contexts = data.Contexts(model);
+  const size_t n = contexts.size();
+  LaserEffectEvaluation evaluation;
+  evaluation.residual.resize(n, 3);
+  if (with_jacobian) evaluation.jacobian.resize(3 * n, kNumLaserFullParams);
+  evaluation.rho0.resize(n);
+  evaluation.rho1.resize(n);
+  evaluation.rho2.resize(n);
+  const double odometry[3] = {calibration.odometry.left_radius_m,
+                              calibration.odometry.right_radius_m,
+                              calibration.odometry.wheelbase_m};
+  const double mounting[3] = {calibration.base_T_sensor(0), calibration.base_T_sensor(1),
+                              calibration.base_T_sensor(2)};
+  const double* parameters[3] = {odometry, mounting, model.gamma.data()};
+  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> j_odometry, j_mounting;
+  Eigen::Matrix<double, 3, kNumLaserEffectParams, Eigen::RowMajor> j_effects;
+  double* jacobians[3] = {j_odometry.data(), j_mounting.data(), j_effects.data()};
+  for (size_t k = 0; k < n; ++k) {
+    LaserEffectResidual functor(contexts[k], &data.sqrt_information());
+    const ceres::AutoDiffCostFunction<LaserEffectResidual, 3, 3, 3, kNumLaserEffectParams> cost(
+        &functor, ceres::DO_NOT_TAKE_OWNERSHIP);
+    Eigen::Vector3d r;
+    cost.Evaluate(parameters, r.data(), with_jacobian ? jacobians : nullptr);
+    evaluation.residual.row(k) = r.transpose();
+    if (with_jacobian) {
+      evaluation.jacobian.block<3, 3>(3 * k, 0) = j_odometry;
+      evaluation.jacobian.block<3, 3>(3 * k, 3) = j_mounting;
+      evaluation.jacobian.block<3, kNumLaserEffectParams>(3 * k, kNumLaserParams) = j_effects;
+    }
+    double rho[3];
+    data.Loss(r.squaredNorm(), rho);
+    evaluation.rho0(k) = rho[0];
+    evaluation.rho1(k) = rho[1];
+    evaluation.rho2(k) = rho[2];
+  }
+  return evaluation;
+}
+
+Eigen::MatrixXd SelectColumns(const Eigen::MatrixXd& jacobian, const std::vector<int>& columns) {
+  Eigen::MatrixXd selected(jacobian.rows(), static_cast<Eigen::Index>(columns.size()));
+  for (size_t i = 0; i < columns.size(); ++i) selected.col(i) = jacobian.col(columns[i]);
+  return selected;
+}
+
+StatusOr<Eigen::MatrixXd> LaserEffectCovariance(const LaserEffectEvaluation& evaluation,
+                                                const std::vector<int>& columns, int hac_lag) {
+  const Eigen::Index n = evaluation.residual.rows();
+  const Eigen::Index p = static_cast<Eigen::Index>(columns.size());
+  if (3 * n <= p) return Status::Error("too few intervals for a covariance");
+  const Eigen::MatrixXd j = SelectColumns(evaluation.jacobian, columns);
+  Eigen::MatrixXd bread = Eigen::MatrixXd::Zero(p, p);
+  Eigen::MatrixXd scores(n, p);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const auto jk = j.middleRows(3 * k, 3);
+    const Eigen::Vector3d r = evaluation.residual.row(k).transpose();
+    const Eigen::VectorXd jr = jk.transpose() * r;
+    bread +=
+        evaluation.rho1(k) * jk.transpose() * jk + 2.0 * evaluation.rho2(k) * jr * jr.transpose();
+    scores.row(k) = evaluation.rho1(k) * jr.transpose();
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(bread);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
+    return Status::Error(
+        "the information matrix is singular: the log does not determine the "
+        "parameters with these effects");
+  }
+  const Eigen::MatrixXd inverse = ldlt.solve(Eigen::MatrixXd::Identity(p, p));
+  const double components = 3.0 * n;
+  return Eigen::MatrixXd(inverse * LongRunCovariance(scores, hac_lag) * inverse *
+                         (components / (components - p)));
+}
+
+}  // namespace calib

@@ -1,0 +1,94 @@
+#ifndef CALIB_SOLVERS_LASER_LASER_REFINEMENT_H_
+#define CALIB_SOLVERS_LASER_LASER_REFINEMENT_H_
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <calib/core/laser/laser_params.h>
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/status.h>
+#include <calib/solvers/common/robust_loss.h>
+
+// Maximum-likelihood refinement of the laser–odometry calibration with Ceres
+// (Levenberg–Marquardt, robust loss instead of the paper's trimming).
+namespace calib {
+
+struct LaserRefinementOptions {
+  RobustLoss loss = RobustLoss::kCauchy;
+  // Scale of the loss on the norm of the whitened 3-vector residual: Gaussian inliers
+  // (‖r‖² ~ χ²₃, mean 3) keep most of their weight, gross slips lose nearly all of it.
+  double loss_scale = 3.0;
+  int max_iterations = 100;
+  int num_threads = 2;
+};
+
+// One log: its intervals and the square root of its scan-noise information.
+struct LaserDataset {
+  const std::vector<LaserInterval>* intervals = nullptr;
+  Eigen::Matrix3d sqrt_information = Eigen::Matrix3d::Identity();
+};
+
+// The Ceres problem over one or more logs sharing the six parameters.
+class LaserProblem {
+ public:
+  LaserProblem(const std::vector<LaserDataset>& datasets, const LaserCalibration& initial,
+               const LaserRefinementOptions& options);
+  ~LaserProblem();
+  LaserProblem(const LaserProblem&) = delete;
+  LaserProblem& operator=(const LaserProblem&) = delete;
+
+  Status Solve(ceres::Solver::Summary* summary = nullptr);
+  LaserCalibration calibration() const;
+  void set_calibration(const LaserCalibration& calibration);
+
+  size_t num_datasets() const { return datasets_.size(); }
+  const Eigen::Matrix3d& sqrt_information(size_t dataset) const {
+    return *sqrt_information_[dataset];
+  }
+  void SetSqrtInformation(size_t dataset, const Eigen::Matrix3d& sqrt_information);
+
+  // Unwhitened errors e (see LaserResidual) of every interval of a dataset.
+  std::vector<Eigen::Vector3d> Errors(size_t dataset) const;
+  // Squared whitened norms s = ‖L·e‖² of every interval of a dataset.
+  std::vector<double> WhitenedSquaredNorms(size_t dataset) const;
+
+  // Covariance of the six parameters: ceres::Covariance of the robustified problem (whose
+  // Jacobian carries the IRLS weights √ρ'), times Huber's correction
+  //   κ = mean(ρ')·mean(ρ'²·s/3) / mean(ρ' + 2ρ''·s/3)² · n/(n − 6)
+  // (n residual components), which makes it the sandwich H⁻¹·B·H⁻¹ of the M-estimator and, for
+  // the plain squared loss, the usual σ̂²(JᵀJ)⁻¹.
+  StatusOr<LaserParamMatrix> Covariance() const;
+  double covariance_scale() const { return covariance_scale_; }
+
+  // The M-estimator's sandwich H⁻¹·B·H⁻¹·n/(n − 6) from per-interval Jacobians J_i and whitened
+  // residuals r_i: H = Σ J_iᵀ(ρ'·I + 2ρ''·r_i r_iᵀ)J_i, B = Σ ρ'²·J_iᵀ r_i r_iᵀ J_i. Unlike the
+  // scalar correction it stays honest when the residual scatter differs between kinds of motion.
+  StatusOr<LaserParamMatrix> SandwichCovariance() const;
+
+  // The loss's weight ρ'(s) for a squared whitened norm s (1 without a robust loss).
+  double LossWeight(double s) const;
+
+ private:
+  std::vector<LaserDataset> datasets_;
+  std::vector<std::unique_ptr<Eigen::Matrix3d>> sqrt_information_;  // Stable addresses.
+  std::unique_ptr<ceres::LossFunction> loss_;
+  std::unique_ptr<ceres::Problem> problem_;
+  std::vector<const ceres::CostFunction*> cost_functions_;  // Owned by problem_.
+  std::vector<size_t> cost_dataset_;
+  LaserRefinementOptions options_;
+  double odometry_[3];
+  double base_T_sensor_[3];
+  mutable double covariance_scale_ = 1.0;
+};
+
+// Robust per-component noise level of errors: 1.4826 × median absolute deviation about the
+// median, floored so that noise-free data still give a usable whitening.
+Eigen::Vector3d RobustNoiseSigma(const std::vector<Eigen::Vector3d>& errors);
+
+}  // namespace calib
+
+#endif  // CALIB_SOLVERS_LASER_LASER_REFINEMENT_H_

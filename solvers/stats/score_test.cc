@@ -1,0 +1,237 @@
+#include <calib/solvers/stats/score_test.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace calib {
+namespace {
+
+// Relative efficient information below which γ counts as confounded with θ: exact confounding
+// leaves ~1e-12 after the subtraction, a weakly identified effect orders of magnitude more.
+constexpr double kConfoundedInformation = 1e-6;
+
+}  // namespace
+
+double ChiSquareSurvival(double x, int dof) {
+  if (dof <= 0) return 0.0;
+  if (!(x > 0.0)) return 1.0;
+  if (!std::isfinite(x)) return 0.0;
+  const double half = 0.5 * x;
+  double sum = 0.0;
+  if (dof % 2 == 0) {
+    // e^{−x/2}·Σ_{i<d/2} (x/2)^i/i!, each term in logs so that neither factor overflows.
+    for (int i = 0; i < dof / 2; ++i) {
+      sum += std::exp(-half + i * std::log(half) - std::lgamma(i + 1.0));
+    }
+  } else {
+    // erfc(√(x/2)) + e^{−x/2}·Σ_{i≤(d−3)/2} (x/2)^{i+1/2}/Γ(i + 3/2).
+    sum = std::erfc(std::sqrt(half));
+    for (int i = 0; i <= (dof - 3) / 2; ++i) {
+      sum += std::exp(-half + (i + 0.5) * std::log(half) - std::lgamma(i + 1.5));
+    }
+  }
+  return std::clamp(sum, 0.0, 1.0);
+}
+
+double SupChiSquareSurvival(double x, int dof, double trim) {
+  if (dof <= 0) return 0.0;
+  const double single = ChiSquareSurvival(x, dof);
+  if (!(x > dof)) return 1.0;  // The tail approximation holds only beyond the mean.
+  trim = std::clamp(trim, 1e-6, 0.499);
+  const double log_lambda = 2.0 * std::log((1.0 - trim) / trim);
+  const double d = dof;
+  const double log_density =
+      0.5 * d * std::log(x) - 0.5 * x - 0.5 * d * std::log(2.0) - std::lgamma(0.5 * d);
+  const double bracket = (1.0 - d / x) * log_lambda + 4.0 / x;
+  const double p = std::exp(log_density) * bracket;
+  return std::clamp(std::max(p, single), 0.0, 1.0);
+}
+
+Eigen::MatrixXd LongRunCovariance(const Eigen::MatrixXd& contributions, int lag) {
+  const Eigen::Index n = contributions.rows();
+  Eigen::MatrixXd v = contributions.transpose() * contributions;
+  for (int l = 1; l <= lag && l < n; ++l) {
+    const Eigen::MatrixXd gamma =
+        contributions.bottomRows(n - l).transpose() * contributions.topRows(n - l);
+    v += (1.0 - l / (lag + 1.0)) * (gamma + gamma.transpose());
+  }
+  return v;
+}
+
+ScoreTester::ScoreTester(const RobustFitBlocks& blocks, int hac_lag)
+    : blocks_(blocks), hac_lag_(std::max(hac_lag, 0)) {
+  const size_t n = blocks.size();
+  const Eigen::Index p = blocks.jacobian.cols();
+  const Eigen::Index d = blocks.dimension();
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(p, p);
+  gradients_.resize(n, p);
+  for (size_t k = 0; k < n; ++k) {
+    const auto j = blocks.jacobian.middleRows(d * k, d);
+    const Eigen::VectorXd r = blocks.residual.row(k).transpose();
+    const Eigen::VectorXd jr = j.transpose() * r;
+    a += blocks.rho1(k) * j.transpose() * j + 2.0 * blocks.rho2(k) * jr * jr.transpose();
+    gradients_.row(k) = blocks.rho1(k) * jr.transpose();
+  }
+  gradient_sum_ = gradients_.colwise().sum().transpose();
+  gradient_outer_ = gradients_.transpose() * gradients_;
+  a_nuisance_.compute(a);
+  ok_ =
+      n > 0 && a_nuisance_.info() == Eigen::Success && (a_nuisance_.vectorD().array() > 0.0).all();
+  const double components = static_cast<double>(d) * n;
+  small_sample_ = components > p ? components / (components - p) : 1.0;
+}
+
+ScoreTestResult ScoreTester::Test(const Eigen::MatrixXd& sensitivity) const {
+  const size_t n = blocks_.size();
+  const Eigen::Index p = blocks_.jacobian.cols();
+  const Eigen::Index m = sensitivity.cols();
+  const Eigen::Index d = blocks_.dimension();
+  ScoreTestResult result;
+  result.dof = static_cast<int>(m);
+  result.gamma = Eigen::VectorXd::Zero(m);
+  result.gamma_covariance = Eigen::MatrixXd::Zero(m, m);
+  result.absorption = Eigen::MatrixXd::Zero(p, m);
+  result.absorbed = Eigen::VectorXd::Zero(p);
+  result.contributions = Eigen::VectorXd::Zero(n);
+  if (!ok_ || m == 0) return result;
+
+  // Full-bread (M_k) and IRLS (ρ'_k) cross products.
+  Eigen::MatrixXd a_tg = Eigen::MatrixXd::Zero(p, m), a_gg = Eigen::MatrixXd::Zero(m, m);
+  Eigen::MatrixXd w_tt = Eigen::MatrixXd::Zero(p, p), w_tg = Eigen::MatrixXd::Zero(p, m);
+  Eigen::MatrixXd w_gg = Eigen::MatrixXd::Zero(m, m);
+  Eigen::MatrixXd raw_scores(n, m);  // ρ'_k·S_kᵀr_k.
+  for (size_t k = 0; k < n; ++k) {
+    const auto j = blocks_.jacobian.middleRows(d * k, d);
+    const auto s = sensitivity.middleRows(d * k, d);
+    const Eigen::VectorXd r = blocks_.residual.row(k).transpose();
+    const Eigen::VectorXd jr = j.transpose() * r;
+    const Eigen::VectorXd sr = s.transpose() * r;
+    const double w = blocks_.rho1(k), w2 = 2.0 * blocks_.rho2(k);
+    const Eigen::MatrixXd js = j.transpose() * s;
+    const Eigen::MatrixXd ss = s.transpose() * s;
+    a_tg += w * js + w2 * jr * sr.transpose();
+    a_gg += w * ss + w2 * sr * sr.transpose();
+    w_tt += w * j.transpose() * j;
+    w_tg += w * js;
+    w_gg += w * ss;
+    raw_scores.row(k) = w * sr.transpose();
+  }
+
+  // Concealment and identifiability in the IRLS metric (positive weights).
+  const Eigen::LDLT<Eigen::MatrixXd> w_nuisance(w_tt);
+  const Eigen::MatrixXd w_eff = w_gg - w_tg.transpose() * w_nuisance.solve(w_tg);
+  const Eigen::LLT<Eigen::MatrixXd> w_llt(w_gg);
+  if (w_gg.trace() > 0.0 && w_llt.info() == Eigen::Success) {
+    const Eigen::MatrixXd l_inv = w_llt.matrixL().solve(Eigen::MatrixXd::Identity(m, m));
+    const Eigen::MatrixXd relative = l_inv * w_eff * l_inv.transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(0.5 *
+                                                               (relative + relative.transpose()));
+    result.concealment = 1.0 - relative.trace() / m;
+    result.identifiable = eigen.eigenvalues().minCoeff() > kConfoundedInformation;
+  } else {
+    result.concealment = std::numeric_limits<double>::quiet_NaN();
+  }
+
+  const Eigen::MatrixXd b = a_nuisance_.solve(a_tg);
+  result.absorption = b;
+  const Eigen::MatrixXd u = raw_scores - gradients_ * b;  // N × m projected score contributions.
+  const Eigen::VectorXd score = u.colwise().sum().transpose();
+  const Eigen::MatrixXd v = LongRunCovariance(u, hac_lag_) * small_sample_;
+  // The efficient information from the loss's full second-order weight; where outliers make it
+  // indefinite (ρ' + 2ρ''s < 0 beyond the Cauchy scale), its Gauss–Newton (IRLS) version.
+  Eigen::MatrixXd info = a_gg - a_tg.transpose() * b;
+  Eigen::LDLT<Eigen::MatrixXd> info_ldlt(info);
+  if (info_ldlt.info() != Eigen::Success || !(info_ldlt.vectorD().array() > 0.0).all()) {
+    info = w_eff;
+    info_ldlt.compute(info);
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> v_ldlt(v);
+  if (!result.identifiable || v_ldlt.info() != Eigen::Success ||
+      !(v_ldlt.vectorD().array() > 0.0).all() || info_ldlt.info() != Eigen::Success ||
+      !(info_ldlt.vectorD().array() > 0.0).all()) {
+    return result;
+  }
+  const Eigen::VectorXd v_inv_score = v_ldlt.solve(score);
+  result.statistic = score.dot(v_inv_score);
+  result.p_value = ChiSquareSurvival(result.statistic, result.dof);
+  const Eigen::MatrixXd info_inv = info_ldlt.solve(Eigen::MatrixXd::Identity(m, m));
+  result.gamma = -info_inv * score;
+  result.gamma_covariance = info_inv * v * info_inv;
+  result.absorbed = b * result.gamma;
+  if (result.statistic > 0.0) {
+    result.contributions = u * v_inv_score / std::sqrt(result.statistic);
+  }
+  return result;
+}
+
+ScoreTester::ChangeScan ScoreTester::ScanChange(const Eigen::MatrixXd& sensitivity,
+                                                double trim) const {
+  ChangeScan scan;
+  const size_t n = blocks_.size();
+  const Eigen::Index p = blocks_.jacobian.cols();
+  const Eigen::Index m = sensitivity.cols();
+  const Eigen::Index d = blocks_.dimension();
+  scan.statistic.assign(n, 0.0);
+  if (!ok_ || n < 4 || m == 0) return scan;
+  trim = std::clamp(trim, 0.0, 0.49);
+  const size_t lo = std::max<size_t>(1, static_cast<size_t>(std::ceil(trim * n)));
+  const size_t hi = std::min(n - 1, static_cast<size_t>(std::floor((1.0 - trim) * n)));
+
+  // Suffix sums over k ≥ j, accumulated from the end.
+  Eigen::VectorXd sum_a = Eigen::VectorXd::Zero(m);
+  Eigen::MatrixXd sum_jmr = Eigen::MatrixXd::Zero(p, m), sum_rmr = Eigen::MatrixXd::Zero(m, m);
+  Eigen::MatrixXd sum_aa = Eigen::MatrixXd::Zero(m, m), sum_ag = Eigen::MatrixXd::Zero(m, p);
+  double best = -1.0, best_located = -1.0;
+  for (size_t j = n; j-- > lo;) {
+    const auto jk = blocks_.jacobian.middleRows(d * j, d);
+    const auto rk = sensitivity.middleRows(d * j, d);
+    const Eigen::VectorXd r = blocks_.residual.row(j).transpose();
+    const Eigen::VectorXd jr = jk.transpose() * r;
+    const Eigen::VectorXd sr = rk.transpose() * r;
+    const double w = blocks_.rho1(j), w2 = 2.0 * blocks_.rho2(j);
+    const Eigen::VectorXd a = w * sr;
+    sum_a += a;
+    sum_jmr += w * jk.transpose() * rk + w2 * jr * sr.transpose();
+    sum_rmr += w * rk.transpose() * rk + w2 * sr * sr.transpose();
+    sum_aa += a * a.transpose();
+    sum_ag += a * gradients_.row(j);
+    if (j > hi) continue;
+    const Eigen::MatrixXd b = a_nuisance_.solve(sum_jmr);
+    const Eigen::VectorXd score = sum_a - b.transpose() * gradient_sum_;
+    const Eigen::MatrixXd cross = sum_ag * b;
+    const Eigen::MatrixXd v =
+        (sum_aa - cross - cross.transpose() + b.transpose() * gradient_outer_ * b) * small_sample_;
+    const Eigen::MatrixXd info = sum_rmr - sum_jmr.transpose() * b;
+    const Eigen::LDLT<Eigen::MatrixXd> v_ldlt(v);
+    const Eigen::LDLT<Eigen::MatrixXd> info_ldlt(info);
+    if (v_ldlt.info() != Eigen::Success || !(v_ldlt.vectorD().array() > 0.0).all()) continue;
+    const double statistic = score.dot(v_ldlt.solve(score));
+    scan.statistic[j] = statistic;
+    if (statistic > best) {
+      best = statistic;
+      scan.index = j;
+    }
+    // The one-step likelihood ratio UᵀI_eff⁻¹U locates the change: unlike the empirical
+    // variance, the information is not inflated by the change itself.
+    const bool info_ok =
+        info_ldlt.info() == Eigen::Success && (info_ldlt.vectorD().array() > 0.0).all();
+    const double located = info_ok ? score.dot(info_ldlt.solve(score)) : statistic;
+    if (located > best_located) {
+      best_located = located;
+      scan.location = j;
+    }
+  }
+  if (best < 0.0) return scan;
+  scan.sup_statistic = best;
+  Eigen::MatrixXd masked = sensitivity;
+  masked.topRows(d * scan.index).setZero();
+  scan.at_best = Test(masked);
+  // The HAC statistic at the best time replaces the short-range one in the sup.
+  scan.sup_statistic = scan.at_best.statistic;
+  scan.p_value = SupChiSquareSurvival(scan.sup_statistic, static_cast<int>(m), trim);
+  return scan;
+}
+
+}  // namespace calib

@@ -1,0 +1,237 @@
+#include <calib/solvers/laser/calibrate_laser.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/core/laser/laser_simulator.h>
+
+namespace calib {
+namespace {
+
+LaserCalibration Truth(const LaserSimOptions& options) {
+  return LaserCalibration{options.odometry, options.base_T_sensor};
+}
+
+// Each parameter within `k` reported sigmas of the truth.
+void ExpectWithinSigmas(const LaserCalibrationResult& result, const LaserCalibration& truth,
+                        double k) {
+  const LaserParamVector error = result.estimate.ToVector() - truth.ToVector();
+  for (int i = 0; i < kNumLaserParams; ++i) {
+    EXPECT_LT(std::abs(error(i)), k * result.stddev(i))
+        << kLaserParamNames[i] << ": error " << error(i) << ", sigma " << result.stddev(i);
+  }
+}
+
+TEST(CalibrateLaserTest, RefinementFromNominalValuesRecoversTheTruth) {
+  LaserSimOptions sim;
+  sim.num_intervals = 400;
+  sim.speed_time_constant_s = 0.0;  // Constant speeds per interval: the model is exact.
+  sim.scan_noise_sigma.setZero();
+  const LaserLog log = SimulateLaserLog(sim);
+  const LaserCalibration nominal{OdometryParams{0.021, 0.021, 0.09}, Pose2d(0.0, 0.0, -1.4)};
+  LaserProblem problem({LaserDataset{&log.intervals, Eigen::Matrix3d::Identity() * 1e3}}, nominal,
+                       LaserRefinementOptions{});
+  ASSERT_TRUE(problem.Solve().ok());
+  const LaserParamVector error = problem.calibration().ToVector() - Truth(sim).ToVector();
+  EXPECT_LT(error.cwiseAbs().maxCoeff(), 1e-9) << error.transpose();
+}
+
+TEST(CalibrateLaserTest, NoiseFreeDataAreRecoveredExactly) {
+  LaserSimOptions sim;
+  sim.num_intervals = 300;
+  sim.speed_time_constant_s = 0.0;
+  sim.scan_noise_sigma.setZero();
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(SimulateLaserLog(sim).intervals);
+  ASSERT_TRUE(result.ok()) << result.message();
+  const LaserParamVector error = result->estimate.ToVector() - Truth(sim).ToVector();
+  EXPECT_LT(error.cwiseAbs().maxCoeff(), 1e-10) << error.transpose();
+  EXPECT_EQ(result->inliers, result->samples);
+}
+
+TEST(CalibrateLaserTest, NoisyLogWithinThreeSigmas) {
+  LaserSimOptions sim;
+  sim.num_intervals = 2000;
+  sim.seed = 11;
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(SimulateLaserLog(sim).intervals);
+  ASSERT_TRUE(result.ok()) << result.message();
+  ExpectWithinSigmas(*result, Truth(sim), 3.0);
+  // The estimated scan noise is the simulated one.
+  for (int j = 0; j < 3; ++j) {
+    EXPECT_NEAR(result->noise_sigma[0](j), sim.scan_noise_sigma(j), 0.1 * sim.scan_noise_sigma(j));
+  }
+  EXPECT_TRUE(result->observability.warnings.empty()) << result->observability.warnings.front();
+}
+
+TEST(CalibrateLaserTest, RobustToTenPercentSlipOutliers) {
+  LaserSimOptions sim;
+  sim.num_intervals = 2000;
+  sim.outlier_fraction = 0.10;
+  sim.seed = 12;
+  LaserSimTruth truth;
+  const LaserLog log = SimulateLaserLog(sim, &truth);
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(log.intervals);
+  ASSERT_TRUE(result.ok()) << result.message();
+  ExpectWithinSigmas(*result, Truth(sim), 3.0);
+  // Most flagged outliers are rejected, few inliers are lost.
+  int caught = 0, outliers = 0;
+  for (size_t k = 0; k < log.intervals.size(); ++k) {
+    if (truth.is_outlier[k]) {
+      ++outliers;
+      caught += !result->is_inlier[0][k];
+    }
+  }
+  EXPECT_GT(caught, 0.8 * outliers);
+  EXPECT_GT(result->inliers, 0.85 * sim.num_intervals);
+}
+
+TEST(CalibrateLaserTest, LossNoneOnCleanDataHasUnitCovarianceScale) {
+  LaserSimOptions sim;
+  sim.num_intervals = 3000;
+  sim.seed = 13;
+  LaserCalibrationOptions options;
+  options.refinement.loss = RobustLoss::kNone;
+  options.noise_sigma = sim.scan_noise_sigma;
+  const StatusOr<LaserCalibrationResult> result =
+      CalibrateLaser(SimulateLaserLog(sim).intervals, options);
+  ASSERT_TRUE(result.ok()) << result.message();
+  // κ = reduced χ², 1 ± √(2/n) for the true noise.
+  EXPECT_NEAR(result->covariance_scale, 1.0, 0.08);
+}
+
+// Over many seeds the reported 1σ and 2σ intervals hold the truth about 68 % and 95 % of the
+// time: the error bars are honest.
+TEST(CalibrateLaserTest, ReportedSigmasAreHonest) {
+  int inside_1 = 0, inside_2 = 0, total = 0;
+  for (int seed = 100; seed < 180; ++seed) {
+    LaserSimOptions sim;
+    sim.num_intervals = 1500;
+    sim.seed = seed;
+    sim.outlier_fraction = 0.02;
+    const StatusOr<LaserCalibrationResult> result = CalibrateLaser(SimulateLaserLog(sim).intervals);
+    ASSERT_TRUE(result.ok()) << result.message();
+    const LaserParamVector z =
+        (result->estimate.ToVector() - Truth(sim).ToVector()).cwiseQuotient(result->stddev);
+    for (int i = 0; i < kNumLaserParams; ++i) {
+      inside_1 += std::abs(z(i)) < 1.0;
+      inside_2 += std::abs(z(i)) < 2.0;
+      ++total;
+    }
+  }
+  EXPECT_NEAR(static_cast<double>(inside_1) / total, 0.683, 0.08);
+  EXPECT_GT(static_cast<double>(inside_2) / total, 0.91);
+  EXPECT_LT(static_cast<double>(inside_2) / total, 0.99);
+}
+
+// The scalar loss correction of Ceres' covariance agrees with the full sandwich.
+TEST(CalibrateLaserTest, CovarianceMatchesTheSandwich) {
+  LaserSimOptions sim;
+  sim.num_intervals = 2000;
+  sim.outlier_fraction = 0.05;
+  sim.seed = 14;
+  const LaserLog log = SimulateLaserLog(sim);
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(log.intervals);
+  ASSERT_TRUE(result.ok()) << result.message();
+  LaserDataset dataset{&log.intervals, Eigen::Matrix3d::Identity()};
+  dataset.sqrt_information = result->noise_sigma[0].cwiseInverse().asDiagonal();
+  LaserProblem problem({dataset}, result->estimate, LaserRefinementOptions{});
+  ASSERT_TRUE(problem.Solve().ok());
+  const StatusOr<LaserParamMatrix> scaled = problem.Covariance();
+  const StatusOr<LaserParamMatrix> sandwich = problem.SandwichCovariance();
+  ASSERT_TRUE(scaled.ok() && sandwich.ok());
+  for (int i = 0; i < kNumLaserParams; ++i) {
+    EXPECT_NEAR(std::sqrt((*scaled)(i, i) / (*sandwich)(i, i)), 1.0, 0.1) << kLaserParamNames[i];
+  }
+}
+
+TEST(CalibrateLaserTest, JointLogsShareParametersAndKeepTheirNoise) {
+  LaserSimOptions a, b;
+  a.num_intervals = b.num_intervals = 1000;
+  a.seed = 21;
+  b.seed = 22;
+  b.scan_noise_sigma *= 3.0;
+  const LaserLog log_a = SimulateLaserLog(a), log_b = SimulateLaserLog(b);
+  const StatusOr<LaserCalibrationResult> joint =
+      CalibrateLaserJoint({&log_a.intervals, &log_b.intervals});
+  const StatusOr<LaserCalibrationResult> alone = CalibrateLaser(log_a.intervals);
+  ASSERT_TRUE(joint.ok() && alone.ok());
+  ExpectWithinSigmas(*joint, Truth(a), 3.0);
+  EXPECT_NEAR(joint->noise_sigma[1](0) / joint->noise_sigma[0](0), 3.0, 0.4);
+  EXPECT_EQ(joint->samples, 2000);
+  for (int i = 0; i < kNumLaserParams; ++i) EXPECT_LT(joint->stddev(i), alone->stddev(i));
+}
+
+// Raw encoder and scan-matcher streams, integrated into intervals (speeds vary inside them),
+// give the truth back.
+TEST(CalibrateLaserTest, RawStreamsAreIntegratedAndCalibrated) {
+  LaserSimOptions sim;
+  sim.num_intervals = 2000;
+  sim.seed = 31;
+  sim.speed_time_constant_s = 0.3;
+  const LaserStreams streams = SimulateLaserStreams(sim, /*encoder_rate_hz=*/100.0);
+  const StatusOr<LaserLog> log =
+      LaserLogFromStreams(streams.odometry, streams.sensor_poses, "simulated streams");
+  ASSERT_TRUE(log.ok()) << log.message();
+  EXPECT_FALSE(log->intervals[10].steps.empty());
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(log->intervals);
+  ASSERT_TRUE(result.ok()) << result.message();
+  ExpectWithinSigmas(*result, Truth(sim), 3.0);
+}
+
+TEST(CalibrateLaserTest, DegenerateLogsGiveTheMissingMotion) {
+  LaserSimOptions sim;
+  sim.trajectory = LaserTrajectory::kPureRotation;
+  StatusOr<LaserCalibrationResult> result = CalibrateLaser(SimulateLaserLog(sim).intervals);
+  ASSERT_FALSE(result.ok());
+  EXPECT_NE(result.message().find("pure rotations"), std::string::npos) << result.message();
+  sim.trajectory = LaserTrajectory::kStraight;
+  result = CalibrateLaser(SimulateLaserLog(sim).intervals);
+  ASSERT_FALSE(result.ok());
+  EXPECT_NE(result.message().find("never turns"), std::string::npos) << result.message();
+  result = CalibrateLaser({});
+  ASSERT_FALSE(result.ok());
+}
+
+TEST(CalibrateLaserTest, BadIntervalsAreNamed) {
+  LaserSimOptions sim;
+  sim.num_intervals = 50;
+  LaserLog log = SimulateLaserLog(sim);
+  log.intervals[7].sensor_motion(1) = NAN;
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(log.intervals);
+  ASSERT_FALSE(result.ok());
+  EXPECT_NE(result.message().find("record 8"), std::string::npos) << result.message();
+}
+
+TEST(CalibrateLaserTest, SingleArcIsDegenerate) {
+  LaserSimOptions sim;
+  sim.trajectory = LaserTrajectory::kConstantArc;
+  sim.num_intervals = 500;
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(SimulateLaserLog(sim).intervals);
+  // One wheel-speed ratio cannot separate J21 from J22.
+  ASSERT_FALSE(result.ok());
+  EXPECT_NE(result.message().find("different wheel-speed ratios"), std::string::npos)
+      << result.message();
+}
+
+// Few turns: the estimate exists, and the report says that the sensor position rests on little.
+TEST(CalibrateLaserTest, ThinTurningWarns) {
+  LaserSimOptions straight, rich;
+  straight.trajectory = LaserTrajectory::kStraight;
+  straight.num_intervals = 2000;
+  rich.num_intervals = 40;
+  rich.seed = 3;
+  std::vector<LaserInterval> intervals = SimulateLaserLog(straight).intervals;
+  const LaserLog turns = SimulateLaserLog(rich);
+  intervals.insert(intervals.end(), turns.intervals.begin(), turns.intervals.end());
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(intervals);
+  ASSERT_TRUE(result.ok()) << result.message();
+  bool warned = false;
+  for (const std::string& warning : result->observability.warnings) {
+    warned |= warning.find("few intervals turn") != std::string::npos;
+  }
+  EXPECT_TRUE(warned);
+}
+
+}  // namespace
+}  // namespace calib

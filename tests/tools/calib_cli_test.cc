@@ -1,0 +1,132 @@
+// The offline tool as a user runs it: exit status, messages, and the contract's JSON keys.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "tests/tools/cli_runner.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+using ::calib::testing::CliRun;
+using ::calib::testing::ReadFile;
+
+class CalibCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("calib_cli_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+            "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  fs::path Write(const std::string& name, const std::string& text) {
+    const fs::path path = dir_ / name;
+    std::ofstream(path) << text;
+    return path;
+  }
+
+  CliRun Calib(const std::string& args) { return ::calib::testing::RunCalib(args, dir_); }
+
+  // Expects a clean failure: non-zero exit, no crash, and a message holding every `needle`.
+  void ExpectFailure(const std::string& args, const std::vector<std::string>& needles) {
+    const CliRun run = Calib(args);
+    EXPECT_NE(run.exit_code, 0) << args;
+    EXPECT_GT(run.exit_code, 0) << "crashed: " << args;
+    EXPECT_LT(run.exit_code, 128) << "crashed: " << args;
+    for (const std::string& needle : needles) {
+      EXPECT_NE(run.err.find(needle), std::string::npos) << "stderr lacks '" << needle << "':\n"
+                                                         << run.err;
+    }
+  }
+
+  std::string Calibrate(const fs::path& input) {
+    return "calibrate --input " + input.string() + " --output " + (dir_ / "out.json").string();
+  }
+
+  fs::path dir_;
+};
+
+constexpr char kRecord[] =
+    "{ \"T\": 0.8, \"phi_l\": 0.4, \"phi_r\": 0.5, \"sm\": [ 0.008, 0.0001, 0.02 ] }\n";
+
+TEST_F(CalibCliTest, SampleLogGivesTheContractJson) {
+  const fs::path sample = fs::path(CALIB_SOURCE_DIR) / "data" / "sample_laser.tuple";
+  const CliRun run = Calib(Calibrate(sample));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("sensor_theta"), std::string::npos) << run.out;
+  const nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+  EXPECT_EQ(json["problem"], "laser");
+  for (const char* key : {"estimate", "stddev", "closed_form"}) {
+    for (const char* param : {"r_l", "r_r", "b", "sensor_x", "sensor_y", "sensor_theta"}) {
+      ASSERT_TRUE(json[key].contains(param)) << key << "." << param;
+      EXPECT_TRUE(json[key][param].is_number());
+    }
+  }
+  EXPECT_GT(json["samples"].get<int>(), 0);
+  EXPECT_GT(json["inliers"].get<int>(), json["samples"].get<int>() / 2);
+  EXPECT_LE(json["inliers"].get<int>(), json["samples"].get<int>());
+}
+
+TEST_F(CalibCliTest, EmptyFile) {
+  const fs::path path = Write("empty.tuple", "");
+  ExpectFailure(Calibrate(path), {"empty.tuple"});
+}
+
+TEST_F(CalibCliTest, TruncatedRecord) {
+  const fs::path path =
+      Write("truncated.tuple", std::string(kRecord) + kRecord + "{ \"T\": 0.8, \"phi_l\": 0.4, ");
+  ExpectFailure(Calibrate(path), {"truncated.tuple", ":3"});
+}
+
+TEST_F(CalibCliTest, NanValue) {
+  const fs::path path = Write(
+      "nan.tuple", std::string(kRecord) +
+                       "{ \"T\": 0.8, \"phi_l\": NaN, \"phi_r\": 0.5, \"sm\": [ 0, 0, 0 ] }\n");
+  ExpectFailure(Calibrate(path), {"nan.tuple", ":2", "phi_l"});
+}
+
+TEST_F(CalibCliTest, MissingCsvColumn) {
+  const fs::path path = Write("missing.csv", "T,phi_l,phi_r,sm_x,sm_y\n0.8,0.4,0.5,0.008,0.0001\n");
+  ExpectFailure(Calibrate(path), {"missing.csv", "sm_theta"});
+}
+
+TEST_F(CalibCliTest, ZeroAndNegativeDuration) {
+  for (const char* t : {"0", "-0.8"}) {
+    const fs::path path =
+        Write("bad_t.tuple", std::string(kRecord) + "{ \"T\": " + t +
+                                 ", \"phi_l\": 0.4, \"phi_r\": 0.5, \"sm\": [ 0, 0, 0 ] }\n");
+    ExpectFailure(Calibrate(path), {"bad_t.tuple", ":2", "T"});
+  }
+}
+
+TEST_F(CalibCliTest, OnlyPureRotations) {
+  std::string text;
+  for (int k = 0; k < 100; ++k) {
+    const double s = (k % 2 ? 1 : -1) * 0.5;
+    text += "{ \"T\": 0.8, \"phi_l\": " + std::to_string(s) + ", \"phi_r\": " + std::to_string(-s) +
+            ", \"sm\": [ 0.0001, 0.0002, " + std::to_string(-s * 0.37) + " ] }\n";
+  }
+  const fs::path path = Write("rotations.tuple", text);
+  ExpectFailure(Calibrate(path), {"rotations.tuple", "pure rotations", "not observable"});
+}
+
+TEST_F(CalibCliTest, MissingFileAndBadFlags) {
+  ExpectFailure(Calibrate(dir_ / "nope.tuple"), {"nope.tuple"});
+  const fs::path sample = fs::path(CALIB_SOURCE_DIR) / "data" / "sample_laser.tuple";
+  ExpectFailure(Calibrate(sample) + " --loss banana", {"banana", "cauchy"});
+  ExpectFailure(Calibrate(sample) + " --format yaml", {"yaml"});
+  ExpectFailure("calibrate --output " + (dir_ / "o.json").string(), {"--input"});
+  EXPECT_EQ(Calib("frobnicate").exit_code, 2);
+}
+
+}  // namespace

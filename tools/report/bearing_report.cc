@@ -1,0 +1,215 @@
+#include <calib/tools/report/bearing_report.h>
+
+#include <glog/logging.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include <calib/core/bearing/bearing_log_io.h>
+
+namespace calib {
+namespace {
+
+nlohmann::ordered_json Matrix(const Eigen::MatrixXd& m) {
+  nlohmann::ordered_json rows = nlohmann::ordered_json::array();
+  for (int i = 0; i < m.rows(); ++i) {
+    nlohmann::ordered_json row = nlohmann::ordered_json::array();
+    for (int j = 0; j < m.cols(); ++j) row.push_back(m(i, j));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+int Fail(const std::string& message) {
+  std::fprintf(stderr, "calib: error: %s\n", message.c_str());
+  return 1;
+}
+
+}  // namespace
+
+nlohmann::ordered_json BearingParamObject(const BearingParamVector& v,
+                                          const BearingMetricVector* metric) {
+  nlohmann::ordered_json object;
+  for (int i = 0; i < kNumBearingParams; ++i) object[kBearingParamNames[i]] = v(i);
+  if (metric != nullptr) {
+    for (int i = 2; i < kNumBearingMetricParams; ++i) object[kBearingMetricNames[i]] = (*metric)(i);
+  }
+  return object;
+}
+
+bool IsBearingLogDirectory(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::is_directory(path, ec)) return false;
+  return fs::exists(fs::path(path) / "bearings.csv", ec) ||
+         fs::exists(fs::path(path) / "meta.json", ec);
+}
+
+nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
+                                         const std::string& input, const std::string& loss) {
+  nlohmann::ordered_json out;
+  out["problem"] = "bearing";
+  out["input"] = input;
+  out["units"] = "m, rad; eta and xi in 1/m";
+  const BearingMetricVector metric = ToVector(result.metric);
+  const BearingMetricVector seed_metric = ToVector(result.seed_metric);
+  out["estimate"] =
+      BearingParamObject(ToVector(result.estimate), result.has_metric ? &metric : nullptr);
+  out["stddev"] =
+      BearingParamObject(result.stddev, result.has_metric ? &result.metric_stddev : nullptr);
+  out["closed_form"] =
+      BearingParamObject(ToVector(result.seed), result.has_seed_metric ? &seed_metric : nullptr);
+  out["closed_form_method"] =
+      result.seed_method == "closed_form"
+          ? "Martinelli's closed form on the circular runs"
+          : "coarse search (the closed form does not apply: " + result.closed_form_message + ")";
+  out["samples"] = result.samples;
+  out["inliers"] = result.inliers;
+  out["loss"] = loss;
+  out["gauge"] =
+      result.has_metric
+          ? "metric: the initial distance fixes the scale; eta, delta, xi are the observable set"
+          : "scale-free: delta_r = 1 (lengths in units of delta_r metres); only phi, psi, eta, "
+            "delta, xi are observable without an initial distance";
+  nlohmann::ordered_json order = nlohmann::ordered_json::array();
+  for (const char* name : kBearingParamNames) order.push_back(name);
+  out["covariance"] = {{"order", order}, {"matrix", Matrix(result.covariance)}};
+  if (result.has_metric) {
+    nlohmann::ordered_json metric_order = nlohmann::ordered_json::array();
+    for (const char* name : kBearingMetricNames) metric_order.push_back(name);
+    out["metric_covariance"] = {{"order", metric_order},
+                                {"matrix", Matrix(result.metric_covariance)}};
+  }
+  out["noise"] = {{"bearing_sigma_rad", result.noise.bearing_sigma_rad},
+                  {"bearing_sigma_estimated", result.bearing_sigma_estimated},
+                  {"encoder_k", result.noise.encoder_k},
+                  {"encoder_k_estimated", result.encoder_k_estimated},
+                  {"encoder_k_data_estimate", result.encoder_k_estimate},
+                  {"encoder_k_for_covariance", result.covariance_encoder_k},
+                  {"bearing_redundancy", result.bearing_redundancy},
+                  {"odometry_redundancy", result.odometry_redundancy}};
+  out["covariance_scale"] = result.covariance_scale;
+  nlohmann::ordered_json runs = nlohmann::ordered_json::array();
+  for (const BearingRunSummary& run : result.runs) {
+    nlohmann::ordered_json r = {{"run", run.run},
+                                {"bearings", run.bearings},
+                                {"inliers", run.inliers},
+                                {"circular", run.circular}};
+    if (run.circular) r["q"] = run.q;
+    r["start_distance"] = run.start_distance;
+    if (result.has_metric) r["start_distance_m"] = run.start_distance * result.metric.delta_r;
+    r["rms_residual_rad"] = run.rms_residual_rad;
+    runs.push_back(r);
+  }
+  out["runs"] = runs;
+  if (result.has_closed_form) {
+    nlohmann::ordered_json cf = nlohmann::ordered_json::array();
+    for (const MartinelliRunEstimate& run : result.closed_form.runs) {
+      cf.push_back({{"run", run.run},
+                    {"q", run.q},
+                    {"xi_q", run.xi_q_per_m},
+                    {"L", run.l_rad},
+                    {"k", run.k_per_m},
+                    {"c", run.c_rad},
+                    {"periods_covered", run.periods_covered},
+                    {"rms_residual_rad", run.rms_residual_rad}});
+    }
+    out["closed_form_runs"] = cf;
+  }
+  out["iterations"] = result.iterations;
+  out["noise_rounds"] = result.noise_rounds;
+  out["seconds"] = {{"seed", result.seed_seconds},
+                    {"adjustment", result.adjustment_seconds},
+                    {"covariance", result.covariance_seconds}};
+  return out;
+}
+
+std::string BearingResultSummary(const BearingCalibrationResult& result, const std::string& input,
+                                 const std::string& loss) {
+  std::string text;
+  char line[256];
+  std::snprintf(line, sizeof(line),
+                "%s: bearing-only calibration, %zu runs, %d bearings (%d inliers), loss %s\n",
+                input.c_str(), result.runs.size(), result.samples, result.inliers, loss.c_str());
+  text += line;
+  std::snprintf(line, sizeof(line), "  %-14s %14s   %-12s %14s\n", "parameter", "estimate", "± σ",
+                result.seed_method == "closed_form" ? "closed form" : "search seed");
+  text += line;
+  const auto row = [&](const std::string& name, double value, double sigma, double seed,
+                       double scale) {
+    std::snprintf(line, sizeof(line), "  %-14s %14.6f ± %-12.6f %14.6f\n", name.c_str(),
+                  value * scale, sigma * scale, seed * scale);
+    text += line;
+  };
+  const double deg = 180.0 / M_PI;
+  const BearingParamVector e = ToVector(result.estimate), s = ToVector(result.seed);
+  row("phi [deg]", e(0), result.stddev(0), s(0), deg);
+  row("psi [deg]", e(1), result.stddev(1), s(1), deg);
+  row("eta [1/m]", e(2), result.stddev(2), s(2), 1.0);
+  row("delta", e(3), result.stddev(3), s(3), 1.0);
+  row("xi [1/m]", e(4), result.stddev(4), s(4), 1.0);
+  if (result.has_metric) {
+    const BearingMetricVector m = ToVector(result.metric), sm = ToVector(result.seed_metric);
+    row("rho [m]", m(2), result.metric_stddev(2), sm(2), 1.0);
+    row("delta_r", m(3), result.metric_stddev(3), sm(3), 1.0);
+    row("delta_l", m(4), result.metric_stddev(4), sm(4), 1.0);
+    row("delta_b", m(5), result.metric_stddev(5), sm(5), 1.0);
+  } else {
+    text +=
+        "  no initial distance in meta.json: the metric scale (rho, delta_r, delta_l, "
+        "delta_b) is not observable\n";
+  }
+  std::snprintf(line, sizeof(line),
+                "  noise: σβ %.3f deg (%s), encoder K %.2e m^½ (%s; the data alone say %.2e "
+                "from %.1f degrees of freedom)\n",
+                result.noise.bearing_sigma_rad * deg,
+                result.bearing_sigma_estimated ? "estimated" : "given", result.noise.encoder_k,
+                result.encoder_k_estimated ? "estimated, not below its floor" : "given",
+                result.encoder_k_estimate, result.odometry_redundancy);
+  text += line;
+  for (const BearingRunSummary& run : result.runs) {
+    char kind[64];
+    if (run.circular) {
+      std::snprintf(kind, sizeof(kind), "circle at q = %.3f", run.q);
+    } else {
+      std::snprintf(kind, sizeof(kind), "not a circle at fixed q");
+    }
+    std::snprintf(line, sizeof(line), "  run %d: %d bearings, %s, rms residual %.3f deg\n", run.run,
+                  run.bearings, kind, run.rms_residual_rad * deg);
+    text += line;
+  }
+  return text;
+}
+
+int CalibrateBearingCommand(const std::string& input, const std::string& output,
+                            const std::string& loss, double loss_scale, bool quiet) {
+  const auto start = std::chrono::steady_clock::now();
+  // Ceres warns on stderr when a covariance is rank deficient; the command says why itself.
+  FLAGS_minloglevel = std::max(FLAGS_minloglevel, 2);
+  const StatusOr<RobustLoss> parsed_loss = ParseRobustLoss(loss);
+  if (!parsed_loss.ok()) return Fail(parsed_loss.message());
+  if (!(loss_scale > 0.0)) return Fail("--loss_scale must be positive");
+  const StatusOr<BearingLog> log = ReadBearingLog(input);
+  if (!log.ok()) return Fail(log.message());
+  BearingCalibrationOptions options;
+  options.adjustment.loss = *parsed_loss;
+  options.adjustment.loss_scale = loss_scale;
+  options.adjustment.num_threads = 2;
+  const StatusOr<BearingCalibrationResult> result = CalibrateBearing(*log, options);
+  if (!result.ok()) return Fail(result.message());
+  nlohmann::ordered_json json = BearingResultJson(*result, input, loss);
+  json["seconds"]["total"] =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::ofstream out(output);
+  if (!out) return Fail("cannot write " + output);
+  out << json.dump(2) << "\n";
+  if (!out) return Fail("cannot write " + output);
+  if (!quiet) std::fputs(BearingResultSummary(*result, input, loss).c_str(), stdout);
+  return 0;
+}
+
+}  // namespace calib

@@ -1,0 +1,105 @@
+#include <calib/tools/report/laser_report.h>
+
+#include <cmath>
+#include <cstdio>
+
+namespace calib {
+namespace {
+
+nlohmann::ordered_json ParamObject(const LaserParamVector& v) {
+  nlohmann::ordered_json object;
+  for (int i = 0; i < kNumLaserParams; ++i) object[kLaserParamNames[i]] = v(i);
+  return object;
+}
+
+// Display units: mm for lengths, degrees for the angle.
+double DisplayScale(int param) { return param == 5 ? 180.0 / M_PI : 1000.0; }
+const char* DisplayUnit(int param) { return param == 5 ? "deg" : "mm"; }
+
+}  // namespace
+
+nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
+                                       const std::string& input, const std::string& loss) {
+  nlohmann::ordered_json out;
+  out["problem"] = "laser";
+  out["input"] = input;
+  out["units"] = "m, rad";
+  out["estimate"] = ParamObject(result.estimate.ToVector());
+  out["stddev"] = ParamObject(result.stddev);
+  out["closed_form"] = ParamObject(result.closed_form.calibration.ToVector());
+  out["closed_form_trimmed"] = ParamObject(result.closed_form_trimmed.calibration.ToVector());
+  out["samples"] = result.samples;
+  out["inliers"] = result.inliers;
+  out["loss"] = loss;
+  nlohmann::ordered_json covariance = nlohmann::ordered_json::array();
+  for (int i = 0; i < kNumLaserParams; ++i) {
+    nlohmann::ordered_json row = nlohmann::ordered_json::array();
+    for (int j = 0; j < kNumLaserParams; ++j) row.push_back(result.covariance(i, j));
+    covariance.push_back(row);
+  }
+  out["covariance"] = {{"order", kLaserParamNames}, {"matrix", covariance}};
+  nlohmann::ordered_json noise = nlohmann::ordered_json::array();
+  for (const Eigen::Vector3d& sigma : result.noise_sigma) {
+    noise.push_back({{"x", sigma(0)}, {"y", sigma(1)}, {"theta", sigma(2)}});
+  }
+  out["scan_noise_sigma"] = noise;
+  out["covariance_scale"] = result.covariance_scale;
+  out["motion"] = {{"still", result.census.still},
+                   {"pure_rotation", result.census.pure_rotation},
+                   {"straight", result.census.straight},
+                   {"arc", result.census.arc}};
+  nlohmann::ordered_json direction;
+  for (int i = 0; i < kNumLaserParams; ++i) {
+    direction[kLaserParamNames[i]] = result.observability.weakest_direction(i);
+  }
+  out["observability"] = {{"relative_stddev", ParamObject(result.observability.relative_sigma)},
+                          {"weakest_direction", direction},
+                          {"weakest_relative_stddev", result.observability.weakest_relative_sigma},
+                          {"condition_number", result.observability.condition_number},
+                          {"summary", result.observability.weakest_description},
+                          {"warnings", result.observability.warnings}};
+  out["closed_form_detail"] = {{"J21", result.closed_form.j21},
+                               {"J22", result.closed_form.j22},
+                               {"J_condition_number", result.closed_form.j_condition_number}};
+  out["iterations"] = result.iterations;
+  out["seconds"] = {{"closed_form", result.closed_form_seconds},
+                    {"refinement", result.refinement_seconds},
+                    {"covariance", result.covariance_seconds}};
+  return out;
+}
+
+std::string LaserResultSummary(const LaserCalibrationResult& result, const std::string& input,
+                               const std::string& loss) {
+  std::string text;
+  char line[256];
+  std::snprintf(line, sizeof(line), "%s: laser–odometry calibration, %d intervals, loss %s\n",
+                input.c_str(), result.samples, loss.c_str());
+  text += line;
+  std::snprintf(line, sizeof(line), "  %-18s %12s   %-10s %12s\n", "parameter", "estimate", "± σ",
+                "closed form");
+  text += line;
+  const LaserParamVector estimate = result.estimate.ToVector();
+  const LaserParamVector closed = result.closed_form.calibration.ToVector();
+  for (int i = 0; i < kNumLaserParams; ++i) {
+    const double k = DisplayScale(i);
+    const std::string name = kLaserParamNames[i] + " [" + DisplayUnit(i) + "]";
+    std::snprintf(line, sizeof(line), "  %-18s %12.4f ± %-10.4f %12.4f\n", name.c_str(),
+                  estimate(i) * k, result.stddev(i) * k, closed(i) * k);
+    text += line;
+  }
+  std::snprintf(line, sizeof(line), "  inliers %d of %d\n", result.inliers, result.samples);
+  text += line;
+  for (const Eigen::Vector3d& sigma : result.noise_sigma) {
+    std::snprintf(line, sizeof(line),
+                  "  scan noise of the inliers: σx %.3f mm, σy %.3f mm, σθ %.4f deg\n",
+                  sigma(0) * 1e3, sigma(1) * 1e3, sigma(2) * 180.0 / M_PI);
+    text += line;
+  }
+  text += "  observability: " + result.observability.weakest_description + "\n";
+  for (const std::string& warning : result.observability.warnings) {
+    text += "  warning: " + warning + "\n";
+  }
+  return text;
+}
+
+}  // namespace calib
