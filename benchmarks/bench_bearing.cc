@@ -1,5 +1,10 @@
 #include "benchmarks/bench_bearing.h"
 
+#include <calib/core/bearing/bearing_simulator.h>
+#include <calib/solvers/bearing/bearing_crlb.h>
+#include <calib/solvers/bearing/calibrate_bearing.h>
+#include <calib/solvers/bearing/martinelli_closed_form.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -8,10 +13,6 @@
 #include <vector>
 
 #include "benchmarks/bench_common.h"
-#include <calib/core/bearing/bearing_simulator.h>
-#include <calib/solvers/bearing/bearing_crlb.h>
-#include <calib/solvers/bearing/calibrate_bearing.h>
-#include <calib/solvers/bearing/martinelli_closed_form.h>
 
 namespace calib::bench {
 namespace {
@@ -250,8 +251,9 @@ BearingRunSpec NonCircularRun(double nu) {
 
 }  // namespace
 
-nlohmann::ordered_json RunBearingBench(bool quick, int seeds) {
-  if (seeds <= 0) seeds = quick ? 10 : 100;
+nlohmann::ordered_json RunBearingBench(const BenchConfig& config) {
+  const bool quick = config.quick;
+  const int seeds = config.seeds > 0 ? config.seeds : (quick ? 10 : 100);
   const Stopwatch total;
   nlohmann::ordered_json root;
   const BearingSimOptions base;

@@ -3,6 +3,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "benchmarks/bench_common.h"
+
 // The bearing-only calibration against Martinelli's simulations (INRIA RR-6796, §8.1, Table 4)
 // and the Cramér–Rao bound. Prints its tables on stdout and returns every number as JSON:
 //   1. Table 4: `seeds` simulated logs per σβ ∈ {1°, 3°, 5°} in the §8.1 setting (stated in the
@@ -14,8 +16,8 @@
 //      which the bound would allow Table 4's errors.
 namespace calib::bench {
 
-// seeds = 0: 100 logs per case (10 with `quick`).
-nlohmann::ordered_json RunBearingBench(bool quick, int seeds);
+// config.seeds logs per case; 0: 100 (10 with config.quick).
+nlohmann::ordered_json RunBearingBench(const BenchConfig& config);
 
 }  // namespace calib::bench
 

@@ -1,19 +1,19 @@
 #include "benchmarks/bench_crlb.h"
 
+#include <calib/problems/laser/laser_residual.h>
+
 #include <Eigen/Dense>
 #include <cmath>
 #include <memory>
 
-#include <calib/problems/laser/laser_residual.h>
-
 namespace calib::bench {
 
-StatusOr<LaserParamMatrix> LaserCramerRaoBound(const std::vector<LaserInterval>& intervals,
-                                               const std::vector<bool>& skip,
-                                               const LaserCalibration& truth,
-                                               const Eigen::Vector3d& scan_sigma,
-                                               double wheel_sigma,
-                                               LaserParamMatrix* diagonal_weighted) {
+StatusOr<LaserCramerRao> LaserCramerRaoBound(const std::vector<LaserInterval>& intervals,
+                                             const std::vector<bool>& skip,
+                                             const LaserCalibration& truth,
+                                             const LaserNoiseModel& noise_model) {
+  const Eigen::Vector3d& scan_sigma = noise_model.scan_sigma;
+  const double wheel_sigma = noise_model.wheel_sigma;
   const LaserParamVector p = truth.ToVector();
   const double* parameters[2] = {p.data(), p.data() + 3};
   const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
@@ -32,7 +32,7 @@ StatusOr<LaserParamMatrix> LaserCramerRaoBound(const std::vector<LaserInterval>&
     const std::unique_ptr<ceres::CostFunction> cost(LaserResidual::Create(clean, &identity));
     Eigen::Vector3d r;
     if (!cost->Evaluate(parameters, r.data(), jacobians)) {
-      return Status::Error("a residual could not be evaluated at the truth");
+      return Status::Internal("a residual could not be evaluated at the truth");
     }
     Eigen::Matrix<double, 3, 6> j;
     j << j_odometry, j_sensor;
@@ -58,13 +58,11 @@ StatusOr<LaserParamMatrix> LaserCramerRaoBound(const std::vector<LaserInterval>&
   }
   const Eigen::LDLT<LaserParamMatrix> ldlt(fisher);
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
-    return Status::Error("the Fisher information is singular");
+    return Status::NotObservable("the Fisher information is singular");
   }
-  if (diagonal_weighted != nullptr) {
-    const LaserParamMatrix bread_inverse = bread.inverse();
-    *diagonal_weighted = bread_inverse * meat * bread_inverse;
-  }
-  return LaserParamMatrix(ldlt.solve(LaserParamMatrix::Identity()));
+  const LaserParamMatrix bread_inverse = bread.inverse();
+  return LaserCramerRao{ldlt.solve(LaserParamMatrix::Identity()),
+                        bread_inverse * meat * bread_inverse};
 }
 
 }  // namespace calib::bench

@@ -1,14 +1,15 @@
 #include "benchmarks/bench_laser_monte_carlo.h"
 
+#include <calib/core/laser/laser_simulator.h>
+#include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/solvers/laser/censi_closed_form.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 
 #include "benchmarks/bench_crlb.h"
 #include "benchmarks/bench_laser_mc_report.h"
-#include <calib/core/laser/laser_simulator.h>
-#include <calib/solvers/laser/calibrate_laser.h>
-#include <calib/solvers/laser/censi_closed_form.h>
 
 namespace calib::bench {
 
@@ -44,14 +45,13 @@ McSeedRun RunSeed(const McScenario& scenario, int seed) {
   LaserCalibration truth;
   truth.odometry = sim_truth.odometry;
   truth.base_T_sensor = sim_truth.base_T_sensor;
-  LaserParamMatrix diagonal_weighted;
-  const StatusOr<LaserParamMatrix> crlb =
-      LaserCramerRaoBound(log.intervals, sim_truth.is_outlier, truth, scenario.scan_sigma,
-                          scenario.wheel_speed_noise, &diagonal_weighted);
+  const StatusOr<LaserCramerRao> crlb =
+      LaserCramerRaoBound(log.intervals, sim_truth.is_outlier, truth,
+                          {scenario.scan_sigma, scenario.wheel_speed_noise});
   if (crlb.ok()) {
     run.crlb_ok = true;
-    run.crlb_var = crlb->diagonal();
-    run.diagonal_weighted_var = diagonal_weighted.diagonal();
+    run.crlb_var = crlb->bound.diagonal();
+    run.diagonal_weighted_var = crlb->diagonal_weighted.diagonal();
   }
   const auto record = [&](McMethod m, const Stopwatch& watch, const Status& status,
                           const LaserCalibration* estimate, const LaserParamVector* sigma) {

@@ -1,13 +1,13 @@
 #include "benchmarks/bench_laser_real.h"
 
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/solvers/laser/calibrate_laser.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-
-#include <calib/core/laser/laser_log_io.h>
-#include <calib/solvers/laser/calibrate_laser.h>
 
 namespace calib::bench {
 namespace {
@@ -21,9 +21,9 @@ struct Published {
 
 StatusOr<Published> ReadPublished(const fs::path& path) {
   std::ifstream in(path);
-  if (!in) return Status::Error("cannot open " + path.string());
+  if (!in) return Status::Io("cannot open " + path.string());
   const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-  if (j.is_discarded()) return Status::Error(path.string() + " is not valid JSON");
+  if (j.is_discarded()) return Status::InvalidInput(path.string() + " is not valid JSON");
   Published p;
   p.value << j.at("l_diam").get<double>() / 2, j.at("r_diam").get<double>() / 2,
       j.at("axle").get<double>(), j.at("l_x").get<double>(), j.at("l_y").get<double>(),
@@ -106,7 +106,7 @@ nlohmann::json RunLaserReal(const BenchConfig& config) {
   for (size_t i = 0; i < sets.size(); ++i) {
     const std::string& set = sets[i];
     std::vector<double> seconds;
-    StatusOr<LaserCalibrationResult> ours = Status::Error("not run");
+    StatusOr<LaserCalibrationResult> ours = Status::Internal("not run");
     for (int run = 0; run < timing_runs; ++run) {
       const Stopwatch watch;
       ours = CalibrateFile(dir / (set + ".tuple"));

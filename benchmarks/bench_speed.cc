@@ -1,5 +1,8 @@
 #include "benchmarks/bench_speed.h"
 
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/core/laser/laser_simulator.h>
+#include <calib/solvers/laser/calibrate_laser.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -9,9 +12,6 @@
 #include <fstream>
 
 #include "benchmarks/bench_micro.h"
-#include <calib/core/laser/laser_log_io.h>
-#include <calib/core/laser/laser_simulator.h>
-#include <calib/solvers/laser/calibrate_laser.h>
 
 namespace calib::bench {
 namespace {
@@ -37,7 +37,7 @@ long VmHwmKb() {
 // Runs `command` and returns the last line of its stdout that starts with '{'.
 StatusOr<nlohmann::json> RunChild(const std::string& command) {
   FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return Status::Error("cannot run " + command);
+  if (pipe == nullptr) return Status::Io("cannot run " + command);
   std::string last, line;
   char buffer[4096];
   while (std::fgets(buffer, sizeof(buffer), pipe) != nullptr) {
@@ -48,10 +48,10 @@ StatusOr<nlohmann::json> RunChild(const std::string& command) {
   }
   const int status = pclose(pipe);
   if (status != 0 || last.empty()) {
-    return Status::Error("child failed (status " + std::to_string(status) + "): " + command);
+    return Status::Internal("child failed (status " + std::to_string(status) + "): " + command);
   }
   const nlohmann::json j = nlohmann::json::parse(last, nullptr, false);
-  if (j.is_discarded()) return Status::Error("child printed bad JSON: " + last);
+  if (j.is_discarded()) return Status::Internal("child printed bad JSON: " + last);
   return j;
 }
 

@@ -1,11 +1,11 @@
 // calib_bench: accuracy (Monte Carlo against the Cramér–Rao bound), the published real data, and
 // speed/memory of the laser–odometry calibration. Every number is measured by this run.
+#include <calib/tools/report/json_output.h>
 #include <gflags/gflags.h>
 
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
-#include <fstream>
 #include <set>
 #include <sstream>
 
@@ -132,7 +132,7 @@ int Main(int argc, char** argv) {
   std::fflush(stdout);
   if (sections.count("laser_real")) root["laser_real"] = RunLaserReal(config);
   std::fflush(stdout);
-  if (sections.count("bearing")) root["bearing"] = RunBearingBench(config.quick, FLAGS_seeds);
+  if (sections.count("bearing")) root["bearing"] = RunBearingBench(config);
   std::fflush(stdout);
   if (sections.count("diagnose")) root["diagnose"] = RunDiagnoseBench(config.quick, FLAGS_seeds);
   std::fflush(stdout);
@@ -140,10 +140,7 @@ int Main(int argc, char** argv) {
   root["seconds"] = total.Seconds();
 
   if (!FLAGS_json.empty()) {
-    std::ofstream out(FLAGS_json);
-    out << root.dump(1) << "\n";
-    out.close();
-    if (out) {
+    if (WriteJsonFile(FLAGS_json, root, 1).ok()) {
       std::printf("\nResults written to %s\n", FLAGS_json.c_str());
     } else {
       std::printf("\nFAILED to write %s\n", FLAGS_json.c_str());

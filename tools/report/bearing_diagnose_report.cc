@@ -1,7 +1,5 @@
 #include <calib/tools/report/bearing_diagnose_report.h>
 
-#include <glog/logging.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -107,11 +105,6 @@ nlohmann::ordered_json FindingJson(const BearingFinding& f, const std::vector<st
   return out;
 }
 
-int Fail(const std::string& message) {
-  std::fprintf(stderr, "calib: error: %s\n", message.c_str());
-  return 1;
-}
-
 }  // namespace
 
 nlohmann::ordered_json BearingDiagnosisJson(const BearingDiagnosis& diagnosis,
@@ -199,51 +192,6 @@ StatusOr<std::vector<std::string>> WriteBearingDiagnosisPlots(const BearingDiagn
   AddResidualPlots(diagnosis.covariates, diagnosis.structure_before, diagnosis.structure_after,
                    "bearing residuals", &files);
   return WritePlotFiles(directory, files);
-}
-
-int DiagnoseBearingCommand(const BearingDiagnoseFlags& flags) {
-  const auto start = std::chrono::steady_clock::now();
-  const auto elapsed = [&]() {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  };
-  // Ceres warns on stderr when a covariance is rank deficient; the command says why itself.
-  FLAGS_minloglevel = std::max(FLAGS_minloglevel, 2);
-  const StatusOr<RobustLoss> loss = ParseRobustLoss(flags.loss);
-  if (!loss.ok()) return Fail(loss.message());
-  if (!(flags.loss_scale > 0.0)) return Fail("--loss_scale must be positive");
-  const StatusOr<BearingLog> log = ReadBearingLog(flags.input);
-  if (!log.ok()) return Fail(log.message());
-  BearingDiagnosisOptions options;
-  options.calibration.adjustment.loss = *loss;
-  options.calibration.adjustment.loss_scale = flags.loss_scale;
-  options.calibration.adjustment.num_threads = 2;
-  options.alpha = flags.alpha;
-  options.cv_blocks = flags.cv_blocks;
-  options.progress = [&](const std::string& text) {
-    if (elapsed() > 1.0 && !flags.quiet) {
-      std::fprintf(stderr, "calib: %.1f s: %s\n", elapsed(), text.c_str());
-    }
-  };
-  const StatusOr<BearingDiagnosis> diagnosis = DiagnoseBearing(*log, options);
-  if (!diagnosis.ok()) return Fail(diagnosis.message());
-  std::string plots_dir = flags.plots_dir;
-  if (plots_dir.empty()) {
-    const fs::path output(flags.output);
-    plots_dir = (output.parent_path() / (output.stem().string() + "_plots")).string();
-  }
-  const StatusOr<std::vector<std::string>> plots =
-      WriteBearingDiagnosisPlots(*diagnosis, plots_dir);
-  if (!plots.ok()) return Fail(plots.message());
-  nlohmann::ordered_json json = BearingDiagnosisJson(*diagnosis, flags.input, *plots);
-  json["seconds"] = elapsed();
-  std::ofstream out(flags.output);
-  if (!out) return Fail("cannot write " + flags.output);
-  out << json.dump(2) << "\n";
-  if (!out) return Fail("cannot write " + flags.output);
-  if (!flags.quiet) {
-    std::fputs(BearingDiagnosisSummary(*diagnosis, flags.input, *plots).c_str(), stdout);
-  }
-  return 0;
 }
 
 }  // namespace calib

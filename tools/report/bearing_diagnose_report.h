@@ -24,17 +24,6 @@ std::string BearingDiagnosisSummary(const BearingDiagnosis& diagnosis, const std
 StatusOr<std::vector<std::string>> WriteBearingDiagnosisPlots(const BearingDiagnosis& diagnosis,
                                                               const std::string& directory);
 
-struct BearingDiagnoseFlags {
-  std::string input, output, plots_dir, loss;
-  double loss_scale = 3.0;
-  double alpha = 0.01;
-  int cv_blocks = 5;
-  bool quiet = false;
-};
-
-// Reads, diagnoses, writes; returns the exit status (errors on stderr, naming the file).
-int DiagnoseBearingCommand(const BearingDiagnoseFlags& flags);
-
 }  // namespace calib
 
 #endif  // CALIB_TOOLS_REPORT_BEARING_DIAGNOSE_REPORT_H_

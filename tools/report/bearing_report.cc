@@ -1,35 +1,11 @@
 #include <calib/tools/report/bearing_report.h>
+#include <calib/tools/report/json_output.h>
 
-#include <glog/logging.h>
-
-#include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-
-#include <calib/core/bearing/bearing_log_io.h>
 
 namespace calib {
-namespace {
-
-nlohmann::ordered_json Matrix(const Eigen::MatrixXd& m) {
-  nlohmann::ordered_json rows = nlohmann::ordered_json::array();
-  for (int i = 0; i < m.rows(); ++i) {
-    nlohmann::ordered_json row = nlohmann::ordered_json::array();
-    for (int j = 0; j < m.cols(); ++j) row.push_back(m(i, j));
-    rows.push_back(row);
-  }
-  return rows;
-}
-
-int Fail(const std::string& message) {
-  std::fprintf(stderr, "calib: error: %s\n", message.c_str());
-  return 1;
-}
-
-}  // namespace
 
 nlohmann::ordered_json BearingParamObject(const BearingParamVector& v,
                                           const BearingMetricVector* metric) {
@@ -77,12 +53,12 @@ nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
             "delta, xi are observable without an initial distance";
   nlohmann::ordered_json order = nlohmann::ordered_json::array();
   for (const char* name : kBearingParamNames) order.push_back(name);
-  out["covariance"] = {{"order", order}, {"matrix", Matrix(result.covariance)}};
+  out["covariance"] = {{"order", order}, {"matrix", MatrixJson(result.covariance)}};
   if (result.has_metric) {
     nlohmann::ordered_json metric_order = nlohmann::ordered_json::array();
     for (const char* name : kBearingMetricNames) metric_order.push_back(name);
     out["metric_covariance"] = {{"order", metric_order},
-                                {"matrix", Matrix(result.metric_covariance)}};
+                                {"matrix", MatrixJson(result.metric_covariance)}};
   }
   out["noise"] = {{"bearing_sigma_rad", result.noise.bearing_sigma_rad},
                   {"bearing_sigma_estimated", result.bearing_sigma_estimated},
@@ -183,33 +159,6 @@ std::string BearingResultSummary(const BearingCalibrationResult& result, const s
     text += line;
   }
   return text;
-}
-
-int CalibrateBearingCommand(const std::string& input, const std::string& output,
-                            const std::string& loss, double loss_scale, bool quiet) {
-  const auto start = std::chrono::steady_clock::now();
-  // Ceres warns on stderr when a covariance is rank deficient; the command says why itself.
-  FLAGS_minloglevel = std::max(FLAGS_minloglevel, 2);
-  const StatusOr<RobustLoss> parsed_loss = ParseRobustLoss(loss);
-  if (!parsed_loss.ok()) return Fail(parsed_loss.message());
-  if (!(loss_scale > 0.0)) return Fail("--loss_scale must be positive");
-  const StatusOr<BearingLog> log = ReadBearingLog(input);
-  if (!log.ok()) return Fail(log.message());
-  BearingCalibrationOptions options;
-  options.adjustment.loss = *parsed_loss;
-  options.adjustment.loss_scale = loss_scale;
-  options.adjustment.num_threads = 2;
-  const StatusOr<BearingCalibrationResult> result = CalibrateBearing(*log, options);
-  if (!result.ok()) return Fail(result.message());
-  nlohmann::ordered_json json = BearingResultJson(*result, input, loss);
-  json["seconds"]["total"] =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::ofstream out(output);
-  if (!out) return Fail("cannot write " + output);
-  out << json.dump(2) << "\n";
-  if (!out) return Fail("cannot write " + output);
-  if (!quiet) std::fputs(BearingResultSummary(*result, input, loss).c_str(), stdout);
-  return 0;
 }
 
 }  // namespace calib

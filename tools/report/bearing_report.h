@@ -1,10 +1,10 @@
 #ifndef CALIB_TOOLS_REPORT_BEARING_REPORT_H_
 #define CALIB_TOOLS_REPORT_BEARING_REPORT_H_
 
+#include <calib/solvers/bearing/calibrate_bearing.h>
+
 #include <nlohmann/json.hpp>
 #include <string>
-
-#include <calib/solvers/bearing/calibrate_bearing.h>
 
 namespace calib {
 
@@ -25,11 +25,6 @@ nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
 // The short human-readable summary printed on stdout (degrees for the angles).
 std::string BearingResultSummary(const BearingCalibrationResult& result, const std::string& input,
                                  const std::string& loss);
-
-// `calib calibrate` on a bearing log directory: reads, calibrates, writes `output`, prints the
-// summary unless `quiet`. Returns the process exit status; errors go to stderr and name the file.
-int CalibrateBearingCommand(const std::string& input, const std::string& output,
-                            const std::string& loss, double loss_scale, bool quiet);
 
 }  // namespace calib
 

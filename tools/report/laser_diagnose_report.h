@@ -44,11 +44,6 @@ void AddResidualPlots(const std::vector<CovariateProfile>& covariates,
 // The SVG of one covariate profile (exposed for tests).
 std::string CovariateProfileSvg(const CovariateProfile& profile, const std::string& title);
 
-// The `calib diagnose` command (flags: --input, --output, --format, --loss, --loss_scale,
-// --quiet, and this file's --family_alpha, --max_effects, --cv_blocks, --candidates,
-// --boundary_speeds, --plots_dir). Returns the exit status.
-int RunDiagnoseCommand();
-
 }  // namespace calib
 
 #endif  // CALIB_TOOLS_REPORT_LASER_DIAGNOSE_REPORT_H_

@@ -1,3 +1,4 @@
+#include <calib/tools/report/json_output.h>
 #include <calib/tools/report/laser_report.h>
 
 #include <cmath>
@@ -31,13 +32,7 @@ nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
   out["samples"] = result.samples;
   out["inliers"] = result.inliers;
   out["loss"] = loss;
-  nlohmann::ordered_json covariance = nlohmann::ordered_json::array();
-  for (int i = 0; i < kNumLaserParams; ++i) {
-    nlohmann::ordered_json row = nlohmann::ordered_json::array();
-    for (int j = 0; j < kNumLaserParams; ++j) row.push_back(result.covariance(i, j));
-    covariance.push_back(row);
-  }
-  out["covariance"] = {{"order", kLaserParamNames}, {"matrix", covariance}};
+  out["covariance"] = {{"order", kLaserParamNames}, {"matrix", MatrixJson(result.covariance)}};
   nlohmann::ordered_json noise = nlohmann::ordered_json::array();
   for (const Eigen::Vector3d& sigma : result.noise_sigma) {
     noise.push_back({{"x", sigma(0)}, {"y", sigma(1)}, {"theta", sigma(2)}});
@@ -66,6 +61,19 @@ nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
                     {"refinement", result.refinement_seconds},
                     {"covariance", result.covariance_seconds}};
   return out;
+}
+
+nlohmann::ordered_json LaserSimTruthJson(const LaserSimTruth& truth) {
+  nlohmann::ordered_json json;
+  json["problem"] = "laser";
+  json["estimate"] = ParamObject(LaserCalibration{truth.odometry, truth.base_T_sensor}.ToVector());
+  json["effects"] = {{"time_offset", truth.effects.time_offset_s},
+                     {"lateral_slip", truth.effects.lateral_slip_s},
+                     {"longitudinal_slip", truth.effects.longitudinal_slip_s},
+                     {"wheel_radius_change", truth.effects.radius_change_time_s},
+                     {"r_l_after", truth.effects.left_radius_after_m},
+                     {"r_r_after", truth.effects.right_radius_after_m}};
+  return json;
 }
 
 std::string LaserResultSummary(const LaserCalibrationResult& result, const std::string& input,

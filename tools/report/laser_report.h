@@ -1,10 +1,11 @@
 #ifndef CALIB_TOOLS_REPORT_LASER_REPORT_H_
 #define CALIB_TOOLS_REPORT_LASER_REPORT_H_
 
+#include <calib/core/laser/laser_simulator.h>
+#include <calib/solvers/laser/calibrate_laser.h>
+
 #include <nlohmann/json.hpp>
 #include <string>
-
-#include <calib/solvers/laser/calibrate_laser.h>
 
 namespace calib {
 
@@ -12,6 +13,10 @@ namespace calib {
 // to check the result: covariance, noise, observability, timings.
 nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
                                        const std::string& input, const std::string& loss);
+
+// The truth of a simulated log in the result's layout ({"problem", "estimate"}) plus the
+// simulated effects (`calib simulate --truth`).
+nlohmann::ordered_json LaserSimTruthJson(const LaserSimTruth& truth);
 
 // The short human-readable summary printed on stdout (mm and degrees).
 std::string LaserResultSummary(const LaserCalibrationResult& result, const std::string& input,

@@ -1,0 +1,77 @@
+// `calib calibrate`: reads the log(s), calibrates, writes the contract's OUT.json and prints the
+// summary.
+#include <calib/core/bearing/bearing_log_io.h>
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/solvers/bearing/calibrate_bearing.h>
+#include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/tools/commands/command_util.h>
+#include <calib/tools/commands/commands.h>
+#include <calib/tools/report/bearing_report.h>
+#include <calib/tools/report/laser_report.h>
+
+#include <vector>
+
+namespace calib::cli {
+namespace {
+
+int CalibrateLaserLogs(const CalibrateOptions& flags) {
+  const StatusOr<LaserFormat> format = ParseLaserFormat(flags.format);
+  if (!format.ok()) return Fail(format.message());
+  const StatusOr<RobustLoss> loss = ParseLossFlags(flags.loss, flags.loss_scale);
+  if (!loss.ok()) return Fail(loss.message());
+  const Stopwatch clock;
+  std::vector<LaserLog> logs;
+  for (const std::string& path : SplitCommas(flags.input)) {
+    StatusOr<LaserLog> log = ReadLaserLog(path, *format);
+    if (!log.ok()) return Fail(log.message());
+    logs.push_back(std::move(log).value());
+  }
+  if (logs.empty()) return Fail("--input names no file");
+  std::vector<const std::vector<LaserInterval>*> intervals;
+  for (const LaserLog& log : logs) intervals.push_back(&log.intervals);
+
+  LaserCalibrationOptions options;
+  options.refinement.loss = *loss;
+  options.refinement.loss_scale = flags.loss_scale;
+  options.progress = ProgressPrinter(clock, flags.quiet);
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaserJoint(intervals, options);
+  if (!result.ok()) return Fail(flags.input + ": " + result.message());
+
+  nlohmann::ordered_json json = LaserResultJson(*result, flags.input, flags.loss);
+  json["seconds"]["total"] = clock.Seconds();
+  return WriteReport(flags.output, json, LaserResultSummary(*result, flags.input, flags.loss),
+                     flags.quiet);
+}
+
+int CalibrateBearingLog(const CalibrateOptions& flags) {
+  const Stopwatch clock;
+  SilenceCeresWarnings();
+  const StatusOr<RobustLoss> loss = ParseLossFlags(flags.loss, flags.loss_scale);
+  if (!loss.ok()) return Fail(loss.message());
+  const StatusOr<BearingLog> log = ReadBearingLog(flags.input);
+  if (!log.ok()) return Fail(log.message());
+
+  BearingCalibrationOptions options;
+  options.adjustment.loss = *loss;
+  options.adjustment.loss_scale = flags.loss_scale;
+  options.adjustment.num_threads = 2;
+  options.progress = ProgressPrinter(clock, flags.quiet);
+  const StatusOr<BearingCalibrationResult> result = CalibrateBearing(*log, options);
+  if (!result.ok()) return Fail(result.message());
+
+  nlohmann::ordered_json json = BearingResultJson(*result, flags.input, flags.loss);
+  json["seconds"]["total"] = clock.Seconds();
+  return WriteReport(flags.output, json, BearingResultSummary(*result, flags.input, flags.loss),
+                     flags.quiet);
+}
+
+}  // namespace
+
+int RunCalibrate(const CalibrateOptions& options) {
+  const Status given = CheckInputAndOutput(options.input, options.output);
+  if (!given.ok()) return Fail(given.message());
+  return IsBearingInput(options.input, options.format) ? CalibrateBearingLog(options)
+                                                       : CalibrateLaserLogs(options);
+}
+
+}  // namespace calib::cli

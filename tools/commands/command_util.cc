@@ -1,0 +1,67 @@
+#include <calib/tools/commands/command_util.h>
+#include <calib/tools/report/bearing_report.h>
+#include <calib/tools/report/json_output.h>
+#include <glog/logging.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <sstream>
+
+namespace calib::cli {
+
+int Fail(const std::string& message) {
+  std::fprintf(stderr, "calib: error: %s\n", message.c_str());
+  return 1;
+}
+
+std::function<void(const std::string&)> ProgressPrinter(const Stopwatch& clock, bool quiet,
+                                                        std::FILE* out, double after_s) {
+  return [clock, quiet, out, after_s](const std::string& line) {
+    const double seconds = clock.Seconds();
+    if (!quiet && seconds > after_s)
+      std::fprintf(out, "calib: %.1f s: %s\n", seconds, line.c_str());
+  };
+}
+
+Status CheckInputAndOutput(const std::string& input, const std::string& output) {
+  if (input.empty()) return Status::InvalidInput("--input is required");
+  if (output.empty()) return Status::InvalidInput("--output is required");
+  return Status::Ok();
+}
+
+bool IsBearingInput(const std::string& input, const std::string& format) {
+  return format == "auto" && IsBearingLogDirectory(input);
+}
+
+StatusOr<RobustLoss> ParseLossFlags(const std::string& loss, double loss_scale) {
+  CALIB_ASSIGN_OR_RETURN(const RobustLoss parsed, ParseRobustLoss(loss));
+  if (!(loss_scale > 0.0)) return Status::InvalidInput("--loss_scale must be positive");
+  return parsed;
+}
+
+std::vector<std::string> SplitCommas(const std::string& text) {
+  std::vector<std::string> parts;
+  std::stringstream stream(text);
+  std::string part;
+  while (std::getline(stream, part, ',')) {
+    if (!part.empty()) parts.push_back(part);
+  }
+  return parts;
+}
+
+std::string DefaultPlotsDir(const std::string& output) {
+  const std::filesystem::path path(output);
+  return (path.parent_path() / (path.stem().string() + "_plots")).string();
+}
+
+void SilenceCeresWarnings() { FLAGS_minloglevel = std::max(FLAGS_minloglevel, 2); }
+
+int WriteReport(const std::string& output, const nlohmann::ordered_json& json,
+                const std::string& summary, bool quiet) {
+  const Status written = WriteJsonFile(output, json);
+  if (!written.ok()) return Fail(written.message());
+  if (!quiet) std::fputs(summary.c_str(), stdout);
+  return 0;
+}
+
+}  // namespace calib::cli

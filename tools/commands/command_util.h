@@ -1,0 +1,63 @@
+#ifndef CALIB_TOOLS_COMMANDS_COMMAND_UTIL_H_
+#define CALIB_TOOLS_COMMANDS_COMMAND_UTIL_H_
+
+#include <calib/core/status.h>
+#include <calib/solvers/common/robust_loss.h>
+
+#include <chrono>
+#include <cstdio>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+// What every command does the same way: fail, time, report progress, check the loss flags,
+// write the report.
+namespace calib::cli {
+
+// Prints "calib: error: MESSAGE" on stderr; returns the exit status 1.
+int Fail(const std::string& message);
+
+class Stopwatch {
+ public:
+  double Seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
+
+// A progress callback for the library's options: prints "calib: 1.3 s: LINE" on `out` once the
+// run has taken longer than `after_s` (short runs stay silent), and nothing when `quiet`.
+std::function<void(const std::string&)> ProgressPrinter(const Stopwatch& clock, bool quiet,
+                                                        std::FILE* out = stderr,
+                                                        double after_s = 1.0);
+
+// The checks every command on a log starts with: --input and --output given.
+Status CheckInputAndOutput(const std::string& input, const std::string& output);
+
+// True when --format is auto and --input is a bearing log directory.
+bool IsBearingInput(const std::string& input, const std::string& format);
+
+// The robust loss named by --loss, with --loss_scale checked positive.
+StatusOr<RobustLoss> ParseLossFlags(const std::string& loss, double loss_scale);
+
+// "a.json,b.json" → {"a.json", "b.json"} (empty parts dropped).
+std::vector<std::string> SplitCommas(const std::string& text);
+
+// The default plot folder: OUT_plots beside OUT.json.
+std::string DefaultPlotsDir(const std::string& output);
+
+// Ceres warns on stderr when a covariance is rank deficient; the bearing commands say why
+// themselves.
+void SilenceCeresWarnings();
+
+// The end of every command: writes `json` to `output`, then prints `summary` on stdout unless
+// `quiet`. Returns the exit status.
+int WriteReport(const std::string& output, const nlohmann::ordered_json& json,
+                const std::string& summary, bool quiet);
+
+}  // namespace calib::cli
+
+#endif  // CALIB_TOOLS_COMMANDS_COMMAND_UTIL_H_

@@ -1,0 +1,59 @@
+#ifndef CALIB_TOOLS_COMMANDS_COMMANDS_H_
+#define CALIB_TOOLS_COMMANDS_COMMANDS_H_
+
+#include <cstdint>
+#include <string>
+
+// The calib commands. Each takes its options struct (filled from the flags in flags.cc, the only
+// place that reads them), reads its input, calls the library, writes the report, and returns the
+// process exit status: 0 on success, 1 with "calib: error: ..." on stderr otherwise.
+namespace calib::cli {
+
+// `calib calibrate`: a laser log (or several, comma-separated, calibrated jointly) or a bearing
+// log directory.
+struct CalibrateOptions {
+  std::string input;
+  std::string output;
+  std::string format = "auto";  // Laser log format: auto, tuples, csv or stream.
+  std::string loss = "cauchy";  // cauchy, huber or none.
+  double loss_scale = 3.0;      // In whitened residual units.
+  bool quiet = false;           // No summary on stdout, no progress on stderr.
+};
+int RunCalibrate(const CalibrateOptions& options);
+
+// `calib diagnose`: one log; the calibrate options plus the search's.
+struct DiagnoseOptions : CalibrateOptions {
+  double family_alpha = 0.01;  // Family-wise error rate of each forward step.
+  int max_effects = 3;
+  int cv_blocks = 5;                     // Contiguous held-out blocks.
+  std::string candidates;                // Comma-separated laser effects; empty: all.
+  std::string boundary_speeds = "auto";  // auto, piecewise or smooth (laser).
+  std::string plots_dir;                 // Empty: OUT_plots beside the JSON output.
+};
+int RunDiagnose(const DiagnoseOptions& options);
+
+// `calib simulate`: a laser log with known truth (.csv when `output` ends so, else tuples).
+struct SimulateOptions {
+  std::string output;
+  std::string truth;  // Where to write the truth as JSON; empty: not written.
+  int intervals = 2000;
+  std::uint64_t seed = 1;
+  std::string trajectory = "rich";   // rich, straight, rotation or arc.
+  double noise_xy = 0.001;           // Scan-matching noise σ on x and y (m).
+  double noise_theta = 0.002;        // ... and on θ (rad).
+  double outliers = 0.0;             // Fraction of slip outliers.
+  double speed_time_constant = 0.5;  // s; 0: speeds constant within each interval.
+  double segment_mean = 6.0;         // Mean time between new speed targets (s).
+  double max_wheel_speed = 0.5;      // rad/s.
+  double time_offset = 0.0;          // Scans stamped t were taken at t + this (s).
+  double lateral_slip = 0.0;         // Lateral velocity = this·v·ω (s).
+  double longitudinal_slip = 0.0;    // Forward velocity = v − this·dv/dt (s).
+  double radius_change_time = -1.0;  // Time of a wheel-radius change (s); < 0: none.
+  double r_l_after = 0.0;            // Radii after the change (m).
+  double r_r_after = 0.0;
+};
+int RunSimulate(const SimulateOptions& options);
+
+}  // namespace calib::cli
+
+#endif  // CALIB_TOOLS_COMMANDS_COMMANDS_H_

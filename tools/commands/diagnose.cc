@@ -1,0 +1,123 @@
+// `calib diagnose`: reads one log, searches for the physics the base model leaves out, writes the
+// contract's OUT.json, the plots and the summary.
+#include <calib/core/bearing/bearing_log_io.h>
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/tools/commands/command_util.h>
+#include <calib/tools/commands/commands.h>
+#include <calib/tools/report/bearing_diagnose_report.h>
+#include <calib/tools/report/laser_diagnose_report.h>
+
+#include <string>
+#include <vector>
+
+namespace calib::cli {
+namespace {
+
+using Plots = std::vector<std::string>;
+
+// The report writers of one problem's diagnosis.
+template <typename Diagnosis>
+struct DiagnosisWriters {
+  StatusOr<Plots> (*plots)(const Diagnosis&, const std::string& directory);
+  nlohmann::ordered_json (*json)(const Diagnosis&, const std::string& input, const Plots&);
+  std::string (*summary)(const Diagnosis&, const std::string& input, const Plots&);
+};
+
+template <typename Diagnosis>
+int WriteDiagnosis(const DiagnoseOptions& flags, const Diagnosis& diagnosis, const Stopwatch& clock,
+                   const DiagnosisWriters<Diagnosis>& writers) {
+  const std::string plots_dir =
+      flags.plots_dir.empty() ? DefaultPlotsDir(flags.output) : flags.plots_dir;
+  const StatusOr<Plots> plots = writers.plots(diagnosis, plots_dir);
+  if (!plots.ok()) return Fail(plots.message());
+  nlohmann::ordered_json json = writers.json(diagnosis, flags.input, *plots);
+  json["seconds"] = clock.Seconds();
+  return WriteReport(flags.output, json, writers.summary(diagnosis, flags.input, *plots),
+                     flags.quiet);
+}
+
+StatusOr<BoundaryChoice> ParseBoundarySpeeds(const std::string& name) {
+  if (name == "auto") return BoundaryChoice::kAuto;
+  if (name == "piecewise") return BoundaryChoice::kPiecewiseConstant;
+  if (name == "smooth") return BoundaryChoice::kSmooth;
+  return Status::InvalidInput("unknown --boundary_speeds '" + name +
+                              "' (auto, piecewise or smooth)");
+}
+
+// The laser diagnosis' options from the flags (without the progress callback).
+StatusOr<LaserDiagnosisOptions> LaserOptions(const DiagnoseOptions& flags) {
+  CALIB_ASSIGN_OR_RETURN(const RobustLoss loss, ParseLossFlags(flags.loss, flags.loss_scale));
+  if (flags.max_effects < 0) return Status::InvalidInput("--max_effects must not be negative");
+  LaserDiagnosisOptions options;
+  options.calibration.refinement.loss = loss;
+  options.calibration.refinement.loss_scale = flags.loss_scale;
+  options.alpha = flags.family_alpha;
+  options.max_effects = flags.max_effects;
+  options.cv_blocks = flags.cv_blocks;
+  CALIB_ASSIGN_OR_RETURN(options.boundary, ParseBoundarySpeeds(flags.boundary_speeds));
+  if (!flags.candidates.empty()) {
+    options.candidates.clear();
+    for (const std::string& name : SplitCommas(flags.candidates)) {
+      CALIB_ASSIGN_OR_RETURN(const LaserEffect effect, ParseLaserEffect(name));
+      options.candidates.push_back(effect);
+    }
+  }
+  return options;
+}
+
+int DiagnoseLaserLog(const DiagnoseOptions& flags) {
+  const StatusOr<LaserFormat> format = ParseLaserFormat(flags.format);
+  if (!format.ok()) return Fail(format.message());
+  StatusOr<LaserDiagnosisOptions> options = LaserOptions(flags);
+  if (!options.ok()) return Fail(options.message());
+  const Stopwatch clock;
+  options->progress = ProgressPrinter(clock, flags.quiet);
+  const StatusOr<LaserLog> log = ReadLaserLog(flags.input, *format);
+  if (!log.ok()) return Fail(log.message());
+  const StatusOr<LaserDiagnosis> diagnosis = DiagnoseLaser(log->intervals, *options);
+  if (!diagnosis.ok()) return Fail(flags.input + ": " + diagnosis.message());
+  return WriteDiagnosis<LaserDiagnosis>(
+      flags, *diagnosis, clock,
+      {&WriteLaserDiagnosisPlots, &LaserDiagnosisJson, &LaserDiagnosisSummary});
+}
+
+// One candidate (time_offset) for the bearing problem: --candidates, --max_effects and
+// --boundary_speeds concern the laser's.
+int DiagnoseBearingLog(const DiagnoseOptions& flags) {
+  const Stopwatch clock;
+  SilenceCeresWarnings();
+  const StatusOr<RobustLoss> loss = ParseLossFlags(flags.loss, flags.loss_scale);
+  if (!loss.ok()) return Fail(loss.message());
+  const StatusOr<BearingLog> log = ReadBearingLog(flags.input);
+  if (!log.ok()) return Fail(log.message());
+  BearingDiagnosisOptions options;
+  options.calibration.adjustment.loss = *loss;
+  options.calibration.adjustment.loss_scale = flags.loss_scale;
+  options.calibration.adjustment.num_threads = 2;
+  options.alpha = flags.family_alpha;
+  options.cv_blocks = flags.cv_blocks;
+  options.progress = ProgressPrinter(clock, flags.quiet);
+  const StatusOr<BearingDiagnosis> diagnosis = DiagnoseBearing(*log, options);
+  if (!diagnosis.ok()) return Fail(diagnosis.message());
+  return WriteDiagnosis<BearingDiagnosis>(
+      flags, *diagnosis, clock,
+      {&WriteBearingDiagnosisPlots, &BearingDiagnosisJson, &BearingDiagnosisSummary});
+}
+
+}  // namespace
+
+int RunDiagnose(const DiagnoseOptions& options) {
+  const Status given = CheckInputAndOutput(options.input, options.output);
+  if (!given.ok()) return Fail(given.message());
+  if (options.input.find(',') != std::string::npos) {
+    return Fail("diagnose takes one log (--input names several)");
+  }
+  if (!(options.family_alpha > 0.0 && options.family_alpha < 1.0)) {
+    return Fail("--family_alpha must be in (0, 1)");
+  }
+  if (options.cv_blocks < 2) return Fail("--cv_blocks must be at least 2");
+  return IsBearingInput(options.input, options.format) ? DiagnoseBearingLog(options)
+                                                       : DiagnoseLaserLog(options);
+}
+
+}  // namespace calib::cli
