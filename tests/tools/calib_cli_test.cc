@@ -20,13 +20,7 @@ using ::calib::testing::ReadFile;
 
 class CalibCliTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("calib_cli_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-            "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
+  void SetUp() override { dir_ = ::calib::testing::MakeScratchDir("calib_cli_test_"); }
   void TearDown() override { fs::remove_all(dir_); }
 
   fs::path Write(const std::string& name, const std::string& text) {
@@ -127,6 +121,27 @@ TEST_F(CalibCliTest, MissingFileAndBadFlags) {
   ExpectFailure(Calibrate(sample) + " --format yaml", {"yaml"});
   ExpectFailure("calibrate --output " + (dir_ / "o.json").string(), {"--input"});
   EXPECT_EQ(Calib("frobnicate").exit_code, 2);
+}
+
+// --quiet: nothing on stdout or stderr from a command that succeeds, not even the progress lines
+// printed once a run takes longer than a second.
+TEST_F(CalibCliTest, QuietSaysNothing) {
+  const fs::path big = dir_ / "big.tuple";
+  const fs::path data = fs::path(CALIB_SOURCE_DIR) / "data";
+  const std::vector<std::string> commands = {
+      "simulate --quiet --intervals 150000 --output " + big.string(),
+      // Long enough to pass the progress threshold on any machine we know.
+      Calibrate(big) + " --quiet",
+      Calibrate(data / "sample_bearing") + " --quiet",
+      "diagnose --quiet --input " + (data / "diagnose" / "time_offset.tuple").string() +
+          " --output " + (dir_ / "diagnosis.json").string(),
+  };
+  for (const std::string& command : commands) {
+    const CliRun run = Calib(command);
+    EXPECT_EQ(run.exit_code, 0) << command << "\n" << run.err;
+    EXPECT_EQ(run.out, "") << command;
+    EXPECT_EQ(run.err, "") << command;
+  }
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
 #ifndef CALIB_TESTS_TOOLS_CLI_RUNNER_H_
 #define CALIB_TESTS_TOOLS_CLI_RUNNER_H_
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -23,6 +25,18 @@ inline std::string ReadFile(const std::filesystem::path& path) {
   std::stringstream buffer;
   buffer << in.rdbuf();
   return buffer.str();
+}
+
+// A fresh folder in the temporary directory, named `prefix`, the process id and the running
+// test's name (so that concurrent runs do not meet); the caller removes it.
+inline std::filesystem::path MakeScratchDir(const std::string& prefix) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() /
+      (prefix + std::to_string(::getpid()) + "_" +
+       ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
 }
 
 // `scratch` receives the captured stdout.txt and stderr.txt.

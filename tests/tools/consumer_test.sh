@@ -1,14 +1,19 @@
 #!/usr/bin/env bash
 # Installs calib into a scratch prefix, builds examples/consumer against it with
-# find_package(calib), and runs it on a log.
+# find_package(calib), runs it on a log, and checks that the report it writes through
+# calib::report is the one `calib calibrate` writes (but for the timings).
 set -euo pipefail
 source_dir=$1 binary_dir=$2 log=$3
-prefix="$binary_dir/consumer-test/install"
-rm -rf "$binary_dir/consumer-test"
+scratch="$binary_dir/consumer-test"
+prefix="$scratch/install"
+rm -rf "$scratch"
 cmake --install "$binary_dir" --prefix "$prefix" >/dev/null
-cmake -S "$source_dir/examples/consumer" -B "$binary_dir/consumer-test/build" \
+cmake -S "$source_dir/examples/consumer" -B "$scratch/build" \
   -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$binary_dir/consumer-test/build" >/dev/null
-out=$("$binary_dir/consumer-test/build/calib_consumer" "$log")
+cmake --build "$scratch/build" >/dev/null
+out=$("$scratch/build/calib_consumer" "$log" "$scratch/consumer.json")
 echo "$out"
 grep -q "^b = " <<<"$out"
+"$binary_dir/bin/calib" calibrate --quiet --input "$log" --output "$scratch/calib.json"
+# "seconds" is the last member of the report.
+diff <(sed '/"seconds"/,$d' "$scratch/consumer.json") <(sed '/"seconds"/,$d' "$scratch/calib.json")
