@@ -1,5 +1,3 @@
-#include "benchmarks/bench_bearing.h"
-
 #include <calib/core/bearing/bearing_simulator.h>
 #include <calib/solvers/bearing/bearing_crlb.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
@@ -13,6 +11,7 @@
 #include <vector>
 
 #include "benchmarks/bench_common.h"
+#include "benchmarks/bench_sections.h"
 
 namespace calib::bench {
 namespace {

@@ -1,5 +1,3 @@
-#include "benchmarks/bench_laser_real.h"
-
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/solvers/laser/calibrate_laser.h>
 
@@ -8,6 +6,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+
+#include "benchmarks/bench_sections.h"
 
 namespace calib::bench {
 namespace {

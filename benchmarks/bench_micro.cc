@@ -1,13 +1,12 @@
-#include "benchmarks/bench_micro.h"
-
 #include <benchmark/benchmark.h>
+#include <calib/core/laser/laser_simulator.h>
+#include <calib/problems/laser/laser_residual.h>
+#include <calib/solvers/laser/censi_closed_form.h>
 
 #include <memory>
 #include <vector>
 
-#include <calib/core/laser/laser_simulator.h>
-#include <calib/problems/laser/laser_residual.h>
-#include <calib/solvers/laser/censi_closed_form.h>
+#include "benchmarks/bench_sections.h"
 
 namespace calib::bench {
 namespace {

@@ -1,5 +1,3 @@
-#include "benchmarks/bench_speed.h"
-
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/core/laser/laser_simulator.h>
 #include <calib/solvers/laser/calibrate_laser.h>
@@ -11,7 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "benchmarks/bench_micro.h"
+#include "benchmarks/bench_sections.h"
 
 namespace calib::bench {
 namespace {

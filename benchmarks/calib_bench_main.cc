@@ -9,13 +9,11 @@
 #include <set>
 #include <sstream>
 
-#include "benchmarks/bench_bearing.h"
 #include "benchmarks/bench_common.h"
 #include "benchmarks/bench_diagnose.h"
 #include "benchmarks/bench_laser_monte_carlo.h"
-#include "benchmarks/bench_laser_real.h"
 #include "benchmarks/bench_plot.h"
-#include "benchmarks/bench_speed.h"
+#include "benchmarks/bench_sections.h"
 
 DEFINE_bool(quick, false, "Reduced grid and seeds (CI smoke test, under a minute)");
 DEFINE_string(json, "", "Write every result to this JSON file (and the RMSE plot beside it)");

@@ -1,6 +1,5 @@
 // `calib calibrate`: reads the log(s), calibrates, writes the contract's OUT.json and prints the
 // summary.
-#include <calib/core/bearing/bearing_log_io.h>
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
 #include <calib/solvers/laser/calibrate_laser.h>
@@ -45,18 +44,11 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
 
 int CalibrateBearingLog(const CalibrateOptions& flags) {
   const Stopwatch clock;
-  SilenceCeresWarnings();
-  const StatusOr<RobustLoss> loss = ParseLossFlags(flags.loss, flags.loss_scale);
-  if (!loss.ok()) return Fail(loss.message());
-  const StatusOr<BearingLog> log = ReadBearingLog(flags.input);
-  if (!log.ok()) return Fail(log.message());
-
-  BearingCalibrationOptions options;
-  options.adjustment.loss = *loss;
-  options.adjustment.loss_scale = flags.loss_scale;
-  options.adjustment.num_threads = 2;
-  options.progress = ProgressPrinter(clock, flags.quiet);
-  const StatusOr<BearingCalibrationResult> result = CalibrateBearing(*log, options);
+  StatusOr<BearingInput> input = ReadBearingInput(flags);
+  if (!input.ok()) return Fail(input.message());
+  input->calibration.progress = ProgressPrinter(clock, flags.quiet);
+  const StatusOr<BearingCalibrationResult> result =
+      CalibrateBearing(input->log, input->calibration);
   if (!result.ok()) return Fail(result.message());
 
   nlohmann::ordered_json json = BearingResultJson(*result, flags.input, flags.loss);

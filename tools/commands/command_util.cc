@@ -1,3 +1,4 @@
+#include <calib/core/bearing/bearing_log_io.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/report/bearing_report.h>
 #include <calib/tools/report/json_output.h>
@@ -54,7 +55,17 @@ std::string DefaultPlotsDir(const std::string& output) {
   return (path.parent_path() / (path.stem().string() + "_plots")).string();
 }
 
-void SilenceCeresWarnings() { FLAGS_minloglevel = std::max(FLAGS_minloglevel, 2); }
+StatusOr<BearingInput> ReadBearingInput(const CalibrateOptions& flags) {
+  // Ceres warns on stderr when a covariance is rank deficient; the commands say why themselves.
+  FLAGS_minloglevel = std::max(FLAGS_minloglevel, 2);
+  BearingInput input;
+  CALIB_ASSIGN_OR_RETURN(input.calibration.adjustment.loss,
+                         ParseLossFlags(flags.loss, flags.loss_scale));
+  input.calibration.adjustment.loss_scale = flags.loss_scale;
+  input.calibration.adjustment.num_threads = 2;
+  CALIB_ASSIGN_OR_RETURN(input.log, ReadBearingLog(flags.input));
+  return input;
+}
 
 int WriteReport(const std::string& output, const nlohmann::ordered_json& json,
                 const std::string& summary, bool quiet) {

@@ -1,14 +1,18 @@
 #ifndef CALIB_TOOLS_COMMANDS_COMMAND_UTIL_H_
 #define CALIB_TOOLS_COMMANDS_COMMAND_UTIL_H_
 
+#include <calib/core/bearing/bearing_log.h>
 #include <calib/core/status.h>
+#include <calib/solvers/bearing/calibrate_bearing.h>
 #include <calib/solvers/common/robust_loss.h>
+#include <calib/tools/commands/commands.h>
 
 #include <chrono>
 #include <cstdio>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 // What every command does the same way: fail, time, report progress, check the loss flags,
@@ -43,15 +47,30 @@ bool IsBearingInput(const std::string& input, const std::string& format);
 // The robust loss named by --loss, with --loss_scale checked positive.
 StatusOr<RobustLoss> ParseLossFlags(const std::string& loss, double loss_scale);
 
+// The value named `name` among `choices`, or "unknown --FLAG 'NAME' (EXPECTED)".
+template <typename Enum>
+StatusOr<Enum> ParseChoice(const std::string& flag, const std::string& name,
+                           const std::vector<std::pair<std::string, Enum>>& choices,
+                           const std::string& expected) {
+  for (const auto& [choice, value] : choices) {
+    if (choice == name) return value;
+  }
+  return Status::InvalidInput("unknown --" + flag + " '" + name + "' (" + expected + ")");
+}
+
+// What both bearing commands start with: Ceres' warnings silenced, the loss flags checked, the
+// log read, and the calibration options from the flags (loss, two threads; no progress).
+struct BearingInput {
+  BearingLog log;
+  BearingCalibrationOptions calibration;
+};
+StatusOr<BearingInput> ReadBearingInput(const CalibrateOptions& flags);
+
 // "a.json,b.json" → {"a.json", "b.json"} (empty parts dropped).
 std::vector<std::string> SplitCommas(const std::string& text);
 
 // The default plot folder: OUT_plots beside OUT.json.
 std::string DefaultPlotsDir(const std::string& output);
-
-// Ceres warns on stderr when a covariance is rank deficient; the bearing commands say why
-// themselves.
-void SilenceCeresWarnings();
 
 // The end of every command: writes `json` to `output`, then prints `summary` on stdout unless
 // `quiet`. Returns the exit status.

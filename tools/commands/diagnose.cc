@@ -1,6 +1,5 @@
 // `calib diagnose`: reads one log, searches for the physics the base model leaves out, writes the
 // contract's OUT.json, the plots and the summary.
-#include <calib/core/bearing/bearing_log_io.h>
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
@@ -37,11 +36,11 @@ int WriteDiagnosis(const DiagnoseOptions& flags, const Diagnosis& diagnosis, con
 }
 
 StatusOr<BoundaryChoice> ParseBoundarySpeeds(const std::string& name) {
-  if (name == "auto") return BoundaryChoice::kAuto;
-  if (name == "piecewise") return BoundaryChoice::kPiecewiseConstant;
-  if (name == "smooth") return BoundaryChoice::kSmooth;
-  return Status::InvalidInput("unknown --boundary_speeds '" + name +
-                              "' (auto, piecewise or smooth)");
+  return ParseChoice<BoundaryChoice>("boundary_speeds", name,
+                                     {{"auto", BoundaryChoice::kAuto},
+                                      {"piecewise", BoundaryChoice::kPiecewiseConstant},
+                                      {"smooth", BoundaryChoice::kSmooth}},
+                                     "auto, piecewise or smooth");
 }
 
 // The laser diagnosis' options from the flags (without the progress callback).
@@ -85,19 +84,14 @@ int DiagnoseLaserLog(const DiagnoseOptions& flags) {
 // --boundary_speeds concern the laser's.
 int DiagnoseBearingLog(const DiagnoseOptions& flags) {
   const Stopwatch clock;
-  SilenceCeresWarnings();
-  const StatusOr<RobustLoss> loss = ParseLossFlags(flags.loss, flags.loss_scale);
-  if (!loss.ok()) return Fail(loss.message());
-  const StatusOr<BearingLog> log = ReadBearingLog(flags.input);
-  if (!log.ok()) return Fail(log.message());
+  StatusOr<BearingInput> input = ReadBearingInput(flags);
+  if (!input.ok()) return Fail(input.message());
   BearingDiagnosisOptions options;
-  options.calibration.adjustment.loss = *loss;
-  options.calibration.adjustment.loss_scale = flags.loss_scale;
-  options.calibration.adjustment.num_threads = 2;
+  options.calibration = input->calibration;
   options.alpha = flags.family_alpha;
   options.cv_blocks = flags.cv_blocks;
   options.progress = ProgressPrinter(clock, flags.quiet);
-  const StatusOr<BearingDiagnosis> diagnosis = DiagnoseBearing(*log, options);
+  const StatusOr<BearingDiagnosis> diagnosis = DiagnoseBearing(input->log, options);
   if (!diagnosis.ok()) return Fail(diagnosis.message());
   return WriteDiagnosis<BearingDiagnosis>(
       flags, *diagnosis, clock,

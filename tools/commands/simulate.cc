@@ -10,12 +10,12 @@ namespace calib::cli {
 namespace {
 
 StatusOr<LaserTrajectory> ParseTrajectory(const std::string& name) {
-  if (name == "rich") return LaserTrajectory::kRich;
-  if (name == "straight") return LaserTrajectory::kStraight;
-  if (name == "rotation") return LaserTrajectory::kPureRotation;
-  if (name == "arc") return LaserTrajectory::kConstantArc;
-  return Status::InvalidInput("unknown --trajectory '" + name +
-                              "' (rich, straight, rotation, arc)");
+  return ParseChoice<LaserTrajectory>("trajectory", name,
+                                      {{"rich", LaserTrajectory::kRich},
+                                       {"straight", LaserTrajectory::kStraight},
+                                       {"rotation", LaserTrajectory::kPureRotation},
+                                       {"arc", LaserTrajectory::kConstantArc}},
+                                      "rich, straight, rotation, arc");
 }
 
 StatusOr<LaserSimOptions> SimulatorOptions(const SimulateOptions& flags) {
