@@ -27,10 +27,7 @@ bool IsBearingLogDirectory(const std::string& path) {
 
 nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
                                          const std::string& input, const std::string& loss) {
-  nlohmann::ordered_json out;
-  out["problem"] = "bearing";
-  out["input"] = input;
-  out["units"] = "m, rad; eta and xi in 1/m";
+  nlohmann::ordered_json out = ReportHeader("bearing", input, "m, rad; eta and xi in 1/m");
   const BearingMetricVector metric = ToVector(result.metric);
   const BearingMetricVector seed_metric = ToVector(result.seed_metric);
   out["estimate"] =

@@ -21,6 +21,15 @@ Status WriteJsonFile(const std::string& path, const nlohmann::json& json, int in
   return WriteTextFile(path, json.dump(indent) + "\n");
 }
 
+nlohmann::ordered_json ReportHeader(const std::string& problem, const std::string& input,
+                                    const std::string& units) {
+  nlohmann::ordered_json json;
+  json["problem"] = problem;
+  json["input"] = input;
+  json["units"] = units;
+  return json;
+}
+
 nlohmann::ordered_json MatrixJson(const Eigen::MatrixXd& matrix) {
   nlohmann::ordered_json rows = nlohmann::ordered_json::array();
   for (int i = 0; i < matrix.rows(); ++i) {

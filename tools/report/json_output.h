@@ -19,6 +19,10 @@ Status WriteTextFile(const std::string& path, const std::string& text);
 Status WriteJsonFile(const std::string& path, const nlohmann::ordered_json& json, int indent = 2);
 Status WriteJsonFile(const std::string& path, const nlohmann::json& json, int indent = 2);
 
+// The members every report starts with: {"problem", "input", "units"}.
+nlohmann::ordered_json ReportHeader(const std::string& problem, const std::string& input,
+                                    const std::string& units);
+
 // A matrix as an array of rows.
 nlohmann::ordered_json MatrixJson(const Eigen::MatrixXd& matrix);
 

@@ -21,10 +21,7 @@ const char* DisplayUnit(int param) { return param == 5 ? "deg" : "mm"; }
 
 nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
                                        const std::string& input, const std::string& loss) {
-  nlohmann::ordered_json out;
-  out["problem"] = "laser";
-  out["input"] = input;
-  out["units"] = "m, rad";
+  nlohmann::ordered_json out = ReportHeader("laser", input, "m, rad");
   out["estimate"] = ParamObject(result.estimate.ToVector());
   out["stddev"] = ParamObject(result.stddev);
   out["closed_form"] = ParamObject(result.closed_form.calibration.ToVector());

@@ -62,5 +62,11 @@ TEST_F(JsonOutputTest, MatrixIsAnArrayOfRows) {
   EXPECT_EQ(MatrixJson(Eigen::MatrixXd(0, 0)).dump(), "[]");
 }
 
+TEST_F(JsonOutputTest, ReportHeaderComesFirst) {
+  nlohmann::ordered_json json = ReportHeader("laser", "a.tuple", "m, rad");
+  json["estimate"] = 1;
+  EXPECT_EQ(json.dump(), R"({"problem":"laser","input":"a.tuple","units":"m, rad","estimate":1})");
+}
+
 }  // namespace
 }  // namespace calib
