@@ -65,62 +65,65 @@ struct CaseSummary {
   std::vector<double> cf_seconds, ba_seconds;
 };
 
+// One simulated log: the bound, the closed form (when asked) and the bundle adjustment.
+SeedOutcome RunSeed(const BearingSimOptions& sim, bool closed_form) {
+  SeedOutcome out;
+  BearingSimTruth truth;
+  const BearingLog log = SimulateBearingLog(sim, &truth);
+  const BearingParamVector t = ToVector(truth.params);
+  const BearingMetricVector tm = ToVector(truth.metric);
+  const StatusOr<BearingBound> bound = BearingCramerRaoBound(
+      log, truth, BearingNoise{sim.bearing_noise_rad, std::max(sim.encoder_noise_k, 1e-9)});
+  if (bound.ok()) {
+    out.bound_ok = true;
+    for (int i = 0; i < kNumBearingParams; ++i) {
+      out.bound_var(i) = std::pow(bound->stddev(i) * Scale(i, t(i)), 2);
+    }
+    if (bound->has_metric) {
+      for (int i = 0; i < kNumBearingMetricParams; ++i) {
+        out.bound_metric_var(i) = std::pow(bound->metric_stddev(i) * Scale(i, tm(i)), 2);
+      }
+    }
+  }
+  if (closed_form) {
+    const Stopwatch watch;
+    const StatusOr<MartinelliEstimate> cf = MartinelliClosedForm(log);
+    out.cf_seconds = watch.Seconds();
+    if (cf.ok()) {
+      out.cf_ok = true;
+      const BearingParamVector e = ToVector(cf->params);
+      for (int i = 0; i < kNumBearingParams; ++i) out.cf_err(i) = Error(i, e(i), t(i));
+    }
+  }
+  const Stopwatch watch;
+  const StatusOr<BearingCalibrationResult> ba = CalibrateBearing(log);
+  out.ba_seconds = watch.Seconds();
+  if (!ba.ok()) {
+    out.failure = ba.message();
+    return out;
+  }
+  out.ba_ok = true;
+  out.ba_seed_method = ba->seed_method;
+  const BearingParamVector e = ToVector(ba->estimate);
+  for (int i = 0; i < kNumBearingParams; ++i) {
+    out.ba_err(i) = Error(i, e(i), t(i));
+    out.ba_sigma(i) = ba->stddev(i) * Scale(i, t(i));
+  }
+  if (ba->has_metric) {
+    out.metric = true;
+    const BearingMetricVector em = ToVector(ba->metric);
+    for (int i = 0; i < kNumBearingMetricParams; ++i) {
+      out.ba_metric_err(i) = Error(i, em(i), tm(i));
+      out.ba_metric_sigma(i) = ba->metric_stddev(i) * Scale(i, tm(i));
+    }
+  }
+  return out;
+}
+
 CaseSummary RunCase(const std::function<BearingSimOptions(int)>& make, int seeds,
                     bool closed_form) {
   std::vector<SeedOutcome> outcomes(seeds);
-  ParallelFor(seeds, kThreads, [&](int s) {
-    SeedOutcome& out = outcomes[s];
-    const BearingSimOptions sim = make(s);
-    BearingSimTruth truth;
-    const BearingLog log = SimulateBearingLog(sim, &truth);
-    const BearingParamVector t = ToVector(truth.params);
-    const BearingMetricVector tm = ToVector(truth.metric);
-    const StatusOr<BearingBound> bound = BearingCramerRaoBound(
-        log, truth, BearingNoise{sim.bearing_noise_rad, std::max(sim.encoder_noise_k, 1e-9)});
-    if (bound.ok()) {
-      out.bound_ok = true;
-      for (int i = 0; i < kNumBearingParams; ++i) {
-        out.bound_var(i) = std::pow(bound->stddev(i) * Scale(i, t(i)), 2);
-      }
-      if (bound->has_metric) {
-        for (int i = 0; i < kNumBearingMetricParams; ++i) {
-          out.bound_metric_var(i) = std::pow(bound->metric_stddev(i) * Scale(i, tm(i)), 2);
-        }
-      }
-    }
-    if (closed_form) {
-      const Stopwatch watch;
-      const StatusOr<MartinelliEstimate> cf = MartinelliClosedForm(log);
-      out.cf_seconds = watch.Seconds();
-      if (cf.ok()) {
-        out.cf_ok = true;
-        const BearingParamVector e = ToVector(cf->params);
-        for (int i = 0; i < kNumBearingParams; ++i) out.cf_err(i) = Error(i, e(i), t(i));
-      }
-    }
-    const Stopwatch watch;
-    const StatusOr<BearingCalibrationResult> ba = CalibrateBearing(log);
-    out.ba_seconds = watch.Seconds();
-    if (!ba.ok()) {
-      out.failure = ba.message();
-      return;
-    }
-    out.ba_ok = true;
-    out.ba_seed_method = ba->seed_method;
-    const BearingParamVector e = ToVector(ba->estimate);
-    for (int i = 0; i < kNumBearingParams; ++i) {
-      out.ba_err(i) = Error(i, e(i), t(i));
-      out.ba_sigma(i) = ba->stddev(i) * Scale(i, t(i));
-    }
-    if (ba->has_metric) {
-      out.metric = true;
-      const BearingMetricVector em = ToVector(ba->metric);
-      for (int i = 0; i < kNumBearingMetricParams; ++i) {
-        out.ba_metric_err(i) = Error(i, em(i), tm(i));
-        out.ba_metric_sigma(i) = ba->metric_stddev(i) * Scale(i, tm(i));
-      }
-    }
-  });
+  ParallelFor(seeds, kThreads, [&](int s) { outcomes[s] = RunSeed(make(s), closed_form); });
   CaseSummary sum;
   sum.logs = seeds;
   for (const SeedOutcome& out : outcomes) {
@@ -248,34 +251,8 @@ BearingRunSpec NonCircularRun(double nu) {
   return spec;
 }
 
-}  // namespace
-
-nlohmann::ordered_json RunBearingBench(const BenchConfig& config) {
-  const bool quick = config.quick;
-  const int seeds = config.seeds > 0 ? config.seeds : (quick ? 10 : 100);
-  const Stopwatch total;
-  nlohmann::ordered_json root;
-  const BearingSimOptions base;
-  const std::string setting = Format(
-      "Martinelli §8.1: r = %.2f m, B = %.2f m, ν = %.2f m/s, encoders %.0f Hz with K = %.3g "
-      "m^½, bearings %.0f Hz; truth φ = 0°, ρ = 0.3 m, ψ = 90°, δR = 0.99, δL = 1.006, δB = 0.97 "
-      "(Table 2); runs q = 0.9, 0, −1, one loop each, all starting at (0, −1 m, 0): the landmark "
-      "1 m to the left of the robot (inside the q = 0.9 circle of radius 5.4 m, outside the q = 0 "
-      "and q = −1 circles of radius 0.24 m and 0.004 m); initial distance given for run 1",
-      base.wheel_radius_m, base.wheelbase_m, base.right_wheel_speed_mps, base.encoder_rate_hz,
-      base.encoder_noise_k, base.bearing_rate_hz);
-  std::printf("\n=== Bearing-only calibration: Martinelli's Table 4 experiment ===\n%s.\n",
-              setting.c_str());
-  std::printf(
-      "Errors in Table 4's units (deg for φ, ψ; relative for η, δ, ξ). CF: Martinelli's closed "
-      "form; BA: bundle adjustment with σβ and K estimated from each log. CRLB: bearing noise "
-      "and the encoder noise propagated to the poses (BearingCramerRaoBound). 'bound |e|' is the "
-      "mean absolute error of an efficient unbiased estimator, √(2/π)·√CRLB; 'bound |mean|' the "
-      "same for the mean of %d signed errors. 'BA sd/CRLB' is the median ratio of the reported "
-      "sigma to √CRLB; 'BA in 3sd' the share of logs within 3 reported sigmas.\n",
-      seeds);
-  root["setting"] = setting;
-  root["seeds"] = seeds;
+// Table 4: `seeds` logs per σβ ∈ {1°, 3°, 5°} in the §8.1 setting, against the bound.
+nlohmann::ordered_json Table4Section(int seeds) {
   nlohmann::ordered_json table4 = nlohmann::ordered_json::array();
   for (int s = 0; s < 3; ++s) {
     const double sigma = kSigmasDeg[s] / kDeg;
@@ -303,9 +280,11 @@ nlohmann::ordered_json RunBearingBench(const BenchConfig& config) {
                 as_mean.c_str());
     table4.push_back(j);
   }
-  root["table4"] = table4;
+  return table4;
+}
 
-  // A trajectory the closed form cannot handle.
+// A trajectory the closed form cannot handle.
+nlohmann::ordered_json NonCircularSection(int seeds) {
   std::printf(
       "\n=== Non-circular trajectory ===\nOne 300 s run, vR = ν, vL = q(t)·ν with q(t) = 0.5 + "
       "0.45·sin(2πt/80 s), starting 1.5 m from the landmark (to its left); the robot stays "
@@ -327,9 +306,50 @@ nlohmann::ordered_json RunBearingBench(const BenchConfig& config) {
     j["sigma_beta_deg"] = sigma_deg;
     non_circular.push_back(j);
   }
-  root["non_circular"] = non_circular;
+  return non_circular;
+}
 
-  // Is there a geometry in which the bound allows Table 4?
+// One geometry of the scan: the §8.1 runs at σβ = 1° with encoder noise k, starting with the
+// landmark at distance d0 in direction alpha (deg), and the ratios of the bound's mean absolute
+// error to Table 4.
+struct ScanPoint {
+  std::vector<std::string> row;
+  nlohmann::ordered_json json;
+  double worst = 0.0;
+};
+
+StatusOr<ScanPoint> ScanGeometry(double k, double d0, double alpha) {
+  BearingSimOptions o;
+  o.bearing_noise_rad = 1.0 / kDeg;
+  o.encoder_noise_k = k;
+  const double a = alpha / kDeg;
+  o.runs = MartinelliRuns(Pose2d(-d0 * std::cos(a), -d0 * std::sin(a), 0.0));
+  BearingSimTruth truth;
+  const BearingLog log = SimulateBearingLog(o, &truth);
+  CALIB_ASSIGN_OR_RETURN(
+      const BearingBound bound,
+      BearingCramerRaoBound(log, truth, BearingNoise{o.bearing_noise_rad, std::max(k, 1e-9)}));
+  const BearingParamVector t = ToVector(truth.params);
+  ScanPoint point;
+  point.row = {Format("%.0e", k), G(d0), G(alpha)};
+  nlohmann::ordered_json ratios;
+  for (int i = 0; i < kNumBearingParams; ++i) {
+    const double r = std::sqrt(2.0 / M_PI) * bound.stddev(i) * Scale(i, t(i)) / kTable4[0][i];
+    point.worst = std::max(point.worst, r);
+    ratios[kBearingParamNames[i]] = r;
+    point.row.push_back(Format("%.2f", r));
+  }
+  point.row.push_back(Format("%.2f", point.worst));
+  point.json = {{"encoder_k", k},
+                {"start_distance_m", d0},
+                {"landmark_direction_deg", alpha},
+                {"bound_mean_abs_over_table4", ratios},
+                {"max", point.worst}};
+  return point;
+}
+
+// Is there a geometry in which the bound allows Table 4?
+nlohmann::ordered_json GeometryScanSection(bool quick) {
   std::printf(
       "\n=== Geometry scan: can any start explain Table 4? ===\nσβ = 1° (where Table 4 is "
       "closest to the bound), the three §8.1 runs all starting with the landmark at distance D0 "
@@ -348,36 +368,12 @@ nlohmann::ordered_json RunBearingBench(const BenchConfig& config) {
   for (double k : {1e-3, 0.0}) {
     for (double d0 : distances) {
       for (double alpha : angles) {
-        BearingSimOptions o;
-        o.bearing_noise_rad = 1.0 / kDeg;
-        o.encoder_noise_k = k;
-        const double a = alpha / kDeg;
-        o.runs = MartinelliRuns(Pose2d(-d0 * std::cos(a), -d0 * std::sin(a), 0.0));
-        BearingSimTruth truth;
-        const BearingLog log = SimulateBearingLog(o, &truth);
-        const StatusOr<BearingBound> bound =
-            BearingCramerRaoBound(log, truth, BearingNoise{o.bearing_noise_rad, std::max(k, 1e-9)});
-        if (!bound.ok()) continue;
-        const BearingParamVector t = ToVector(truth.params);
-        std::vector<std::string> row = {Format("%.0e", k), G(d0), G(alpha)};
-        double worst = 0.0;
-        nlohmann::ordered_json ratios;
-        for (int i = 0; i < kNumBearingParams; ++i) {
-          const double r =
-              std::sqrt(2.0 / M_PI) * bound->stddev(i) * Scale(i, t(i)) / kTable4[0][i];
-          worst = std::max(worst, r);
-          ratios[kBearingParamNames[i]] = r;
-          row.push_back(Format("%.2f", r));
-        }
-        row.push_back(Format("%.2f", worst));
-        if (d0 == 1.0 || d0 == distances.front() || alpha == 90.0) scan.AddRow(row);
-        scan_json.push_back({{"encoder_k", k},
-                             {"start_distance_m", d0},
-                             {"landmark_direction_deg", alpha},
-                             {"bound_mean_abs_over_table4", ratios},
-                             {"max", worst}});
-        if (worst < best) {
-          best = worst;
+        const StatusOr<ScanPoint> point = ScanGeometry(k, d0, alpha);
+        if (!point.ok()) continue;
+        if (d0 == 1.0 || d0 == distances.front() || alpha == 90.0) scan.AddRow(point->row);
+        scan_json.push_back(point->json);
+        if (point->worst < best) {
+          best = point->worst;
           best_text = Format("K = %.0e, D0 = %.2f m, α = %.0f°", k, d0, alpha);
         }
       }
@@ -397,7 +393,39 @@ nlohmann::ordered_json RunBearingBench(const BenchConfig& config) {
         "absolute errors.\n",
         best_text.c_str(), best);
   }
-  root["geometry_scan"] = {{"rows", scan_json}, {"best", best_text}, {"best_max_ratio", best}};
+  return {{"rows", scan_json}, {"best", best_text}, {"best_max_ratio", best}};
+}
+
+}  // namespace
+
+nlohmann::ordered_json RunBearingBench(const BenchConfig& config) {
+  const int seeds = config.seeds > 0 ? config.seeds : (config.quick ? 10 : 100);
+  const Stopwatch total;
+  nlohmann::ordered_json root;
+  const BearingSimOptions base;
+  const std::string setting = Format(
+      "Martinelli §8.1: r = %.2f m, B = %.2f m, ν = %.2f m/s, encoders %.0f Hz with K = %.3g "
+      "m^½, bearings %.0f Hz; truth φ = 0°, ρ = 0.3 m, ψ = 90°, δR = 0.99, δL = 1.006, δB = 0.97 "
+      "(Table 2); runs q = 0.9, 0, −1, one loop each, all starting at (0, −1 m, 0): the landmark "
+      "1 m to the left of the robot (inside the q = 0.9 circle of radius 5.4 m, outside the q = 0 "
+      "and q = −1 circles of radius 0.24 m and 0.004 m); initial distance given for run 1",
+      base.wheel_radius_m, base.wheelbase_m, base.right_wheel_speed_mps, base.encoder_rate_hz,
+      base.encoder_noise_k, base.bearing_rate_hz);
+  std::printf("\n=== Bearing-only calibration: Martinelli's Table 4 experiment ===\n%s.\n",
+              setting.c_str());
+  std::printf(
+      "Errors in Table 4's units (deg for φ, ψ; relative for η, δ, ξ). CF: Martinelli's closed "
+      "form; BA: bundle adjustment with σβ and K estimated from each log. CRLB: bearing noise "
+      "and the encoder noise propagated to the poses (BearingCramerRaoBound). 'bound |e|' is the "
+      "mean absolute error of an efficient unbiased estimator, √(2/π)·√CRLB; 'bound |mean|' the "
+      "same for the mean of %d signed errors. 'BA sd/CRLB' is the median ratio of the reported "
+      "sigma to √CRLB; 'BA in 3sd' the share of logs within 3 reported sigmas.\n",
+      seeds);
+  root["setting"] = setting;
+  root["seeds"] = seeds;
+  root["table4"] = Table4Section(seeds);
+  root["non_circular"] = NonCircularSection(seeds);
+  root["geometry_scan"] = GeometryScanSection(config.quick);
   root["seconds"] = total.Seconds();
   return root;
 }

@@ -63,6 +63,103 @@ std::string Cell(int p, double v, const char* format = "%.3f") {
   return Format(format, ToDisplay(p, v, /*degrees=*/true));
 }
 
+// The three disjoint subsets X_0, X_1, X_2 of a set: the largest difference between two of
+// them, absolute and in units of their combined sigma.
+struct SubsetSpread {
+  std::vector<LaserCalibrationResult> results;
+  LaserParamVector spread = LaserParamVector::Zero();
+  LaserParamVector spread_sigmas = LaserParamVector::Zero();
+};
+
+SubsetSpread CalibrateSubsets(const fs::path& dir, const std::string& set) {
+  SubsetSpread out;
+  for (int k = 0; k < 3; ++k) {
+    const auto subset = CalibrateFile(dir / (set + "_" + std::to_string(k) + ".tuple"));
+    if (!subset.ok()) {
+      std::printf("%s_%d: FAILED: %s\n", set.c_str(), k, subset.message().c_str());
+      continue;
+    }
+    out.results.push_back(*subset);
+  }
+  for (size_t a = 0; a < out.results.size(); ++a) {
+    for (size_t b = a + 1; b < out.results.size(); ++b) {
+      LaserParamVector d = out.results[a].estimate.ToVector() - out.results[b].estimate.ToVector();
+      d(5) = WrapAngle(d(5));
+      const LaserParamVector s =
+          (out.results[a].stddev.cwiseAbs2() + out.results[b].stddev.cwiseAbs2()).cwiseSqrt();
+      out.spread = out.spread.cwiseMax(d.cwiseAbs());
+      out.spread_sigmas = out.spread_sigmas.cwiseMax(d.cwiseAbs().cwiseQuotient(s));
+    }
+  }
+  return out;
+}
+
+// One recording: ours (timed) against the published result, and the subsets' spread.
+nlohmann::json RunSet(const fs::path& dir, const std::string& set, const Published& pub,
+                      bool over_radii, int timing_runs) {
+  std::vector<double> seconds;
+  StatusOr<LaserCalibrationResult> ours = Status::Internal("not run");
+  for (int run = 0; run < timing_runs; ++run) {
+    const Stopwatch watch;
+    ours = CalibrateFile(dir / (set + ".tuple"));
+    seconds.push_back(watch.Seconds());
+    if (!ours.ok()) break;
+  }
+  if (!ours.ok()) {
+    std::printf("\n%s: FAILED: %s\n", set.c_str(), ours.message().c_str());
+    return {{"error", ours.message()}};
+  }
+  const SubsetSpread subsets = CalibrateSubsets(dir, set);
+  LaserParamVector pub_sigma_radius = pub.covariance.diagonal().cwiseSqrt();
+  if (!over_radii) pub_sigma_radius.head<2>() /= 2;  // σ_r = σ_d / 2.
+  const LaserParamVector value = ours->estimate.ToVector();
+  LaserParamVector diff = value - pub.value;
+  diff(5) = WrapAngle(diff(5));
+
+  std::printf(
+      "\n%s: %d intervals, %d inliers, scan noise (%.3g mm, %.3g mm, %.3g mrad), "
+      "%d iterations; wall time %.3f s (median of %d; min %.3f, max %.3f)\n",
+      set.c_str(), ours->samples, ours->inliers, ours->noise_sigma[0](0) * 1e3,
+      ours->noise_sigma[0](1) * 1e3, ours->noise_sigma[0](2) * 1e3, ours->iterations,
+      Median(seconds), timing_runs, *std::min_element(seconds.begin(), seconds.end()),
+      *std::max_element(seconds.begin(), seconds.end()));
+  TextTable table({"param", "ours", "published", "diff", "pub sigma", "diff/pub sigma", "our sigma",
+                   "diff/our sigma", "subset spread", "spread/sigma"});
+  for (int p = 0; p < kNumLaserParams; ++p) {
+    table.AddRow({kLaserParamNames[p], Cell(p, value(p), "%.4f"), Cell(p, pub.value(p), "%.4f"),
+                  Cell(p, diff(p), "%+.4f"), Cell(p, pub_sigma_radius(p), "%.4f"),
+                  Format("%+.2f", diff(p) / pub_sigma_radius(p)), Cell(p, ours->stddev(p), "%.4f"),
+                  Format("%+.2f", diff(p) / ours->stddev(p)), Cell(p, subsets.spread(p), "%.4f"),
+                  Format("%.2f", subsets.spread_sigmas(p))});
+  }
+  table.Print();
+  nlohmann::json subsets_json;
+  for (const auto& s : subsets.results) {
+    subsets_json.push_back({{"estimate", ToJson(s.estimate.ToVector())},
+                            {"stddev", ToJson(s.stddev)},
+                            {"inliers", s.inliers},
+                            {"samples", s.samples}});
+  }
+  return {{"intervals", ours->samples},
+          {"inliers", ours->inliers},
+          {"iterations", ours->iterations},
+          {"noise_sigma", ToJson(ours->noise_sigma[0])},
+          {"estimate", ToJson(value)},
+          {"stddev", ToJson(ours->stddev)},
+          {"closed_form", ToJson(ours->closed_form.calibration.ToVector())},
+          {"published", ToJson(pub.value)},
+          {"published_sigma", ToJson(pub_sigma_radius)},
+          {"difference", ToJson(diff)},
+          {"difference_over_published_sigma",
+           ToJson(LaserParamVector(diff.cwiseQuotient(pub_sigma_radius)))},
+          {"difference_over_our_sigma", ToJson(LaserParamVector(diff.cwiseQuotient(ours->stddev)))},
+          {"subsets", subsets_json},
+          {"subset_max_difference", ToJson(subsets.spread)},
+          {"subset_max_difference_over_sigma", ToJson(subsets.spread_sigmas)},
+          {"seconds", seconds},
+          {"median_seconds", Median(seconds)}};
+}
+
 }  // namespace
 
 nlohmann::json RunLaserReal(const BenchConfig& config) {
@@ -104,90 +201,7 @@ nlohmann::json RunLaserReal(const BenchConfig& config) {
   std::printf("  => published sigmas taken as over %s\n", over_radii ? "radii" : "diameters");
 
   for (size_t i = 0; i < sets.size(); ++i) {
-    const std::string& set = sets[i];
-    std::vector<double> seconds;
-    StatusOr<LaserCalibrationResult> ours = Status::Internal("not run");
-    for (int run = 0; run < timing_runs; ++run) {
-      const Stopwatch watch;
-      ours = CalibrateFile(dir / (set + ".tuple"));
-      seconds.push_back(watch.Seconds());
-      if (!ours.ok()) break;
-    }
-    if (!ours.ok()) {
-      std::printf("\n%s: FAILED: %s\n", set.c_str(), ours.message().c_str());
-      out["sets"][set] = {{"error", ours.message()}};
-      continue;
-    }
-    std::vector<LaserCalibrationResult> subsets;
-    for (int k = 0; k < 3; ++k) {
-      const auto subset = CalibrateFile(dir / (set + "_" + std::to_string(k) + ".tuple"));
-      if (!subset.ok()) {
-        std::printf("%s_%d: FAILED: %s\n", set.c_str(), k, subset.message().c_str());
-        continue;
-      }
-      subsets.push_back(*subset);
-    }
-    LaserParamVector spread = LaserParamVector::Zero(), spread_sigmas = LaserParamVector::Zero();
-    for (size_t a = 0; a < subsets.size(); ++a) {
-      for (size_t b = a + 1; b < subsets.size(); ++b) {
-        LaserParamVector d = subsets[a].estimate.ToVector() - subsets[b].estimate.ToVector();
-        d(5) = WrapAngle(d(5));
-        const LaserParamVector s =
-            (subsets[a].stddev.cwiseAbs2() + subsets[b].stddev.cwiseAbs2()).cwiseSqrt();
-        spread = spread.cwiseMax(d.cwiseAbs());
-        spread_sigmas = spread_sigmas.cwiseMax(d.cwiseAbs().cwiseQuotient(s));
-      }
-    }
-    const Published& pub = published[i];
-    LaserParamVector pub_sigma_radius = pub.covariance.diagonal().cwiseSqrt();
-    if (!over_radii) pub_sigma_radius.head<2>() /= 2;  // σ_r = σ_d / 2.
-    const LaserParamVector value = ours->estimate.ToVector();
-    LaserParamVector diff = value - pub.value;
-    diff(5) = WrapAngle(diff(5));
-
-    std::printf(
-        "\n%s: %d intervals, %d inliers, scan noise (%.3g mm, %.3g mm, %.3g mrad), "
-        "%d iterations; wall time %.3f s (median of %d; min %.3f, max %.3f)\n",
-        set.c_str(), ours->samples, ours->inliers, ours->noise_sigma[0](0) * 1e3,
-        ours->noise_sigma[0](1) * 1e3, ours->noise_sigma[0](2) * 1e3, ours->iterations,
-        Median(seconds), timing_runs, *std::min_element(seconds.begin(), seconds.end()),
-        *std::max_element(seconds.begin(), seconds.end()));
-    TextTable table({"param", "ours", "published", "diff", "pub sigma", "diff/pub sigma",
-                     "our sigma", "diff/our sigma", "subset spread", "spread/sigma"});
-    for (int p = 0; p < kNumLaserParams; ++p) {
-      table.AddRow({kLaserParamNames[p], Cell(p, value(p), "%.4f"), Cell(p, pub.value(p), "%.4f"),
-                    Cell(p, diff(p), "%+.4f"), Cell(p, pub_sigma_radius(p), "%.4f"),
-                    Format("%+.2f", diff(p) / pub_sigma_radius(p)),
-                    Cell(p, ours->stddev(p), "%.4f"), Format("%+.2f", diff(p) / ours->stddev(p)),
-                    Cell(p, spread(p), "%.4f"), Format("%.2f", spread_sigmas(p))});
-    }
-    table.Print();
-    nlohmann::json subsets_json;
-    for (const auto& s : subsets) {
-      subsets_json.push_back({{"estimate", ToJson(s.estimate.ToVector())},
-                              {"stddev", ToJson(s.stddev)},
-                              {"inliers", s.inliers},
-                              {"samples", s.samples}});
-    }
-    out["sets"][set] = {
-        {"intervals", ours->samples},
-        {"inliers", ours->inliers},
-        {"iterations", ours->iterations},
-        {"noise_sigma", ToJson(ours->noise_sigma[0])},
-        {"estimate", ToJson(value)},
-        {"stddev", ToJson(ours->stddev)},
-        {"closed_form", ToJson(ours->closed_form.calibration.ToVector())},
-        {"published", ToJson(pub.value)},
-        {"published_sigma", ToJson(pub_sigma_radius)},
-        {"difference", ToJson(diff)},
-        {"difference_over_published_sigma",
-         ToJson(LaserParamVector(diff.cwiseQuotient(pub_sigma_radius)))},
-        {"difference_over_our_sigma", ToJson(LaserParamVector(diff.cwiseQuotient(ours->stddev)))},
-        {"subsets", subsets_json},
-        {"subset_max_difference", ToJson(spread)},
-        {"subset_max_difference_over_sigma", ToJson(spread_sigmas)},
-        {"seconds", seconds},
-        {"median_seconds", Median(seconds)}};
+    out["sets"][sets[i]] = RunSet(dir, sets[i], published[i], over_radii, timing_runs);
   }
   return out;
 }
