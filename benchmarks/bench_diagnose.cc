@@ -599,7 +599,7 @@ nlohmann::ordered_json RunBearingTimeOffset(bool quick, int seeds) {
     out.adopted = f.significant;
     out.value = f.value;
     out.stddev = f.stddev;
-    out.one_step_stddev = f.one_step_stddev;
+    out.one_step_stddev = f.one_step_stddev(0);
     return out;
   };
   const BearingDiagnosisOptions defaults;

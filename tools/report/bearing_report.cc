@@ -1,5 +1,5 @@
+#include <calib/core/bearing/bearing_log_io.h>
 #include <calib/tools/report/bearing_report.h>
-
 #include <glog/logging.h>
 
 #include <algorithm>
@@ -8,8 +8,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-
-#include <calib/core/bearing/bearing_log_io.h>
 
 namespace calib {
 namespace {

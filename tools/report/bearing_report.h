@@ -1,10 +1,10 @@
 #ifndef CALIB_TOOLS_REPORT_BEARING_REPORT_H_
 #define CALIB_TOOLS_REPORT_BEARING_REPORT_H_
 
+#include <calib/solvers/bearing/calibrate_bearing.h>
+
 #include <nlohmann/json.hpp>
 #include <string>
-
-#include <calib/solvers/bearing/calibrate_bearing.h>
 
 namespace calib {
 

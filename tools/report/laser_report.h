@@ -1,10 +1,10 @@
 #ifndef CALIB_TOOLS_REPORT_LASER_REPORT_H_
 #define CALIB_TOOLS_REPORT_LASER_REPORT_H_
 
+#include <calib/solvers/laser/calibrate_laser.h>
+
 #include <nlohmann/json.hpp>
 #include <string>
-
-#include <calib/solvers/laser/calibrate_laser.h>
 
 namespace calib {
 

@@ -312,7 +312,7 @@ TEST(BearingDiagnosisData, CirclesHideAnOffsetWithoutBias) {
   ASSERT_TRUE(d.ok()) << d.message();
   const BearingFinding& f = d->findings[0];
   EXPECT_GT(f.concealment, 0.9);
-  EXPECT_GT(f.one_step_stddev, 0.05);  // Far less information than on the varying run.
+  EXPECT_GT(f.one_step_stddev(0), 0.05);  // Far less information than on the varying run.
   const BearingParamVector base = ToVector(d->baseline.estimate), t = ToVector(truth.params);
   for (int i = 0; i < kNumBearingParams; ++i) {
     EXPECT_LE(std::abs(ParamError(i, base(i), t(i))), 3.0 * d->baseline.stddev(i));
