@@ -342,18 +342,13 @@ DiagnosisReport ToDiagnosisReport(const BearingDiagnosis& diagnosis) {
   DiagnosisReport out;
   out.problem = "bearing";
   out.units = "m, rad, s; eta and xi in 1/m";
-  out.samples = diagnosis.samples;
   out.steps = 1;
-  out.seconds = diagnosis.seconds;
+  CopyCommonFields(diagnosis, &out);
   out.params.assign(BearingParamTable().begin(), BearingParamTable().begin() + kNumBearingParams);
   out.baseline = ToFitReport(diagnosis.baseline);
   out.final_fit = ToFitReport(diagnosis.final_fit);
   for (const BearingFinding& f : diagnosis.findings) out.findings.push_back({f, {}});
   out.adopted = diagnosis.adopted;
-  out.covariates = diagnosis.covariates;
-  out.structure_before = diagnosis.structure_before;
-  out.structure_after = diagnosis.structure_after;
-  out.notes = diagnosis.notes;
   return out;
 }
 

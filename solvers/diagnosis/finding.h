@@ -131,6 +131,18 @@ struct DiagnosisReport {
   std::vector<std::string> notes;
 };
 
+// The fields every problem's diagnosis result has in common (D: LaserDiagnosis,
+// BearingDiagnosis), copied into `out`.
+template <typename D>
+void CopyCommonFields(const D& diagnosis, DiagnosisReport* out) {
+  out->samples = diagnosis.samples;
+  out->seconds = diagnosis.seconds;
+  out->covariates = diagnosis.covariates;
+  out->structure_before = diagnosis.structure_before;
+  out->structure_after = diagnosis.structure_after;
+  out->notes = diagnosis.notes;
+}
+
 }  // namespace calib
 
 #endif  // CALIB_SOLVERS_DIAGNOSIS_FINDING_H_

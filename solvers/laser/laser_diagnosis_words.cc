@@ -232,9 +232,8 @@ DiagnosisReport ToDiagnosisReport(const LaserDiagnosis& diagnosis) {
   DiagnosisReport out;
   out.problem = "laser";
   out.units = "m, rad, s";
-  out.samples = diagnosis.samples;
   out.steps = diagnosis.steps;
-  out.seconds = diagnosis.seconds;
+  CopyCommonFields(diagnosis, &out);
   out.params.assign(std::begin(kLaserParams), std::end(kLaserParams));
   out.baseline = ToFitReport(diagnosis.baseline);
   out.final_fit = ToFitReport(diagnosis.final_fit);
@@ -249,10 +248,6 @@ DiagnosisReport ToDiagnosisReport(const LaserDiagnosis& diagnosis) {
     out.findings.push_back(reported);
   }
   for (LaserEffect effect : diagnosis.adopted) out.adopted.push_back(LaserEffectName(effect));
-  out.covariates = diagnosis.covariates;
-  out.structure_before = diagnosis.structure_before;
-  out.structure_after = diagnosis.structure_after;
-  out.notes = diagnosis.notes;
   return out;
 }
 
