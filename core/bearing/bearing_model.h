@@ -1,16 +1,16 @@
 #ifndef CALIB_CORE_BEARING_BEARING_MODEL_H_
 #define CALIB_CORE_BEARING_BEARING_MODEL_H_
 
+#include <calib/core/bearing/bearing_log.h>
+#include <calib/core/diff_drive.h>
+#include <calib/core/se2.h>
+
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <complex>
 #include <utility>
 #include <vector>
-
-#include <calib/core/bearing/bearing_log.h>
-#include <calib/core/diff_drive.h>
-#include <calib/core/se2.h>
 
 // The bearing-only model of Martinelli, "Using the Distribution Theory to Simultaneously
 // Calibrate the Sensors of a Mobile Robot", INRIA RR-6796, 2009 (seed 001). Equation numbers
@@ -375,6 +375,18 @@ void InterpolateWheelAngles(const std::vector<EncoderSample>& odometry, const Ti
                        [](const Time& t, const EncoderSample& sample) { return t < sample.t_s; });
   const EncoderSample& b = *after;
   const EncoderSample& a = *(after - 1);
+  if (t_s == a.t_s) {
+    // On a sample the angles have a kink: their derivative (a Jet's d/dt) is the mean of the two
+    // steps' speeds, not the later step's alone (the same value, a symmetric sensitivity).
+    const EncoderSample& z = *(after - 2);
+    const double left_speed = 0.5 * ((b.left_rad - a.left_rad) / (b.t_s - a.t_s) +
+                                     (a.left_rad - z.left_rad) / (a.t_s - z.t_s));
+    const double right_speed = 0.5 * ((b.right_rad - a.right_rad) / (b.t_s - a.t_s) +
+                                      (a.right_rad - z.right_rad) / (a.t_s - z.t_s));
+    *left_rad = a.left_rad + (t_s - a.t_s) * left_speed;
+    *right_rad = a.right_rad + (t_s - a.t_s) * right_speed;
+    return;
+  }
   const Time f = (t_s - a.t_s) / (b.t_s - a.t_s);
   *left_rad = a.left_rad + f * (b.left_rad - a.left_rad);
   *right_rad = a.right_rad + f * (b.right_rad - a.right_rad);

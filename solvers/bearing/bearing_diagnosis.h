@@ -1,16 +1,17 @@
 #ifndef CALIB_SOLVERS_BEARING_BEARING_DIAGNOSIS_H_
 #define CALIB_SOLVERS_BEARING_BEARING_DIAGNOSIS_H_
 
-#include <functional>
-#include <string>
-#include <vector>
-
 #include <calib/core/bearing/bearing_log.h>
 #include <calib/core/bearing/bearing_model.h>
 #include <calib/core/status.h>
 #include <calib/solvers/bearing/bearing_bundle_adjustment.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
+#include <calib/solvers/diagnosis/finding.h>
 #include <calib/solvers/stats/change_point.h>
+
+#include <functional>
+#include <string>
+#include <vector>
 
 // `calib diagnose` for the bearing problem (Martinelli): is the bearings' clock offset from the
 // encoders' (the contract's `time_offset`), hidden in biased calibration parameters?
@@ -41,6 +42,7 @@ struct BearingDiagnosisOptions {
   double alpha = 0.01;                    // Family-wise error rate (one candidate: its level).
   int cv_blocks = 5;                      // Contiguous held-out blocks per run.
   int covariate_bins = 10;
+  double change_trim = 0.05;  // Changes of the mean residual searched in [trim, 1 − trim].
   std::function<void(const std::string&)> progress;
 };
 
@@ -59,36 +61,16 @@ struct BearingFitReport {
   int inliers = 0;
 };
 
-struct BearingFinding {
-  std::string name = "time_offset";
-  std::string unit = "s";
-  bool significant = false;     // Adopted: score test, likelihood ratio and held-out agree.
-  bool confounded = false;      // The poses and calibration absorb it entirely.
-  bool no_information = false;  // The log's motion does not excite it.
-  std::vector<std::string> confounded_with;
-  double statistic = 0.0;
-  int dof = 1;
-  double p_value = 1.0;
-  double holm_level = 0.0;
-  bool score_significant = false;
-  double concealment = 0.0;  // Share of its information the base unknowns absorb.
-  double one_step = 0.0, one_step_stddev = 0.0;
-  BearingParamVector absorbed = BearingParamVector::Zero();  // One-step θ(without) − θ(with).
-  bool refitted = false;
-  double lr_statistic = 0.0;
-  double lr_p_value = 1.0;
-  double delta_aic = 0.0, delta_bic = 0.0;
-  double heldout_cost_before = 0.0, heldout_cost_after = 0.0;
-  double heldout_rms_before = 0.0, heldout_rms_after = 0.0;  // Held-out inlier errors (rad).
-  double heldout_reduction = 0.0;
-  double value = 0.0;  // τ (s): the final fit's when adopted, else the one-step estimate.
-  double stddev = 0.0;
-  // Adopted: the refit's change θ(without) − θ(with) and in the baseline's sigmas.
-  BearingParamVector base_shift = BearingParamVector::Zero();
-  BearingParamVector base_shift_sigmas = BearingParamVector::Zero();
-  MismatchLocation location;
-  CovariateProfile profile;  // Residuals against location.covariate, before and after.
-  std::string statement;
+// The bearing problem's one candidate, time_offset, as a shared Finding (vectors over
+// BearingParamTable(); one_step and one_step_stddev of size 1, in s).
+struct BearingFinding : Finding {
+  BearingFinding() {
+    name = "time_offset";
+    unit = "s";
+    dof = 1;
+    one_step = one_step_stddev = Eigen::VectorXd::Zero(1);
+    absorbed = base_shift = base_shift_sigmas = BearingParamVector::Zero();
+  }
 };
 
 struct BearingDiagnosis {
@@ -112,6 +94,13 @@ const std::vector<std::string>& BearingCovariateNames();
 
 StatusOr<BearingDiagnosis> DiagnoseBearing(const BearingLog& log,
                                            const BearingDiagnosisOptions& options = {});
+
+// Names, units and angle flags of the bearing parameters (phi, psi, eta, delta, xi), in the order
+// of BearingParamVector, then of the metric set's rho, delta_r, delta_l, delta_b.
+const ParamTable& BearingParamTable();
+
+// The diagnosis in the problem-independent form of the reports (tools/report/diagnosis_json.h).
+DiagnosisReport ToDiagnosisReport(const BearingDiagnosis& diagnosis);
 
 }  // namespace calib
 

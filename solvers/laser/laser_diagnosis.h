@@ -1,18 +1,19 @@
 #ifndef CALIB_SOLVERS_LASER_LASER_DIAGNOSIS_H_
 #define CALIB_SOLVERS_LASER_LASER_DIAGNOSIS_H_
 
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/laser/laser_params.h>
+#include <calib/core/status.h>
+#include <calib/problems/laser/laser_effect_residual.h>
+#include <calib/solvers/diagnosis/finding.h>
+#include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/solvers/laser/laser_effect_fit.h>
+#include <calib/solvers/stats/change_point.h>
+
 #include <Eigen/Core>
 #include <functional>
 #include <string>
 #include <vector>
-
-#include <calib/core/laser/laser_params.h>
-#include <calib/core/laser/laser_log.h>
-#include <calib/core/status.h>
-#include <calib/problems/laser/laser_effect_residual.h>
-#include <calib/solvers/laser/calibrate_laser.h>
-#include <calib/solvers/stats/change_point.h>
-#include <calib/solvers/laser/laser_effect_fit.h>
 
 // `calib diagnose` for the laser problem: finds physics that the base model leaves out, even
 // when the base parameters absorb it and the residuals look like noise.
@@ -75,52 +76,12 @@ struct LaserFitReport {
   int inliers = 0;
 };
 
-struct LaserFinding {
+// A finding of the laser problem: the shared Finding (vectors over kLaserParams) with its effect
+// and, for wheel_radius_change, the radii after the change.
+struct LaserFinding : Finding {
   LaserEffect effect = LaserEffect::kTimeOffset;
-  std::string name;
-  std::string unit;             // Of value.
-  bool significant = false;     // Adopted: score test (Holm), likelihood ratio and held-out agree.
-  bool confounded = false;      // The data cannot separate it from the base parameters.
-  bool no_information = false;  // The log's motion does not excite it at all.
-  std::vector<std::string> confounded_with;
-  int step = 0;  // Forward step of the last score test (1-based).
-  // Score test (at the step it was last tested, given the effects adopted before).
-  double statistic = 0.0;
-  int dof = 0;
-  double p_value = 1.0;
-  double holm_level = 0.0;  // The level its p-value was compared with (0: not reached).
-  bool score_significant = false;
-  double concealment = 0.0;  // Share absorbable by the parameters already fitted.
-  Eigen::VectorXd one_step;  // One-step γ̂ and its standard deviation.
-  Eigen::VectorXd one_step_stddev;
-  LaserParamVector absorbed = LaserParamVector::Zero();  // B·γ̂: what the fit without it took on.
-  // Confirmation (when it was refitted).
-  bool refitted = false;
-  double lr_statistic = 0.0;
-  double lr_p_value = 1.0;
-  double delta_aic = 0.0;  // AIC(without) − AIC(with): positive favours the effect.
-  double delta_bic = 0.0;
-  double heldout_cost_before = 0.0;  // Σ over held-out blocks of ½Σρ.
-  double heldout_cost_after = 0.0;
-  double heldout_rms_before = 0.0;  // Whitened RMS of held-out inliers.
-  double heldout_rms_after = 0.0;
-  double heldout_reduction = 0.0;  // 1 − cost_after/cost_before.
-  // The value in the contract's meaning (γ; the change time for wheel_radius_change) and its
-  // standard deviation: from the final fit when adopted, else the one-step estimate.
-  double value = 0.0;
-  double stddev = 0.0;
   double r_l_after = 0.0, r_r_after = 0.0;  // wheel_radius_change.
   double r_l_after_stddev = 0.0, r_r_after_stddev = 0.0;
-  // Adopted: the refit's change of the base parameters, θ(without) − θ(with), in m/rad and in
-  // units of the baseline's standard deviations.
-  LaserParamVector base_shift = LaserParamVector::Zero();
-  // Adopted: the share of the fitted effect's signal (‖·‖² of its residual change at the final
-  // parameters) that the base fit had hidden by shifting its parameters.
-  double absorbed_share = 0.0;
-  LaserParamVector base_shift_sigmas = LaserParamVector::Zero();
-  MismatchLocation location;
-  CovariateProfile profile;  // Adopted: residuals against location.covariate.
-  std::string statement;
 };
 
 struct LaserDiagnosis {
@@ -143,6 +104,9 @@ const std::vector<std::string>& LaserCovariateNames();
 
 StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& intervals,
                                        const LaserDiagnosisOptions& options = {});
+
+// The diagnosis in the problem-independent form of the reports (tools/report/diagnosis_json.h).
+DiagnosisReport ToDiagnosisReport(const LaserDiagnosis& diagnosis);
 
 }  // namespace calib
 

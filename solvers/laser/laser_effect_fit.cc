@@ -1,13 +1,11 @@
+#include <calib/problems/positive_manifold.h>
 #include <calib/solvers/laser/laser_effect_fit.h>
-
+#include <calib/solvers/stats/score_test.h>
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-
-#include <calib/problems/positive_manifold.h>
-#include <calib/solvers/stats/score_test.h>
 
 namespace calib {
 
@@ -93,7 +91,7 @@ StatusOr<LaserEffectFit> FitLaserEffects(const LaserEffectData& data, const Lase
                              loss, odometry, mounting, gamma.data());
     ++residuals;
   }
-  if (residuals == 0) return Status::Error("no intervals to fit");
+  if (residuals == 0) return Status::InvalidInput("no intervals to fit");
 
   ceres::Solver::Options options;
   options.minimizer_type = ceres::TRUST_REGION;
@@ -110,10 +108,11 @@ StatusOr<LaserEffectFit> FitLaserEffects(const LaserEffectData& data, const Lase
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
   if (summary.termination_type == ceres::FAILURE || !std::isfinite(summary.final_cost)) {
-    return Status::Error("the refit with effects failed: " + summary.message);
+    return Status::NotConverged("the refit with effects failed: " + summary.message);
   }
   if (!(odometry[0] > 0.0 && odometry[1] > 0.0 && odometry[2] > 0.0)) {
-    return Status::Error("the refit with effects drove a radius or the wheelbase non-positive");
+    return Status::NotConverged(
+        "the refit with effects drove a radius or the wheelbase non-positive");
   }
   LaserEffectFit fit;
   fit.model = model;
@@ -185,7 +184,7 @@ StatusOr<Eigen::MatrixXd> LaserEffectCovariance(const LaserEffectEvaluation& eva
                                                 const std::vector<int>& columns, int hac_lag) {
   const Eigen::Index n = evaluation.residual.rows();
   const Eigen::Index p = static_cast<Eigen::Index>(columns.size());
-  if (3 * n <= p) return Status::Error("too few intervals for a covariance");
+  if (3 * n <= p) return Status::NotObservable("too few intervals for a covariance");
   const Eigen::MatrixXd j = SelectColumns(evaluation.jacobian, columns);
   Eigen::MatrixXd bread = Eigen::MatrixXd::Zero(p, p);
   Eigen::MatrixXd scores(n, p);
@@ -199,7 +198,7 @@ StatusOr<Eigen::MatrixXd> LaserEffectCovariance(const LaserEffectEvaluation& eva
   }
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(bread);
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
-    return Status::Error(
+    return Status::NotObservable(
         "the information matrix is singular: the log does not determine the "
         "parameters with these effects");
   }

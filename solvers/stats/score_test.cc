@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace calib {
 namespace {
@@ -60,8 +61,9 @@ Eigen::MatrixXd LongRunCovariance(const Eigen::MatrixXd& contributions, int lag)
   return v;
 }
 
-ScoreTester::ScoreTester(const RobustFitBlocks& blocks, int hac_lag)
-    : blocks_(blocks), hac_lag_(std::max(hac_lag, 0)) {
+ScoreTester::ScoreTester(RobustFitBlocks blocks_in, int hac_lag)
+    : blocks_(std::move(blocks_in)), hac_lag_(std::max(hac_lag, 0)) {
+  const RobustFitBlocks& blocks = blocks_;
   const size_t n = blocks.size();
   const Eigen::Index p = blocks.jacobian.cols();
   const Eigen::Index d = blocks.dimension();

@@ -61,10 +61,12 @@ struct ScoreTestResult {
 //   I_eff = A_γγ − A_θγᵀB.
 class ScoreTester {
  public:
-  ScoreTester(const RobustFitBlocks& blocks, int hac_lag);
+  // Owns its blocks (move them in when the caller no longer needs them).
+  ScoreTester(RobustFitBlocks blocks, int hac_lag);
 
   // False when A_θθ is singular (the fit itself is not determined).
   bool ok() const { return ok_; }
+  const RobustFitBlocks& blocks() const { return blocks_; }
 
   // `sensitivity`: dN × m, rows d·k.. = S_k.
   ScoreTestResult Test(const Eigen::MatrixXd& sensitivity) const;
@@ -83,7 +85,7 @@ class ScoreTester {
   ChangeScan ScanChange(const Eigen::MatrixXd& sensitivity, double trim) const;
 
  private:
-  const RobustFitBlocks& blocks_;
+  RobustFitBlocks blocks_;
   int hac_lag_;
   bool ok_ = false;
   Eigen::LDLT<Eigen::MatrixXd> a_nuisance_;  // A_θθ.

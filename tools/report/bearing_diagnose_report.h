@@ -1,12 +1,12 @@
 #ifndef CALIB_TOOLS_REPORT_BEARING_DIAGNOSE_REPORT_H_
 #define CALIB_TOOLS_REPORT_BEARING_DIAGNOSE_REPORT_H_
 
+#include <calib/core/status.h>
+#include <calib/solvers/bearing/bearing_diagnosis.h>
+
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <calib/core/status.h>
-#include <calib/solvers/bearing/bearing_diagnosis.h>
 
 // `calib diagnose` on a bearing log directory: the contract's OUT.json, the plots and the
 // summary.

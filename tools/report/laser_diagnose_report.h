@@ -1,18 +1,20 @@
 #ifndef CALIB_TOOLS_REPORT_LASER_DIAGNOSE_REPORT_H_
 #define CALIB_TOOLS_REPORT_LASER_DIAGNOSE_REPORT_H_
 
+#include <calib/solvers/laser/laser_diagnosis.h>
+#include <calib/tools/report/diagnosis_json.h>
+#include <calib/tools/report/svg_plot.h>
+
 #include <nlohmann/json.hpp>
 #include <string>
-#include <utility>
 #include <vector>
-
-#include <calib/solvers/laser/laser_diagnosis.h>
 
 // `calib diagnose`: the contract's OUT.json, the before/after residual plots (SVG) and the
 // human summary for a laser diagnosis.
 namespace calib {
 
-// The contract's {"baseline", "findings", "final"} plus the evidence behind each finding.
+// The contract's {"baseline", "findings", "final"} plus the evidence behind each finding:
+// DiagnosisJson(ToDiagnosisReport(diagnosis), input, plots) (tools/report/diagnosis_json.h).
 // `plots` are the files written (relative or absolute, as given).
 nlohmann::ordered_json LaserDiagnosisJson(const LaserDiagnosis& diagnosis, const std::string& input,
                                           const std::vector<std::string>& plots);
@@ -26,23 +28,16 @@ std::string LaserDiagnosisSummary(const LaserDiagnosis& diagnosis, const std::st
 StatusOr<std::vector<std::string>> WriteLaserDiagnosisPlots(const LaserDiagnosis& diagnosis,
                                                             const std::string& directory);
 
-// The JSON of a covariate profile and of a residual structure (shared by both problems).
-nlohmann::ordered_json ProfileJson(const CovariateProfile& profile);
-nlohmann::ordered_json StructureJson(const ResidualStructure& structure);
+// The plots of any diagnosis: each adopted finding's profile ("<effect>_vs_<covariate>.svg",
+// titled "<effect>: <residuals> against <covariate>") and the residual profiles worth drawing:
+// against time and against the covariates that the residual structure before or after names
+// ("residuals_vs_<covariate>.svg").
+PlotFiles DiagnosisPlots(const DiagnosisReport& report, const std::string& residuals);
 
-// SVG files to write, (file name, content), and the writer (creates the folder; returns the
-// paths written, or an error naming the file that failed).
-using PlotFiles = std::vector<std::pair<std::string, std::string>>;
-StatusOr<std::vector<std::string>> WritePlotFiles(const std::string& directory,
-                                                  const PlotFiles& files);
-// Adds the residual profiles worth drawing: against time and against the covariates that the
-// residual structure before or after names ("residuals_vs_<covariate>.svg").
-void AddResidualPlots(const std::vector<CovariateProfile>& covariates,
-                      const ResidualStructure& before, const ResidualStructure& after,
-                      const std::string& title, PlotFiles* files);
-
-// The SVG of one covariate profile (exposed for tests).
-std::string CovariateProfileSvg(const CovariateProfile& profile, const std::string& title);
+// The summary's lines shared by both problems: the findings with their tags, the residual
+// structure before and after, the notes and the plots.
+std::string FindingsSummary(const DiagnosisReport& report);
+std::string ResidualsSummary(const DiagnosisReport& report, const std::vector<std::string>& plots);
 
 }  // namespace calib
 
