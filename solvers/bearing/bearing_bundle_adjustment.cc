@@ -1,15 +1,15 @@
+#include <calib/core/whitening.h>
+#include <calib/problems/bearing/bearing_odometry_residual.h>
+#include <calib/problems/bearing/bearing_time_offset_residual.h>
+#include <calib/problems/positive_manifold.h>
 #include <calib/solvers/bearing/bearing_bundle_adjustment.h>
+#include <calib/solvers/bearing/martinelli_closed_form.h>
+#include <calib/solvers/common/solver_options.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <utility>
-
-#include <calib/core/whitening.h>
-#include <calib/problems/bearing/bearing_odometry_residual.h>
-#include <calib/problems/bearing/bearing_time_offset_residual.h>
-#include <calib/problems/positive_manifold.h>
-#include <calib/solvers/bearing/martinelli_closed_form.h>
 
 namespace calib {
 namespace {
@@ -227,23 +227,8 @@ void BearingProblem::Relinearize() {
 }
 
 Status BearingProblem::Solve(ceres::Solver::Summary* summary) {
-  ceres::Solver::Options solver_options;
-  solver_options.minimizer_type = ceres::TRUST_REGION;
-  solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  solver_options.max_num_iterations = options_.max_iterations;
-  // The stiff odometry chains make the normal equations badly conditioned: a small initial
-  // radius damps the soft modes (the runs' shapes) for a dozen iterations. Start near
-  // Gauss–Newton; LM still backs off when a step fails.
-  solver_options.initial_trust_region_radius = options_.initial_trust_region_radius;
-  solver_options.max_trust_region_radius = 1e16;
-  solver_options.num_threads = options_.num_threads;
-  // The cost is about half a unit per bearing; stop once an iteration gains far less than a
-  // hundredth of a sigma's worth.
-  solver_options.function_tolerance = 1e-10;
-  solver_options.gradient_tolerance = 1e-14;
-  solver_options.parameter_tolerance = 1e-12;
-  solver_options.logging_type = ceres::SILENT;
+  const ceres::Solver::Options solver_options = MakeSolverOptions(BearingAdjustmentSettings(
+      options_.max_iterations, options_.num_threads, options_.initial_trust_region_radius));
   ceres::Solver::Summary local_summary;
   ceres::Solve(solver_options, problem_.get(), &local_summary);
   if (summary != nullptr) *summary = local_summary;
@@ -342,28 +327,22 @@ std::vector<BearingProblem::BearingTermInfo> BearingProblem::BearingTerms() cons
 }
 
 void BearingProblem::LossConstants(double* likelihood_ratio_scale, double* lambda) const {
-  double weight = 0.0, meat = 0.0, bread = 0.0;
+  LossCorrectionSums sums;
   for (const BearingTermInfo& info : BearingTerms()) {
-    const double s = info.residual * info.residual;
-    weight += info.rho1;
-    meat += info.rho1 * info.rho1 * s;
-    bread += info.rho1 + 2.0 * info.rho2 * s;
+    sums.Add(info.residual * info.residual, LossDerivatives{info.rho1, info.rho2});
   }
-  *likelihood_ratio_scale =
-      bread > 0.0 && meat > 0.0 ? meat / bread / bearing_redundancy_fraction_ : 1.0;
-  *lambda = weight > 0.0 && bread > 0.0 ? bread / weight : 1.0;
+  *likelihood_ratio_scale = sums.bread > 0.0 && sums.meat > 0.0
+                                ? sums.meat / sums.bread / bearing_redundancy_fraction_
+                                : 1.0;
+  *lambda = sums.weight > 0.0 && sums.bread > 0.0 ? sums.bread / sums.weight : 1.0;
 }
 
-StatusOr<BearingProblem::TimeOffsetCovariance> BearingProblem::CovarianceWithTimeOffset() const {
+StatusOr<BearingProblem::TimeOffsetCovariance> BearingProblem::CovarianceWithTimeOffset() {
   if (!options_.model_time_offset) return Status::Error("the problem does not model τ");
   // A constant block has no covariance: free τ while Ceres computes it.
   const bool was_constant = problem_->IsParameterBlockConstant(time_offset_);
   if (was_constant) problem_->SetParameterBlockVariable(time_offset_);
-  ceres::Covariance::Options covariance_options;
-  covariance_options.num_threads = options_.num_threads;
-  covariance_options.algorithm_type = ceres::SPARSE_QR;
-  covariance_options.apply_loss_function = true;
-  ceres::Covariance covariance(covariance_options);
+  ceres::Covariance covariance(MakeCovarianceOptions(options_.num_threads));
   std::vector<std::pair<const double*, const double*>> pairs = {
       {calibration_, calibration_}, {calibration_, time_offset_}, {time_offset_, time_offset_}};
   const bool computed = covariance.Compute(pairs, problem_.get());
@@ -378,38 +357,22 @@ StatusOr<BearingProblem::TimeOffsetCovariance> BearingProblem::CovarianceWithTim
   return out;
 }
 
-double BearingProblem::LossWeight(double s) const {
-  if (!loss_) return 1.0;
-  double rho[3];
-  loss_->Evaluate(s, rho);
-  return rho[1];
-}
+double BearingProblem::LossWeight(double s) const { return EvaluateLoss(loss_.get(), s).rho1; }
 
-void BearingProblem::UpdateKappa() const {
-  double sum_weight = 0.0, sum_meat = 0.0, sum_bread = 0.0;
+double BearingProblem::LossCorrection() const {
+  LossCorrectionSums sums;
   for (const BearingTerm& term : bearings_) {
     const double e = BearingError(term.run, term.node, term.bearing) * inverse_bearing_sigma_;
-    const double s = e * e;
-    double rho[3] = {s, 1.0, 0.0};
-    if (loss_) loss_->Evaluate(s, rho);
-    sum_weight += rho[1];
-    sum_meat += rho[1] * rho[1] * s;
-    sum_bread += rho[1] + 2.0 * rho[2] * s;
+    sums.Add(e * e, loss_.get());
   }
-  const double n = static_cast<double>(std::max<size_t>(1, bearings_.size()));
-  covariance_scale_ = sum_bread > 0.0
-                          ? (sum_weight / n) * (sum_meat / n) /
-                                ((sum_bread / n) * (sum_bread / n)) / bearing_redundancy_fraction_
-                          : 1.0;
+  // n/Σ(1 − h) passed as 1/fraction.
+  const StatusOr<double> kappa = calib::LossCorrection(sums, 1.0, bearing_redundancy_fraction_);
+  return kappa.ok() ? *kappa : 1.0;
 }
 
 StatusOr<Eigen::MatrixXd> BearingProblem::BlockCovariance(
     const std::vector<const double*>& blocks) const {
-  ceres::Covariance::Options covariance_options;
-  covariance_options.num_threads = options_.num_threads;
-  covariance_options.algorithm_type = ceres::SPARSE_QR;
-  covariance_options.apply_loss_function = true;
-  ceres::Covariance covariance(covariance_options);
+  ceres::Covariance covariance(MakeCovarianceOptions(options_.num_threads));
   std::vector<std::pair<const double*, const double*>> pairs;
   int size = 0;
   for (size_t a = 0; a < blocks.size(); ++a) {
@@ -424,12 +387,17 @@ StatusOr<Eigen::MatrixXd> BearingProblem::BlockCovariance(
   return Eigen::MatrixXd(joint);
 }
 
+StatusOr<CorrectedCovariance<BearingParamMatrix>> BearingProblem::CalibrationCovariance(
+    bool loss_correction) const {
+  CALIB_ASSIGN_OR_RETURN(const Eigen::MatrixXd cov, BlockCovariance({calibration_}));
+  const double kappa = loss_correction ? LossCorrection() : 1.0;
+  return CorrectedCovariance<BearingParamMatrix>{BearingParamMatrix(cov * kappa), kappa};
+}
+
 StatusOr<BearingParamMatrix> BearingProblem::Covariance(bool loss_correction) const {
-  StatusOr<Eigen::MatrixXd> cov = BlockCovariance({calibration_});
-  if (!cov.ok()) return cov.status();
-  covariance_scale_ = 1.0;
-  if (loss_correction) UpdateKappa();
-  return BearingParamMatrix(*cov * covariance_scale_);
+  CALIB_ASSIGN_OR_RETURN(const CorrectedCovariance<BearingParamMatrix> cov,
+                         CalibrationCovariance(loss_correction));
+  return cov.covariance;
 }
 
 double BearingProblem::StartDistance(size_t run_index) const {
@@ -437,12 +405,12 @@ double BearingProblem::StartDistance(size_t run_index) const {
   return std::hypot(p[0], p[1]);
 }
 
-StatusOr<BearingScaledWithDistanceMatrix> BearingProblem::CovarianceWithStartDistance(
-    size_t run_index, bool loss_correction) const {
-  StatusOr<Eigen::MatrixXd> cov = BlockCovariance({calibration_, Node(run_index, 0)});
-  if (!cov.ok()) return cov.status();
-  covariance_scale_ = 1.0;
-  if (loss_correction) UpdateKappa();
+StatusOr<CorrectedCovariance<BearingScaledWithDistanceMatrix>>
+BearingProblem::CalibrationCovarianceWithStartDistance(size_t run_index,
+                                                       bool loss_correction) const {
+  CALIB_ASSIGN_OR_RETURN(const Eigen::MatrixXd cov,
+                         BlockCovariance({calibration_, Node(run_index, 0)}));
+  const double kappa = loss_correction ? LossCorrection() : 1.0;
   const double* p = Node(run_index, 0);
   const double d = std::hypot(p[0], p[1]);
   Eigen::Matrix<double, kNumBearingParams + 1, kNumBearingParams + 3> g =
@@ -450,16 +418,20 @@ StatusOr<BearingScaledWithDistanceMatrix> BearingProblem::CovarianceWithStartDis
   g.topLeftCorner<kNumBearingParams, kNumBearingParams>().setIdentity();
   g(kNumBearingParams, kNumBearingParams) = p[0] / d;
   g(kNumBearingParams, kNumBearingParams + 1) = p[1] / d;
-  return BearingScaledWithDistanceMatrix(g * *cov * g.transpose() * covariance_scale_);
+  return CorrectedCovariance<BearingScaledWithDistanceMatrix>{
+      BearingScaledWithDistanceMatrix(g * cov * g.transpose() * kappa), kappa};
+}
+
+StatusOr<BearingScaledWithDistanceMatrix> BearingProblem::CovarianceWithStartDistance(
+    size_t run_index, bool loss_correction) const {
+  CALIB_ASSIGN_OR_RETURN(const CorrectedCovariance<BearingScaledWithDistanceMatrix> cov,
+                         CalibrationCovarianceWithStartDistance(run_index, loss_correction));
+  return cov.covariance;
 }
 
 StatusOr<BearingVarianceComponents> BearingProblem::VarianceComponents(
-    const std::vector<std::vector<bool>>& inlier) const {
-  ceres::Covariance::Options covariance_options;
-  covariance_options.num_threads = options_.num_threads;
-  covariance_options.algorithm_type = ceres::SPARSE_QR;
-  covariance_options.apply_loss_function = true;
-  ceres::Covariance covariance(covariance_options);
+    const std::vector<std::vector<bool>>& inlier) {
+  ceres::Covariance covariance(MakeCovarianceOptions(options_.num_threads));
   std::vector<std::pair<const double*, const double*>> pairs;
   pairs.emplace_back(calibration_, calibration_);
   const bool with_offset = options_.model_time_offset && !options_.fix_time_offset;

@@ -1,3 +1,4 @@
+#include <calib/core/bearing/bearing_log_io.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
 
 #include <Eigen/Dense>
@@ -9,8 +10,6 @@
 #include <optional>
 #include <sstream>
 #include <utility>
-
-#include <calib/core/bearing/bearing_log_io.h>
 
 namespace calib {
 namespace {
@@ -669,22 +668,23 @@ StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
   result.covariance_encoder_k = reported.encoder_k;
   if (log.meta.initial_distance) {
     const InitialDistance& d = *log.meta.initial_distance;
-    StatusOr<BearingScaledWithDistanceMatrix> joint =
-        problem->CovarianceWithStartDistance(distance_run);
-    if (!joint.ok()) return Status::Error(source + ": " + joint.message());
-    result.covariance = joint->topLeftCorner<kNumBearingParams, kNumBearingParams>();
+    StatusOr<CorrectedCovariance<BearingScaledWithDistanceMatrix>> joint =
+        problem->CalibrationCovarianceWithStartDistance(distance_run);
+    if (!joint.ok()) return joint.status().Prefixed(source + ": ");
+    result.covariance = joint->covariance.topLeftCorner<kNumBearingParams, kNumBearingParams>();
     Eigen::Matrix<double, kNumBearingMetricParams, kNumBearingParams + 1> jacobian;
     result.metric = BearingMetricFromScaled(result.estimate, problem->StartDistance(distance_run),
                                             d.meters, log.meta.wheelbase_m, &jacobian);
-    result.metric_covariance = jacobian * *joint * jacobian.transpose();
+    result.metric_covariance = jacobian * joint->covariance * jacobian.transpose();
     result.metric_stddev = result.metric_covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
     result.has_metric = true;
+    result.covariance_scale = joint->kappa;
   } else {
-    StatusOr<BearingParamMatrix> cov = problem->Covariance();
-    if (!cov.ok()) return Status::Error(source + ": " + cov.message());
-    result.covariance = *cov;
+    StatusOr<CorrectedCovariance<BearingParamMatrix>> cov = problem->CalibrationCovariance();
+    if (!cov.ok()) return cov.status().Prefixed(source + ": ");
+    result.covariance = cov->covariance;
+    result.covariance_scale = cov->kappa;
   }
-  result.covariance_scale = problem->covariance_scale();
   result.stddev = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
   result.covariance_seconds = Seconds(clock);
 

@@ -186,11 +186,11 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   }
 
   start = std::chrono::steady_clock::now();
-  StatusOr<LaserParamMatrix> covariance =
-      total <= kCeresCovarianceUpTo ? problem.Covariance() : problem.SandwichCovariance();
-  if (!covariance.ok()) return covariance.status();
-  result.covariance = *covariance;
-  result.covariance_scale = total <= kCeresCovarianceUpTo ? problem.covariance_scale() : 1.0;
+  CALIB_ASSIGN_OR_RETURN(
+      const CorrectedCovariance<LaserParamMatrix> covariance,
+      total <= kCeresCovarianceUpTo ? problem.Covariance() : problem.SandwichCovariance());
+  result.covariance = covariance.covariance;
+  result.covariance_scale = covariance.kappa;
   result.stddev = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
   result.covariance_seconds = SecondsSince(start);
   result.observability =

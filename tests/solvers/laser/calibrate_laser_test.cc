@@ -1,11 +1,9 @@
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/core/laser/laser_simulator.h>
 #include <calib/solvers/laser/calibrate_laser.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
-
-#include <calib/core/laser/laser_log_io.h>
-#include <calib/core/laser/laser_simulator.h>
 
 namespace calib {
 namespace {
@@ -137,11 +135,13 @@ TEST(CalibrateLaserTest, CovarianceMatchesTheSandwich) {
   dataset.sqrt_information = result->noise_sigma[0].cwiseInverse().asDiagonal();
   LaserProblem problem({dataset}, result->estimate, LaserRefinementOptions{});
   ASSERT_TRUE(problem.Solve().ok());
-  const StatusOr<LaserParamMatrix> scaled = problem.Covariance();
-  const StatusOr<LaserParamMatrix> sandwich = problem.SandwichCovariance();
+  const StatusOr<CorrectedCovariance<LaserParamMatrix>> scaled = problem.Covariance();
+  const StatusOr<CorrectedCovariance<LaserParamMatrix>> sandwich = problem.SandwichCovariance();
   ASSERT_TRUE(scaled.ok() && sandwich.ok());
+  EXPECT_EQ(sandwich->kappa, 1.0);
   for (int i = 0; i < kNumLaserParams; ++i) {
-    EXPECT_NEAR(std::sqrt((*scaled)(i, i) / (*sandwich)(i, i)), 1.0, 0.1) << kLaserParamNames[i];
+    EXPECT_NEAR(std::sqrt(scaled->covariance(i, i) / sandwich->covariance(i, i)), 1.0, 0.1)
+        << kLaserParamNames[i];
   }
 }
 
