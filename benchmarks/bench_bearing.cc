@@ -106,7 +106,7 @@ CaseSummary RunCase(const std::function<BearingSimOptions(int)>& make, int seeds
       return;
     }
     out.ba_ok = true;
-    out.ba_seed_method = ba->seed_method;
+    out.ba_seed_method = SeedMethodName(ba->seed_method);
     const BearingParamVector e = ToVector(ba->estimate);
     for (int i = 0; i < kNumBearingParams; ++i) {
       out.ba_err(i) = Error(i, e(i), t(i));

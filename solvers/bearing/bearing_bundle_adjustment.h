@@ -15,6 +15,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 // Bundle adjustment of the bearing-only calibration (Martinelli 2009, eqs. 1–6) with Ceres.
@@ -235,6 +236,12 @@ class BearingProblem {
   Eigen::Matrix3d UnitCovariance(size_t run, double t0_s, double t1_s, double delta,
                                  double xi) const;
   StatusOr<Eigen::MatrixXd> BlockCovariance(const std::vector<const double*>& blocks) const;
+  // For VarianceComponents: the covariance blocks it reads, and one term's leverage.
+  std::vector<std::pair<const double*, const double*>> LeveragePairs(bool with_offset) const;
+  StatusOr<double> BearingLeverage(const ceres::Covariance& covariance, const BearingTerm& term,
+                                   bool with_offset, double* residual) const;
+  StatusOr<double> OdometryLeverage(const ceres::Covariance& covariance, const OdometryTerm& term,
+                                    double* squared_norm) const;
 
   const BearingLog* log_;
   std::vector<BearingRunNodes> nodes_;
@@ -253,6 +260,24 @@ class BearingProblem {
   int num_bearings_ = 0;
   double bearing_redundancy_fraction_ = 1.0;  // Σ(1 − h)/n over all bearings (VarianceComponents).
 };
+
+// The covariance of an estimate as a calibration reports it: of (φ, ψ, η, δ, ξ), and with an
+// initial distance also of the metric set (at `at`, the problem's estimate), with the loss
+// correction κ applied (1 without `loss_correction`).
+struct BearingEstimateCovariance {
+  BearingParamMatrix covariance = BearingParamMatrix::Zero();
+  bool has_metric = false;
+  BearingMetricParams metric;
+  BearingMetricMatrix metric_covariance = BearingMetricMatrix::Zero();
+  double kappa = 1.0;
+};
+StatusOr<BearingEstimateCovariance> EstimateCovariance(const BearingProblem& problem,
+                                                       const BearingLog& log,
+                                                       const BearingParams& at,
+                                                       bool loss_correction = true);
+
+// The index in log.runs of the run the initial distance is given for (log.runs.size() without).
+size_t InitialDistanceRun(const BearingLog& log);
 
 // The poses at the nodes of every run obtained by dead reckoning with `params` from a start
 // pose given by the landmark's position in the robot frame at the run's start (gauge units).

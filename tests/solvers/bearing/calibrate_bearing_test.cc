@@ -87,7 +87,7 @@ TEST(CalibrateBearingTest, Section81CirclesWithinThreeSigmaWithSigmasAtTheBound)
   ASSERT_TRUE(r.ok()) << r.message();
   const StatusOr<BearingBound> bound = BearingCramerRaoBound(log, truth, {1.0 * kDeg, 1e-3});
   ASSERT_TRUE(bound.ok()) << bound.message();
-  EXPECT_EQ(r->seed_method, "closed_form");
+  EXPECT_EQ(r->seed_method, BearingSeedMethod::kClosedForm);
   EXPECT_TRUE(r->has_closed_form);
   EXPECT_TRUE(r->has_metric);
   ExpectHonest(*r, truth, *bound, 0.7, 1.6);
@@ -111,7 +111,7 @@ TEST(CalibrateBearingTest, NonCircularTrajectoryIsSeededBySearchAndRecovered) {
   ASSERT_TRUE(r.ok()) << r.message();
   const StatusOr<BearingBound> bound = BearingCramerRaoBound(log, truth, {1.0 * kDeg, 1e-3});
   ASSERT_TRUE(bound.ok()) << bound.message();
-  EXPECT_EQ(r->seed_method, "search");
+  EXPECT_EQ(r->seed_method, BearingSeedMethod::kSearch);
   EXPECT_FALSE(r->has_closed_form);
   EXPECT_NE(r->closed_form_message.find("circular runs"), std::string::npos)
       << r->closed_form_message;
@@ -149,7 +149,7 @@ TEST(CalibrateBearingTest, MixedCircularAndNonCircularRunsUseTheClosedFormSeed) 
   ASSERT_TRUE(r.ok()) << r.message();
   const StatusOr<BearingBound> bound = BearingCramerRaoBound(log, truth, {1.0 * kDeg, 1e-3});
   ASSERT_TRUE(bound.ok()) << bound.message();
-  EXPECT_EQ(r->seed_method, "closed_form");
+  EXPECT_EQ(r->seed_method, BearingSeedMethod::kClosedForm);
   ASSERT_EQ(r->runs.size(), 4u);
   EXPECT_FALSE(r->runs[3].circular);
   ExpectHonest(*r, truth, *bound);
