@@ -218,15 +218,10 @@ void BearingProblem::Relinearize() {
 }
 
 Status BearingProblem::Solve(ceres::Solver::Summary* summary) {
-  const ceres::Solver::Options solver_options = MakeSolverOptions(BearingAdjustmentSettings(
-      options_.max_iterations, options_.num_threads, options_.initial_trust_region_radius));
-  ceres::Solver::Summary local_summary;
-  ceres::Solve(solver_options, problem_.get(), &local_summary);
-  if (summary != nullptr) *summary = local_summary;
-  if (local_summary.termination_type == ceres::FAILURE ||
-      !std::isfinite(local_summary.final_cost)) {
-    return Status::NotConverged("the bundle adjustment failed: " + local_summary.message);
-  }
+  CALIB_RETURN_IF_ERROR(
+      calib::Solve(BearingAdjustmentSettings(options_.max_iterations, options_.num_threads,
+                                             options_.initial_trust_region_radius),
+                   "the bundle adjustment", problem_.get(), summary));
   for (double v : calibration_) {
     if (!std::isfinite(v)) return Status::NotConverged("the bundle adjustment diverged");
   }

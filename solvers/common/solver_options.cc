@@ -1,6 +1,7 @@
 #include <calib/solvers/common/solver_options.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace calib {
 
@@ -56,6 +57,18 @@ SolverSettings BearingAdjustmentSettings(int max_iterations, int num_threads,
   s.gradient_tolerance = 1e-14;
   s.parameter_tolerance = 1e-12;
   return s;
+}
+
+Status Solve(const SolverSettings& settings, const std::string& what, ceres::Problem* problem,
+             ceres::Solver::Summary* summary) {
+  ceres::Solver::Summary local_summary;
+  ceres::Solve(MakeSolverOptions(settings), problem, &local_summary);
+  if (summary != nullptr) *summary = local_summary;
+  if (local_summary.termination_type == ceres::FAILURE ||
+      !std::isfinite(local_summary.final_cost)) {
+    return Status::NotConverged(what + " failed: " + local_summary.message);
+  }
+  return Status::Ok();
 }
 
 bool Converged(const ceres::Solver::Summary& summary) {

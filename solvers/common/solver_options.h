@@ -1,6 +1,7 @@
 #ifndef CALIB_SOLVERS_COMMON_SOLVER_OPTIONS_H_
 #define CALIB_SOLVERS_COMMON_SOLVER_OPTIONS_H_
 
+#include <calib/core/status.h>
 #include <ceres/ceres.h>
 
 #include <cstddef>
@@ -42,6 +43,12 @@ SolverSettings LaserRefinementSettings(size_t residual_blocks, int max_iteration
 // sigma's worth.
 SolverSettings BearingAdjustmentSettings(int max_iterations, int num_threads,
                                          double initial_trust_region_radius);
+
+// Runs the solver on `problem` (the summary into `summary` when not null); NotConverged, naming
+// `what`, when Ceres fails or the cost is not finite. Stopping at the iteration limit is not a
+// failure here: the caller reads Converged(summary) and reports it.
+Status Solve(const SolverSettings& settings, const std::string& what, ceres::Problem* problem,
+             ceres::Solver::Summary* summary);
 
 // Whether a solve ended by one of its convergence tests (not by its iteration or time limit).
 bool Converged(const ceres::Solver::Summary& summary);

@@ -62,15 +62,10 @@ LaserProblem::LaserProblem(const std::vector<LaserDataset>& datasets,
 LaserProblem::~LaserProblem() = default;
 
 Status LaserProblem::Solve(ceres::Solver::Summary* summary) {
-  const ceres::Solver::Options solver_options = MakeSolverOptions(LaserRefinementSettings(
-      cost_functions_.size(), options_.max_iterations, options_.num_threads));
-  ceres::Solver::Summary local_summary;
-  ceres::Solve(solver_options, problem_.get(), &local_summary);
-  if (summary != nullptr) *summary = local_summary;
-  if (local_summary.termination_type == ceres::FAILURE ||
-      !std::isfinite(local_summary.final_cost)) {
-    return Status::NotConverged("the refinement failed: " + local_summary.message);
-  }
+  CALIB_RETURN_IF_ERROR(
+      calib::Solve(LaserRefinementSettings(cost_functions_.size(), options_.max_iterations,
+                                           options_.num_threads),
+                   "the refinement", problem_.get(), summary));
   if (!(odometry_[0] > 0.0 && odometry_[1] > 0.0 && odometry_[2] > 0.0)) {
     return Status::NotObservable(
         "the refinement drove a wheel radius or the wheelbase to a non-positive "
