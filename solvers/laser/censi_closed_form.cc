@@ -122,13 +122,11 @@ StatusOr<TrimmedClosedFormResult> CensiClosedFormTrimmed(
   TrimmedClosedFormResult result;
   result.kept.assign(intervals.size(), true);
   for (int round = 0;; ++round) {
-    StatusOr<CensiClosedFormResult> estimate =
-        CensiClosedForm(intervals, &result.kept, options.closed_form);
-    if (!estimate.ok()) return estimate.status();
-    result.estimate = *estimate;
+    CALIB_ASSIGN_OR_RETURN(result.estimate,
+                           CensiClosedForm(intervals, &result.kept, options.closed_form));
     if (round == options.rounds) break;
     // e = ℓ ⊕ ŝ − ô ⊕ ℓ (§III-B), in the robot frame.
-    const LaserCalibration& cal = estimate->calibration;
+    const LaserCalibration& cal = result.estimate.calibration;
     std::vector<double> xy_error(intervals.size()), theta_error(intervals.size());
     std::vector<double> kept_xy, kept_theta;
     for (size_t k = 0; k < intervals.size(); ++k) {
