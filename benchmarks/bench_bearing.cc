@@ -103,7 +103,7 @@ SeedOutcome RunSeed(const BearingSimOptions& sim, bool closed_form) {
     return out;
   }
   out.ba_ok = true;
-  out.ba_seed_method = ba->seed_method;
+  out.ba_seed_method = SeedMethodName(ba->seed_method);
   const BearingParamVector e = ToVector(ba->estimate);
   for (int i = 0; i < kNumBearingParams; ++i) {
     out.ba_err(i) = Error(i, e(i), t(i));

@@ -1,26 +1,17 @@
+#include <calib/core/whitening.h>
+#include <calib/problems/bearing/bearing_odometry_residual.h>
+#include <calib/problems/bearing/bearing_time_offset_residual.h>
+#include <calib/problems/positive_manifold.h>
 #include <calib/solvers/bearing/bearing_bundle_adjustment.h>
+#include <calib/solvers/bearing/martinelli_closed_form.h>
+#include <calib/solvers/common/solver_options.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <utility>
 
-#include <calib/core/whitening.h>
-#include <calib/problems/bearing/bearing_odometry_residual.h>
-#include <calib/problems/bearing/bearing_time_offset_residual.h>
-#include <calib/problems/positive_manifold.h>
-#include <calib/solvers/bearing/martinelli_closed_form.h>
-
 namespace calib {
-namespace {
-
-constexpr char kSingular[] =
-    "the information matrix is singular: the log does not determine φ, ψ, η, δ and ξ (it needs "
-    "circular runs at three or more distinct wheel-speed ratios, or runs whose curvature varies, "
-    "with the landmark in view)";
-
-}  // namespace
-
 const std::array<const char*, kNumBearingParams> kBearingParamNames = {"phi", "psi", "eta", "delta",
                                                                        "xi"};
 const std::array<const char*, kNumBearingMetricParams> kBearingMetricNames = {
@@ -227,32 +218,12 @@ void BearingProblem::Relinearize() {
 }
 
 Status BearingProblem::Solve(ceres::Solver::Summary* summary) {
-  ceres::Solver::Options solver_options;
-  solver_options.minimizer_type = ceres::TRUST_REGION;
-  solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  solver_options.max_num_iterations = options_.max_iterations;
-  // The stiff odometry chains make the normal equations badly conditioned: a small initial
-  // radius damps the soft modes (the runs' shapes) for a dozen iterations. Start near
-  // Gauss–Newton; LM still backs off when a step fails.
-  solver_options.initial_trust_region_radius = options_.initial_trust_region_radius;
-  solver_options.max_trust_region_radius = 1e16;
-  solver_options.num_threads = options_.num_threads;
-  // The cost is about half a unit per bearing; stop once an iteration gains far less than a
-  // hundredth of a sigma's worth.
-  solver_options.function_tolerance = 1e-10;
-  solver_options.gradient_tolerance = 1e-14;
-  solver_options.parameter_tolerance = 1e-12;
-  solver_options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary local_summary;
-  ceres::Solve(solver_options, problem_.get(), &local_summary);
-  if (summary != nullptr) *summary = local_summary;
-  if (local_summary.termination_type == ceres::FAILURE ||
-      !std::isfinite(local_summary.final_cost)) {
-    return Status::Error("the bundle adjustment failed: " + local_summary.message);
-  }
+  CALIB_RETURN_IF_ERROR(
+      calib::Solve(BearingAdjustmentSettings(options_.max_iterations, options_.num_threads,
+                                             options_.initial_trust_region_radius),
+                   "the bundle adjustment", problem_.get(), summary));
   for (double v : calibration_) {
-    if (!std::isfinite(v)) return Status::Error("the bundle adjustment diverged");
+    if (!std::isfinite(v)) return Status::NotConverged("the bundle adjustment diverged");
   }
   return Status::Ok();
 }
@@ -337,225 +308,6 @@ std::vector<BearingProblem::BearingTermInfo> BearingProblem::BearingTerms() cons
     info.rho1 = rho[1];
     info.rho2 = rho[2];
     out.push_back(info);
-  }
-  return out;
-}
-
-void BearingProblem::LossConstants(double* likelihood_ratio_scale, double* lambda) const {
-  double weight = 0.0, meat = 0.0, bread = 0.0;
-  for (const BearingTermInfo& info : BearingTerms()) {
-    const double s = info.residual * info.residual;
-    weight += info.rho1;
-    meat += info.rho1 * info.rho1 * s;
-    bread += info.rho1 + 2.0 * info.rho2 * s;
-  }
-  *likelihood_ratio_scale =
-      bread > 0.0 && meat > 0.0 ? meat / bread / bearing_redundancy_fraction_ : 1.0;
-  *lambda = weight > 0.0 && bread > 0.0 ? bread / weight : 1.0;
-}
-
-StatusOr<BearingProblem::TimeOffsetCovariance> BearingProblem::CovarianceWithTimeOffset() const {
-  if (!options_.model_time_offset) return Status::Error("the problem does not model τ");
-  // A constant block has no covariance: free τ while Ceres computes it.
-  const bool was_constant = problem_->IsParameterBlockConstant(time_offset_);
-  if (was_constant) problem_->SetParameterBlockVariable(time_offset_);
-  ceres::Covariance::Options covariance_options;
-  covariance_options.num_threads = options_.num_threads;
-  covariance_options.algorithm_type = ceres::SPARSE_QR;
-  covariance_options.apply_loss_function = true;
-  ceres::Covariance covariance(covariance_options);
-  std::vector<std::pair<const double*, const double*>> pairs = {
-      {calibration_, calibration_}, {calibration_, time_offset_}, {time_offset_, time_offset_}};
-  const bool computed = covariance.Compute(pairs, problem_.get());
-  TimeOffsetCovariance out;
-  if (computed) {
-    Eigen::Matrix<double, kNumBearingParams + 1, kNumBearingParams + 1, Eigen::RowMajor> joint;
-    covariance.GetCovarianceMatrix({calibration_, time_offset_}, joint.data());
-    out.joint = joint;
-  }
-  if (was_constant) problem_->SetParameterBlockConstant(time_offset_);
-  if (!computed) return Status::Error(kSingular);
-  return out;
-}
-
-double BearingProblem::LossWeight(double s) const {
-  if (!loss_) return 1.0;
-  double rho[3];
-  loss_->Evaluate(s, rho);
-  return rho[1];
-}
-
-void BearingProblem::UpdateKappa() const {
-  double sum_weight = 0.0, sum_meat = 0.0, sum_bread = 0.0;
-  for (const BearingTerm& term : bearings_) {
-    const double e = BearingError(term.run, term.node, term.bearing) * inverse_bearing_sigma_;
-    const double s = e * e;
-    double rho[3] = {s, 1.0, 0.0};
-    if (loss_) loss_->Evaluate(s, rho);
-    sum_weight += rho[1];
-    sum_meat += rho[1] * rho[1] * s;
-    sum_bread += rho[1] + 2.0 * rho[2] * s;
-  }
-  const double n = static_cast<double>(std::max<size_t>(1, bearings_.size()));
-  covariance_scale_ = sum_bread > 0.0
-                          ? (sum_weight / n) * (sum_meat / n) /
-                                ((sum_bread / n) * (sum_bread / n)) / bearing_redundancy_fraction_
-                          : 1.0;
-}
-
-StatusOr<Eigen::MatrixXd> BearingProblem::BlockCovariance(
-    const std::vector<const double*>& blocks) const {
-  ceres::Covariance::Options covariance_options;
-  covariance_options.num_threads = options_.num_threads;
-  covariance_options.algorithm_type = ceres::SPARSE_QR;
-  covariance_options.apply_loss_function = true;
-  ceres::Covariance covariance(covariance_options);
-  std::vector<std::pair<const double*, const double*>> pairs;
-  int size = 0;
-  for (size_t a = 0; a < blocks.size(); ++a) {
-    size += problem_->ParameterBlockSize(blocks[a]);
-    for (size_t b = a; b < blocks.size(); ++b) pairs.emplace_back(blocks[a], blocks[b]);
-  }
-  if (!covariance.Compute(pairs, problem_.get())) return Status::Error(kSingular);
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> joint(size, size);
-  if (!covariance.GetCovarianceMatrix(blocks, joint.data())) {
-    return Status::Error("could not read the covariance from Ceres");
-  }
-  return Eigen::MatrixXd(joint);
-}
-
-StatusOr<BearingParamMatrix> BearingProblem::Covariance(bool loss_correction) const {
-  StatusOr<Eigen::MatrixXd> cov = BlockCovariance({calibration_});
-  if (!cov.ok()) return cov.status();
-  covariance_scale_ = 1.0;
-  if (loss_correction) UpdateKappa();
-  return BearingParamMatrix(*cov * covariance_scale_);
-}
-
-double BearingProblem::StartDistance(size_t run_index) const {
-  const double* p = Node(run_index, 0);
-  return std::hypot(p[0], p[1]);
-}
-
-StatusOr<BearingScaledWithDistanceMatrix> BearingProblem::CovarianceWithStartDistance(
-    size_t run_index, bool loss_correction) const {
-  StatusOr<Eigen::MatrixXd> cov = BlockCovariance({calibration_, Node(run_index, 0)});
-  if (!cov.ok()) return cov.status();
-  covariance_scale_ = 1.0;
-  if (loss_correction) UpdateKappa();
-  const double* p = Node(run_index, 0);
-  const double d = std::hypot(p[0], p[1]);
-  Eigen::Matrix<double, kNumBearingParams + 1, kNumBearingParams + 3> g =
-      Eigen::Matrix<double, kNumBearingParams + 1, kNumBearingParams + 3>::Zero();
-  g.topLeftCorner<kNumBearingParams, kNumBearingParams>().setIdentity();
-  g(kNumBearingParams, kNumBearingParams) = p[0] / d;
-  g(kNumBearingParams, kNumBearingParams + 1) = p[1] / d;
-  return BearingScaledWithDistanceMatrix(g * *cov * g.transpose() * covariance_scale_);
-}
-
-StatusOr<BearingVarianceComponents> BearingProblem::VarianceComponents(
-    const std::vector<std::vector<bool>>& inlier) const {
-  ceres::Covariance::Options covariance_options;
-  covariance_options.num_threads = options_.num_threads;
-  covariance_options.algorithm_type = ceres::SPARSE_QR;
-  covariance_options.apply_loss_function = true;
-  ceres::Covariance covariance(covariance_options);
-  std::vector<std::pair<const double*, const double*>> pairs;
-  pairs.emplace_back(calibration_, calibration_);
-  const bool with_offset = options_.model_time_offset && !options_.fix_time_offset;
-  if (with_offset) {
-    pairs.emplace_back(calibration_, time_offset_);
-    pairs.emplace_back(time_offset_, time_offset_);
-  }
-  for (size_t i = 0; i < poses_.size(); ++i) {
-    for (size_t k = 0; k < poses_[i].size(); ++k) {
-      pairs.emplace_back(Node(i, k), Node(i, k));
-      pairs.emplace_back(Node(i, k), calibration_);
-      if (with_offset) pairs.emplace_back(Node(i, k), time_offset_);
-      if (k > 0) pairs.emplace_back(Node(i, k - 1), Node(i, k));
-    }
-  }
-  if (!covariance.Compute(pairs, problem_.get())) return Status::Error(kSingular);
-  constexpr int kC = kNumBearingParams;
-  Eigen::Matrix<double, kC, kC, Eigen::RowMajor> cc;
-  covariance.GetCovarianceBlock(calibration_, calibration_, cc.data());
-  const auto block = [&](const double* a, const double* b, int rows, int cols) {
-    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m(rows, cols);
-    covariance.GetCovarianceBlock(a, b, m.data());
-    return Eigen::MatrixXd(m);
-  };
-
-  BearingVarianceComponents out;
-  double all_bearing_redundancy = 0.0;
-  // Bearings: h = ρ'·J·C·Jᵀ with J = ∂r/∂(pose, c), as Ceres weighs them in the covariance (the
-  // leverages then sum to the number of free parameters).
-  for (const BearingTerm& term : bearings_) {
-    const double* pose = Node(term.run, term.node);
-    const std::vector<double*> parameters = TermBlocks(term);
-    double residual = 0.0;
-    Eigen::Matrix<double, 1, 3, Eigen::RowMajor> j_pose;
-    Eigen::Matrix<double, 1, kC, Eigen::RowMajor> j_cal;
-    double j_offset = 0.0;
-    double* jacobians[3] = {j_pose.data(), j_cal.data(), &j_offset};
-    if (!term.cost->Evaluate(parameters.data(), &residual, jacobians)) {
-      return Status::Error("a bearing residual could not be evaluated");
-    }
-    // Blocks (pose, c[, τ]): J·C·Jᵀ.
-    const int size = 3 + kC + (with_offset ? 1 : 0);
-    Eigen::RowVectorXd j(size);
-    j << j_pose, j_cal, Eigen::RowVectorXd::Constant(size - 3 - kC, j_offset);
-    Eigen::MatrixXd c(size, size);
-    c.topLeftCorner<3, 3>() = block(pose, pose, 3, 3);
-    c.block<3, kC>(0, 3) = block(pose, calibration_, 3, kC);
-    c.block<kC, 3>(3, 0) = c.block<3, kC>(0, 3).transpose();
-    c.block<kC, kC>(3, 3) = cc;
-    if (with_offset) {
-      c.block<3, 1>(0, 3 + kC) = block(pose, time_offset_, 3, 1);
-      c.block<kC, 1>(3, 3 + kC) = block(calibration_, time_offset_, kC, 1);
-      c.block<1, 3 + kC>(3 + kC, 0) = c.block<3 + kC, 1>(0, 3 + kC).transpose();
-      c(3 + kC, 3 + kC) = block(time_offset_, time_offset_, 1, 1)(0, 0);
-    }
-    const double h = LossWeight(residual * residual) * (j * c * j.transpose())(0, 0);
-    out.total_leverage += h;
-    all_bearing_redundancy += 1.0 - h;
-    if (!inlier[term.run][term.bearing]) continue;
-    const double e = residual / inverse_bearing_sigma_;
-    out.bearing_sum_sq_rad2 += e * e;
-    out.bearing_redundancy += 1.0 - h;
-    ++out.bearing_count;
-  }
-  // Odometry terms: tr(J·C·Jᵀ) with J = ∂r/∂(pose0, pose1, c).
-  for (const OdometryTerm& term : odometry_) {
-    const double* p0 = Node(term.run, term.node - 1);
-    const double* p1 = Node(term.run, term.node);
-    const double* parameters[3] = {p0, p1, calibration_};
-    // (The odometry terms do not depend on τ.)
-    Eigen::Vector3d residual;
-    Eigen::Matrix<double, 3, 3, Eigen::RowMajor> j0, j1;
-    Eigen::Matrix<double, 3, kC, Eigen::RowMajor> jc;
-    double* jacobians[3] = {j0.data(), j1.data(), jc.data()};
-    if (!term.cost->Evaluate(parameters, residual.data(), jacobians)) {
-      return Status::Error("an odometry residual could not be evaluated");
-    }
-    Eigen::Matrix<double, 3, 6 + kC> j;
-    j << j0, j1, jc;
-    Eigen::Matrix<double, 6 + kC, 6 + kC> c;
-    c.block<3, 3>(0, 0) = block(p0, p0, 3, 3);
-    c.block<3, 3>(3, 3) = block(p1, p1, 3, 3);
-    c.block<3, 3>(0, 3) = block(p0, p1, 3, 3);
-    c.block<3, 3>(3, 0) = c.block<3, 3>(0, 3).transpose();
-    c.block<3, kC>(0, 6) = block(p0, calibration_, 3, kC);
-    c.block<3, kC>(3, 6) = block(p1, calibration_, 3, kC);
-    c.block<kC, 3>(6, 0) = c.block<3, kC>(0, 6).transpose();
-    c.block<kC, 3>(6, 3) = c.block<3, kC>(3, 6).transpose();
-    c.block<kC, kC>(6, 6) = cc;
-    const double h = (j * c * j.transpose()).trace();
-    out.total_leverage += h;
-    out.odometry_sum_sq += residual.squaredNorm();
-    out.odometry_redundancy += 3.0 - h;
-  }
-  if (!bearings_.empty() && all_bearing_redundancy > 0.0) {
-    bearing_redundancy_fraction_ = all_bearing_redundancy / static_cast<double>(bearings_.size());
   }
   return out;
 }

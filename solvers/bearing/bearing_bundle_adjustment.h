@@ -1,6 +1,13 @@
 #ifndef CALIB_SOLVERS_BEARING_BEARING_BUNDLE_ADJUSTMENT_H_
 #define CALIB_SOLVERS_BEARING_BEARING_BUNDLE_ADJUSTMENT_H_
 
+#include <calib/core/bearing/bearing_log.h>
+#include <calib/core/bearing/bearing_model.h>
+#include <calib/core/se2.h>
+#include <calib/core/status.h>
+#include <calib/problems/bearing/bearing_observation_residual.h>
+#include <calib/solvers/common/robust_covariance.h>
+#include <calib/solvers/common/robust_loss.h>
 #include <ceres/ceres.h>
 
 #include <Eigen/Core>
@@ -8,14 +15,8 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
-
-#include <calib/core/bearing/bearing_log.h>
-#include <calib/core/bearing/bearing_model.h>
-#include <calib/core/se2.h>
-#include <calib/core/status.h>
-#include <calib/problems/bearing/bearing_observation_residual.h>
-#include <calib/solvers/laser/laser_refinement.h>
 
 // Bundle adjustment of the bearing-only calibration (Martinelli 2009, eqs. 1–6) with Ceres.
 //
@@ -167,34 +168,46 @@ class BearingProblem {
   // (2·Δcost/scale is χ² under the null) and λ = mean(ρ' + 2ρ''s)/mean(ρ').
   void LossConstants(double* likelihood_ratio_scale, double* lambda) const;
   // Covariance of (φ, ψ, η, δ, ξ, τ) as ceres::Covariance gives it (no loss correction; the
-  // poses eliminated), also while τ is held constant. Requires model_time_offset.
+  // poses eliminated), also while τ is held constant (it is freed for the computation, hence not
+  // const). Requires model_time_offset.
   struct TimeOffsetCovariance {
     Eigen::Matrix<double, kNumBearingParams + 1, kNumBearingParams + 1> joint;
   };
-  StatusOr<TimeOffsetCovariance> CovarianceWithTimeOffset() const;
+  StatusOr<TimeOffsetCovariance> CovarianceWithTimeOffset();
   // The robust loss's weight ρ'(s) for a squared whitened residual s (1 without a loss).
   double LossWeight(double s) const;
 
   // Covariance of (φ, ψ, η, δ, ξ): ceres::Covariance of the robustified problem (the poses are
   // nuisance: Ceres eliminates them in its factorization of the whole Jacobian). With
-  // `loss_correction`, times the correction of the bearing terms, as the laser side does:
-  //   κ = mean(ρ')·mean(ρ'²·s)/mean(ρ' + 2ρ''·s)² · n/Σ(1 − h)
-  // (s the squared whitened bearing residuals, n their number, h their leverages from the last
-  // VarianceComponents call): the M-estimator's sandwich H⁻¹·B·H⁻¹, with residuals shrunk by
-  // their leverage counted back; 1 for the plain squared loss at the estimated σβ. Without it,
-  // (JᵀJ)⁻¹ alone, which at the truth with the true noise is the Cramér–Rao bound.
-  StatusOr<BearingParamMatrix> Covariance(bool loss_correction = true) const;
+  // `loss_correction`, times the correction κ of the bearing terms (LossCorrection), as the laser
+  // side does; without it (κ = 1), (JᵀJ)⁻¹ alone, which at the truth with the true noise is the
+  // Cramér–Rao bound.
+  StatusOr<CorrectedCovariance<BearingParamMatrix>> CalibrationCovariance(
+      bool loss_correction = true) const;
   // The same with D0', the distance of run `run_index`'s start node, appended.
+  StatusOr<CorrectedCovariance<BearingScaledWithDistanceMatrix>>
+  CalibrationCovarianceWithStartDistance(size_t run_index, bool loss_correction = true) const;
+  double StartDistance(size_t run_index) const;
+  // The robust-loss correction of the bearing terms (solvers/common/robust_covariance.h)
+  //   κ = mean(ρ')·mean(ρ'²·s)/mean(ρ' + 2ρ''·s)² · n/Σ(1 − h)
+  // (s the squared whitened bearing residuals, n their number, h their leverages as the last
+  // VarianceComponents call left them; h = 0 before any): the M-estimator's sandwich H⁻¹·B·H⁻¹,
+  // with residuals shrunk by their leverage counted back; 1 for the plain squared loss at the
+  // estimated σβ, and when the loss leaves no curvature.
+  double LossCorrection() const;
+
+  // Forwarding aliases of the above for older callers (the matrix alone; κ = LossCorrection()).
+  StatusOr<BearingParamMatrix> Covariance(bool loss_correction = true) const;
   StatusOr<BearingScaledWithDistanceMatrix> CovarianceWithStartDistance(
       size_t run_index, bool loss_correction = true) const;
-  double StartDistance(size_t run_index) const;
-  double covariance_scale() const { return covariance_scale_; }
+  double covariance_scale() const { return LossCorrection(); }
 
   // Leverages of every residual from the covariance of all blocks (with the loss's weights, as
   // the solution has them), summed per class; bearings with inlier[i][j] false are left out of
-  // the bearing class.
+  // the bearing class. Also keeps Σ(1 − h) over all bearings for LossCorrection and
+  // LossConstants (hence not const).
   StatusOr<BearingVarianceComponents> VarianceComponents(
-      const std::vector<std::vector<bool>>& inlier) const;
+      const std::vector<std::vector<bool>>& inlier);
 
   int num_bearings() const { return num_bearings_; }
   int num_odometry_terms() const { return static_cast<int>(odometry_.size()); }
@@ -223,7 +236,12 @@ class BearingProblem {
   Eigen::Matrix3d UnitCovariance(size_t run, double t0_s, double t1_s, double delta,
                                  double xi) const;
   StatusOr<Eigen::MatrixXd> BlockCovariance(const std::vector<const double*>& blocks) const;
-  void UpdateKappa() const;
+  // For VarianceComponents: the covariance blocks it reads, and one term's leverage.
+  std::vector<std::pair<const double*, const double*>> LeveragePairs(bool with_offset) const;
+  StatusOr<double> BearingLeverage(const ceres::Covariance& covariance, const BearingTerm& term,
+                                   bool with_offset, double* residual) const;
+  StatusOr<double> OdometryLeverage(const ceres::Covariance& covariance, const OdometryTerm& term,
+                                    double* squared_norm) const;
 
   const BearingLog* log_;
   std::vector<BearingRunNodes> nodes_;
@@ -240,9 +258,26 @@ class BearingProblem {
   std::vector<OdometryTerm> odometry_;
   std::vector<BearingTerm> bearings_;
   int num_bearings_ = 0;
-  mutable double covariance_scale_ = 1.0;
-  mutable double bearing_redundancy_fraction_ = 1.0;  // Σ(1 − h)/n over all bearings.
+  double bearing_redundancy_fraction_ = 1.0;  // Σ(1 − h)/n over all bearings (VarianceComponents).
 };
+
+// The covariance of an estimate as a calibration reports it: of (φ, ψ, η, δ, ξ), and with an
+// initial distance also of the metric set (at `at`, the problem's estimate), with the loss
+// correction κ applied (1 without `loss_correction`).
+struct BearingEstimateCovariance {
+  BearingParamMatrix covariance = BearingParamMatrix::Zero();
+  bool has_metric = false;
+  BearingMetricParams metric;
+  BearingMetricMatrix metric_covariance = BearingMetricMatrix::Zero();
+  double kappa = 1.0;
+};
+StatusOr<BearingEstimateCovariance> EstimateCovariance(const BearingProblem& problem,
+                                                       const BearingLog& log,
+                                                       const BearingParams& at,
+                                                       bool loss_correction = true);
+
+// The index in log.runs of the run the initial distance is given for (log.runs.size() without).
+size_t InitialDistanceRun(const BearingLog& log);
 
 // The poses at the nodes of every run obtained by dead reckoning with `params` from a start
 // pose given by the landmark's position in the robot frame at the run's start (gauge units).

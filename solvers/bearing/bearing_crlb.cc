@@ -1,11 +1,10 @@
+#include <calib/core/bearing/bearing_log_io.h>
 #include <calib/solvers/bearing/bearing_crlb.h>
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
-
-#include <calib/core/bearing/bearing_log_io.h>
 
 namespace calib {
 
@@ -14,7 +13,7 @@ StatusOr<BearingBound> BearingCramerRaoBound(const BearingLog& log, const Bearin
   Status status = ValidateBearingLog(log);
   if (!status.ok()) return status;
   if (!(noise.bearing_sigma_rad > 0.0) || !(noise.encoder_k >= 0.0)) {
-    return Status::Error("the bound needs σβ > 0 and K ≥ 0");
+    return Status::InvalidInput("the bound needs σβ > 0 and K ≥ 0");
   }
   const std::vector<BearingRunNodes> nodes = BearingNodes(log);
   const double delta_r = truth.metric.delta_r;
@@ -24,7 +23,7 @@ StatusOr<BearingBound> BearingCramerRaoBound(const BearingLog& log, const Bearin
                                   [&](const BearingRunTruth& t) { return t.id == log.runs[i].id; });
     if (run == truth.runs.end() ||
         run->world_T_robot_at_bearings.size() != log.runs[i].bearings.size()) {
-      return Status::Error("the truth does not match run " + std::to_string(log.runs[i].id));
+      return Status::InvalidInput("the truth does not match run " + std::to_string(log.runs[i].id));
     }
     for (int bearing : nodes[i].bearing) {
       Pose2d p = bearing < 0 ? run->world_T_robot_start : run->world_T_robot_at_bearings[bearing];
@@ -37,27 +36,14 @@ StatusOr<BearingBound> BearingCramerRaoBound(const BearingLog& log, const Bearin
   // With K = 0 the odometry is exact up to the covariance floor of BearingAdjustmentOptions.
   BearingProblem problem(log, truth.params, poses, noise, options);
 
+  CALIB_ASSIGN_OR_RETURN(const BearingEstimateCovariance cov,
+                         EstimateCovariance(problem, log, truth.params,
+                                            /*loss_correction=*/false));
   BearingBound bound;
-  if (log.meta.initial_distance) {
-    const InitialDistance& d = *log.meta.initial_distance;
-    const auto it = std::find_if(log.runs.begin(), log.runs.end(),
-                                 [&](const BearingRun& r) { return r.id == d.run; });
-    const size_t index = static_cast<size_t>(it - log.runs.begin());
-    StatusOr<BearingScaledWithDistanceMatrix> joint =
-        problem.CovarianceWithStartDistance(index, /*loss_correction=*/false);
-    if (!joint.ok()) return joint.status();
-    bound.covariance = joint->topLeftCorner<kNumBearingParams, kNumBearingParams>();
-    Eigen::Matrix<double, kNumBearingMetricParams, kNumBearingParams + 1> jacobian;
-    BearingMetricFromScaled(truth.params, problem.StartDistance(index), d.meters,
-                            log.meta.wheelbase_m, &jacobian);
-    bound.metric_covariance = jacobian * *joint * jacobian.transpose();
-    bound.metric_stddev = bound.metric_covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-    bound.has_metric = true;
-  } else {
-    StatusOr<BearingParamMatrix> cov = problem.Covariance(/*loss_correction=*/false);
-    if (!cov.ok()) return cov.status();
-    bound.covariance = *cov;
-  }
+  bound.covariance = cov.covariance;
+  bound.has_metric = cov.has_metric;
+  bound.metric_covariance = cov.metric_covariance;
+  bound.metric_stddev = bound.metric_covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
   bound.stddev = bound.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
   return bound;
 }

@@ -1,17 +1,18 @@
 #ifndef CALIB_SOLVERS_BEARING_CALIBRATE_BEARING_H_
 #define CALIB_SOLVERS_BEARING_CALIBRATE_BEARING_H_
 
+#include <calib/core/bearing/bearing_log.h>
+#include <calib/core/bearing/bearing_model.h>
+#include <calib/core/status.h>
+#include <calib/solvers/bearing/bearing_bundle_adjustment.h>
+#include <calib/solvers/bearing/bearing_seed_search.h>
+#include <calib/solvers/bearing/martinelli_closed_form.h>
+
 #include <Eigen/Core>
 #include <functional>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <calib/core/bearing/bearing_log.h>
-#include <calib/core/bearing/bearing_model.h>
-#include <calib/core/status.h>
-#include <calib/solvers/bearing/bearing_bundle_adjustment.h>
-#include <calib/solvers/bearing/martinelli_closed_form.h>
 
 // Bearing-only calibration in one call (Martinelli 2009): seed → bundle adjustment with the noise
 // levels estimated from the data → covariance.
@@ -21,13 +22,14 @@
 //   if (result.ok()) use(result->estimate, result->stddev);
 //
 // Seed. When the log holds circular runs at three or more distinct q = vL/vR, Martinelli's closed
-// form on those runs (solvers/martinelli_closed_form.h); otherwise, or when the adjustment from
-// it does not explain the bearings, a coarse search (SearchBearingSeed) that handles arbitrary
-// trajectories. Each run's start is then placed from the seed calibration by a linear fit of the
-// landmark's position to its bearings (SeedLandmarks), and its poses at the bearing times by dead
-// reckoning. Both seeds are least squares: bearings that disagree with their neighbours in time
-// (gross outliers) are left out of them. A seed is accepted when the adjustment from it leaves
-// residuals no larger than twice the neighbours' own scatter; if none is, the log is rejected.
+// form on those runs (solvers/bearing/martinelli_closed_form.h); otherwise, or when the adjustment
+// from it does not explain the bearings, a coarse search (SearchBearingSeed,
+// solvers/bearing/bearing_seed_search.h) that handles arbitrary trajectories. Each run's start is
+// then placed from the seed calibration by a linear fit of the landmark's position to its
+// bearings (SeedLandmarks), and its poses at the bearing times by dead reckoning. Both seeds are
+// least squares: bearings that disagree with their neighbours in time (gross outliers) are left out
+// of them. A seed is accepted when the adjustment from it leaves residuals no larger than twice the
+// neighbours' own scatter; if none is, the log is rejected.
 //
 // Noise. σβ and the encoder constant K are unknown to the log; unless given they are estimated
 // by variance components: σβ² = Σe²/Σ(1 − h) over the inlier bearings (h the leverages, corrected
@@ -42,20 +44,6 @@
 // the robust loss (BearingProblem::Covariance); with an initial distance, also on D0' and mapped
 // to the metric set by BearingMetricFromScaled.
 namespace calib {
-
-struct BearingSearchOptions {
-  // Ranges searched for δ = δL/δR and ξ·B = δR/δB (log-uniform).
-  double min_delta = 0.8;
-  double max_delta = 1.25;
-  double min_xi_b = 2.0 / 3.0;
-  double max_xi_b = 1.5;
-  // Grid steps turn the dead-reckoned heading by at most this anywhere in a run.
-  double heading_tolerance_rad = 0.15;
-  int max_grid_points = 20000;    // Coarser steps beyond.
-  int max_search_bearings = 300;  // The grid uses every k-th bearing to stay within this.
-  int candidates = 4;             // Grid minima refined on every bearing.
-  int refine_levels = 5;          // 5×5 refinements, the step halving each time.
-};
 
 struct BearingCalibrationOptions {
   BearingAdjustmentOptions adjustment;
@@ -88,6 +76,12 @@ struct BearingCalibrationOptions {
   std::function<void(const std::string&)> progress;  // Optional progress lines.
 };
 
+// Where the adjustment started: Martinelli's closed form (circular runs) or the coarse search
+// (any trajectory).
+enum class BearingSeedMethod { kNone, kClosedForm, kSearch };
+// "closed_form", "search" ("" for kNone): the report's words.
+const char* SeedMethodName(BearingSeedMethod method);
+
 struct BearingRunSummary {
   int run = 0;
   int bearings = 0;
@@ -108,8 +102,7 @@ struct BearingCalibrationResult {
   BearingMetricMatrix metric_covariance = BearingMetricMatrix::Zero();
   BearingMetricVector metric_stddev = BearingMetricVector::Zero();
 
-  // The seed: "closed_form" (Martinelli) or "search" (non-circular runs).
-  std::string seed_method;
+  BearingSeedMethod seed_method = BearingSeedMethod::kNone;
   BearingParams seed;
   bool has_closed_form = false;
   MartinelliEstimate closed_form;
@@ -136,36 +129,17 @@ struct BearingCalibrationResult {
   std::vector<std::vector<Pose2d>> poses;          // Per run, at its nodes (gauge units).
   double covariance_scale = 1.0;                   // κ.
   int iterations = 0;
+  bool converged = true;  // The final adjustment stopped by a convergence test.
+  // What went wrong on the way without stopping the calibration (e.g. no convergence).
+  std::vector<std::string> warnings;
   double seed_seconds = 0.0;
   double adjustment_seconds = 0.0;
   double covariance_seconds = 0.0;
 };
 
+// Validates the log once (ValidateBearingLog); the steps below take it as valid.
 StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
                                                     const BearingCalibrationOptions& options = {});
-
-// ---------------------------------------------------------------------------------------------
-// The seeding steps.
-
-// The landmark's position in each run's start frame (gauge units) for a given calibration: with
-// dead-reckoned sensor positions s_j and measured directions d_j, cross(L − s_j, d_j) = 0 is linear
-// in L; solved by least squares, reweighted by 1/|L − s_j|² so that residuals are angles.
-StatusOr<std::vector<Eigen::Vector2d>> SeedLandmarks(const BearingLog& log,
-                                                     const BearingParams& params);
-
-// A calibration for arbitrary trajectories. For trial (δ, ξ) each run's path (p_j, θ_j) is
-// dead-reckoned from its first bearing, and the bearing condition
-//   cross(L − p_j − R(θ_j)·m, R(c + θ_j)·u(β_j)) = 0,   c = φ + ψ,  m = ρ(cos φ, sin φ),
-// with L the landmark in that frame, reads, with Q = R(−c − π/2) and w_j = R(θ_j)·u(β_j):
-//   (Q·L)·w_j − (Q·m)·u(β_j) + cos c·cross(p_j, w_j) + sin c·(p_j·w_j) = 0,
-// linear and homogeneous in (Q·L per run, Q·m, cos c, sin c). Eliminating Q·L and Q·m, the
-// constraint cos²c + sin²c = 1 leaves a 2×2 eigenproblem (rows reweighted by 1/distance² so that
-// they measure angles); the fit is scored by its bearing errors. (δ, ξ) come from a grid whose
-// steps turn the dead-reckoned heading by at most `heading_tolerance_rad` (the information on
-// them is the long-range agreement of odometry heading and bearings, so the basin is that
-// narrow), then from local refinement of the best minima.
-StatusOr<BearingParams> SearchBearingSeed(const BearingLog& log,
-                                          const BearingSearchOptions& options = {});
 
 }  // namespace calib
 

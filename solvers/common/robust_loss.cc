@@ -6,7 +6,7 @@ StatusOr<RobustLoss> ParseRobustLoss(const std::string& name) {
   if (name == "cauchy") return RobustLoss::kCauchy;
   if (name == "huber") return RobustLoss::kHuber;
   if (name == "none") return RobustLoss::kNone;
-  return Status::Error("unknown loss '" + name + "' (expected cauchy, huber or none)");
+  return Status::InvalidInput("unknown loss '" + name + "' (expected cauchy, huber or none)");
 }
 
 std::string RobustLossName(RobustLoss loss) {

@@ -1,12 +1,11 @@
 #ifndef CALIB_SOLVERS_COMMON_ROBUST_LOSS_H_
 #define CALIB_SOLVERS_COMMON_ROBUST_LOSS_H_
 
+#include <calib/core/status.h>
 #include <ceres/loss_function.h>
 
 #include <memory>
 #include <string>
-
-#include <calib/core/status.h>
 
 namespace calib {
 

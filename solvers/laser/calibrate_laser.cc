@@ -1,3 +1,4 @@
+#include <calib/solvers/common/solver_options.h>
 #include <calib/solvers/laser/calibrate_laser.h>
 
 #include <algorithm>
@@ -35,10 +36,18 @@ constexpr size_t kWarmStartSubset = 50000;
 // (the tests check that the two agree).
 constexpr size_t kCeresCovarianceUpTo = 200000;
 
+// What a sequence of solves did: iterations summed, and whether the last one converged.
+struct SolveOutcome {
+  int iterations = 0;
+  bool converged = true;
+  std::string not_converged;  // Why the last solve stopped, when it did not converge.
+};
+
 // Fits, re-estimates each log's noise from the residuals (unless fixed), and fits again while
 // the noise level still moves enough to shift the weights.
-Status RefineWithNoise(const LaserCalibrationOptions& options, LaserProblem* problem,
-                       int* iterations, const std::function<void(const std::string&)>& report) {
+StatusOr<SolveOutcome> RefineWithNoise(const LaserCalibrationOptions& options,
+                                       LaserProblem* problem,
+                                       const std::function<void(const std::string&)>& report) {
   // Whitens each log by its robust noise level; returns the largest relative change.
   const auto estimate_noise = [&]() {
     double change = 0.0;
@@ -52,34 +61,95 @@ Status RefineWithNoise(const LaserCalibrationOptions& options, LaserProblem* pro
     return change;
   };
   estimate_noise();
+  SolveOutcome outcome;
   for (int round = 0; round < std::max(1, options.noise_rounds); ++round) {
     ceres::Solver::Summary summary;
-    const Status solved = problem->Solve(&summary);
-    if (!solved.ok()) return solved;
-    *iterations += static_cast<int>(summary.iterations.size());
+    CALIB_RETURN_IF_ERROR(problem->Solve(&summary));
+    outcome.iterations += static_cast<int>(summary.iterations.size());
+    outcome.converged = Converged(summary);
+    outcome.not_converged = outcome.converged ? "" : NotConvergedText("the refinement", summary);
     report("refinement round " + std::to_string(round + 1) + ": " +
            std::to_string(summary.iterations.size()) + " iterations");
     if (options.noise_sigma || estimate_noise() < kNoiseRefitChange) break;
   }
-  return Status::Ok();
+  return outcome;
+}
+
+// Every `stride`-th interval of each log (the warm start's subset).
+std::vector<std::vector<LaserInterval>> EvenSubsets(
+    const std::vector<const std::vector<LaserInterval>*>& logs, size_t stride) {
+  std::vector<std::vector<LaserInterval>> subsets(logs.size());
+  for (size_t d = 0; d < logs.size(); ++d) {
+    for (size_t k = 0; k < logs[d]->size(); k += stride) subsets[d].push_back((*logs[d])[k]);
+  }
+  return subsets;
+}
+
+// The refinement's seed: the paper's trimmed closed form. Slips can drag the plain one far
+// enough (at a few hundred noisy intervals with 20 % slips) that LM settles in a wrong basin with
+// near-zero radii. When the trimming fails (it can remove the few turns a log has) the plain one
+// is used, and a warning says so.
+void SeedFromTrimmedClosedForm(const std::vector<LaserInterval>& intervals,
+                               LaserCalibrationResult* result) {
+  const StatusOr<TrimmedClosedFormResult> trimmed = CensiClosedFormTrimmed(intervals);
+  result->seed_trimmed = trimmed.ok();
+  if (trimmed.ok()) {
+    result->closed_form_trimmed = trimmed->estimate;
+    return;
+  }
+  result->closed_form_trimmed = result->closed_form;
+  result->warnings.push_back("the trimmed closed form failed (" + trimmed.message() +
+                             "): the refinement started from the closed form on all intervals");
+}
+
+// Inliers of each log (squared whitened residual below the cut) and their noise level. A log
+// without inliers keeps the robust level of all its intervals, with a warning (never NaN).
+void ClassifyInliers(const LaserProblem& problem, double inlier_chi2,
+                     LaserCalibrationResult* result) {
+  for (size_t d = 0; d < problem.num_datasets(); ++d) {
+    const std::vector<Eigen::Vector3d> errors = problem.Errors(d);
+    const Eigen::Matrix3d& sqrt_information = problem.sqrt_information(d);
+    std::vector<bool> inlier(errors.size());
+    Eigen::Vector3d sum_sq = Eigen::Vector3d::Zero();
+    int count = 0;
+    for (size_t k = 0; k < errors.size(); ++k) {
+      inlier[k] = (sqrt_information * errors[k]).squaredNorm() < inlier_chi2;
+      if (inlier[k]) {
+        sum_sq += errors[k].cwiseAbs2();
+        ++count;
+      }
+    }
+    result->inliers += count;
+    if (count > 0) {
+      result->noise_sigma.push_back((sum_sq / count).cwiseSqrt());
+    } else {
+      result->noise_sigma.push_back(RobustNoiseSigma(errors));
+      result->warnings.push_back(
+          (problem.num_datasets() > 1 ? "log " + std::to_string(d + 1) + ": " : std::string()) +
+          "no interval agrees with the model: its scan noise is the robust level of all "
+          "intervals");
+    }
+    result->is_inlier.push_back(std::move(inlier));
+  }
 }
 
 }  // namespace
 
 Status ValidateLaserIntervals(const std::vector<LaserInterval>& intervals) {
-  if (intervals.empty()) return Status::Error("the log holds no intervals");
+  if (intervals.empty()) return Status::InvalidInput("the log holds no intervals");
   for (size_t k = 0; k < intervals.size(); ++k) {
     const LaserInterval& interval = intervals[k];
     if (!(interval.duration_s > 0.0) || !std::isfinite(interval.duration_s)) {
-      return Status::Error(IntervalName(interval, k) + ": T must be positive and finite");
+      return Status::InvalidInput(IntervalName(interval, k) + ": T must be positive and finite");
     }
     if (!std::isfinite(interval.left_speed) || !std::isfinite(interval.right_speed) ||
         !interval.sensor_motion.allFinite()) {
-      return Status::Error(IntervalName(interval, k) + ": wheel speeds and sm must be finite");
+      return Status::InvalidInput(IntervalName(interval, k) +
+                                  ": wheel speeds and sm must be finite");
     }
     for (const WheelStep& step : interval.steps) {
       if (!std::isfinite(step.left_rad) || !std::isfinite(step.right_rad)) {
-        return Status::Error(IntervalName(interval, k) + ": wheel steps must be finite");
+        return Status::InvalidInput(IntervalName(interval, k) + ": wheel steps must be finite");
       }
     }
   }
@@ -97,16 +167,13 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   const auto report = [&](const std::string& line) {
     if (options.progress) options.progress(line);
   };
+  if (logs.empty()) return Status::InvalidInput("no logs to calibrate");
   std::vector<LaserInterval> all;
   for (size_t i = 0; i < logs.size(); ++i) {
-    const Status valid = ValidateLaserIntervals(*logs[i]);
-    if (!valid.ok()) {
-      return Status::Error(logs.size() > 1 ? "log " + std::to_string(i + 1) + ": " + valid.message()
-                                           : valid.message());
-    }
+    CALIB_RETURN_IF_ERROR(ValidateLaserIntervals(*logs[i]).Prefixed(
+        logs.size() > 1 ? "log " + std::to_string(i + 1) + ": " : ""));
     if (logs.size() > 1) all.insert(all.end(), logs[i]->begin(), logs[i]->end());
   }
-  if (logs.empty()) return Status::Error("no logs to calibrate");
   const std::vector<LaserInterval>& joined = logs.size() > 1 ? all : *logs[0];
 
   LaserCalibrationResult result;
@@ -114,21 +181,15 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   result.census = CountLaserMotion(joined);
 
   auto start = std::chrono::steady_clock::now();
-  StatusOr<CensiClosedFormResult> closed_form = CensiClosedForm(joined);
-  if (!closed_form.ok()) return closed_form.status();
-  result.closed_form = *closed_form;
-  // The refinement starts from the paper's trimmed closed form: slips can drag the plain one far
-  // enough (at a few hundred noisy intervals with 20 % slips) that LM settles in a wrong basin with
-  // near-zero radii. On huge logs an evenly spread subset suffices for a seed.
+  CALIB_ASSIGN_OR_RETURN(result.closed_form, CensiClosedForm(joined));
+  // On huge logs an evenly spread subset suffices for a seed.
   const size_t total = joined.size();
   const size_t stride = (total + kWarmStartSubset - 1) / kWarmStartSubset;
-  std::vector<LaserInterval> seed_subset;
   if (total > kWarmStartAbove) {
-    for (size_t k = 0; k < total; k += stride) seed_subset.push_back(joined[k]);
+    SeedFromTrimmedClosedForm(EvenSubsets({&joined}, stride).front(), &result);
+  } else {
+    SeedFromTrimmedClosedForm(joined, &result);
   }
-  const StatusOr<TrimmedClosedFormResult> trimmed =
-      CensiClosedFormTrimmed(seed_subset.empty() ? joined : seed_subset);
-  result.closed_form_trimmed = trimmed.ok() ? trimmed->estimate : *closed_form;
   result.closed_form_seconds = SecondsSince(start);
   report("closed form done in " + std::to_string(result.closed_form_seconds) + " s");
 
@@ -138,15 +199,15 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   if (total > kWarmStartAbove) {
     // Refine on an evenly spread subset first: its optimum lies within a few full-data sigmas of
     // the final one, so the full problem then converges in a few iterations.
-    std::vector<std::vector<LaserInterval>> subsets(logs.size());
+    const std::vector<std::vector<LaserInterval>> subsets = EvenSubsets(logs, stride);
     std::vector<LaserDataset> subset_datasets;
-    for (size_t d = 0; d < logs.size(); ++d) {
-      for (size_t k = 0; k < logs[d]->size(); k += stride) subsets[d].push_back((*logs[d])[k]);
-      subset_datasets.push_back(LaserDataset{&subsets[d], Eigen::Matrix3d::Identity()});
+    for (const auto& subset : subsets) {
+      subset_datasets.push_back(LaserDataset{&subset, Eigen::Matrix3d::Identity()});
     }
     LaserProblem warm(subset_datasets, initial, options.refinement);
-    const Status solved = RefineWithNoise(options, &warm, &result.iterations, report);
-    if (!solved.ok()) return solved;
+    CALIB_ASSIGN_OR_RETURN(const SolveOutcome warm_outcome,
+                           RefineWithNoise(options, &warm, report));
+    result.iterations += warm_outcome.iterations;
     initial = warm.calibration();
     for (size_t d = 0; d < logs.size(); ++d) {
       initial_sigma.push_back(warm.sqrt_information(d).diagonal().cwiseInverse());
@@ -160,37 +221,20 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
                                                  : DiagonalSqrtInformation(initial_sigma[d])});
   }
   LaserProblem problem(datasets, initial, options.refinement);
-  const Status solved = RefineWithNoise(options, &problem, &result.iterations, report);
-  if (!solved.ok()) return solved;
+  CALIB_ASSIGN_OR_RETURN(const SolveOutcome outcome, RefineWithNoise(options, &problem, report));
+  result.iterations += outcome.iterations;
+  result.converged = outcome.converged;
+  if (!outcome.converged) result.warnings.push_back(outcome.not_converged);
   result.estimate = problem.calibration();
   result.refinement_seconds = SecondsSince(start);
-
-  // Inliers and their noise level.
-  for (size_t d = 0; d < logs.size(); ++d) {
-    const std::vector<Eigen::Vector3d> errors = problem.Errors(d);
-    const Eigen::Matrix3d& sqrt_information = problem.sqrt_information(d);
-    std::vector<bool> inlier(errors.size());
-    Eigen::Vector3d sum_sq = Eigen::Vector3d::Zero();
-    int count = 0;
-    for (size_t k = 0; k < errors.size(); ++k) {
-      inlier[k] = (sqrt_information * errors[k]).squaredNorm() < options.inlier_chi2;
-      if (inlier[k]) {
-        sum_sq += errors[k].cwiseAbs2();
-        ++count;
-      }
-    }
-    result.inliers += count;
-    result.noise_sigma.push_back(count > 0 ? Eigen::Vector3d((sum_sq / count).cwiseSqrt())
-                                           : Eigen::Vector3d::Constant(NAN));
-    result.is_inlier.push_back(std::move(inlier));
-  }
+  ClassifyInliers(problem, options.inlier_chi2, &result);
 
   start = std::chrono::steady_clock::now();
-  StatusOr<LaserParamMatrix> covariance =
-      total <= kCeresCovarianceUpTo ? problem.Covariance() : problem.SandwichCovariance();
-  if (!covariance.ok()) return covariance.status();
-  result.covariance = *covariance;
-  result.covariance_scale = total <= kCeresCovarianceUpTo ? problem.covariance_scale() : 1.0;
+  CALIB_ASSIGN_OR_RETURN(
+      const CorrectedCovariance<LaserParamMatrix> covariance,
+      total <= kCeresCovarianceUpTo ? problem.Covariance() : problem.SandwichCovariance());
+  result.covariance = covariance.covariance;
+  result.covariance_scale = covariance.kappa;
   result.stddev = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
   result.covariance_seconds = SecondsSince(start);
   result.observability =
@@ -201,6 +245,9 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
         " intervals agree with the model: check the wheel-speed signs, units and the scan "
         "matcher");
   }
+  // The solver's warnings join the observability's, which the report prints.
+  result.observability.warnings.insert(result.observability.warnings.end(), result.warnings.begin(),
+                                       result.warnings.end());
   return result;
 }
 

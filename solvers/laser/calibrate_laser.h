@@ -1,19 +1,19 @@
 #ifndef CALIB_SOLVERS_LASER_CALIBRATE_LASER_H_
 #define CALIB_SOLVERS_LASER_CALIBRATE_LASER_H_
 
-#include <Eigen/Core>
-#include <functional>
-#include <optional>
-#include <string>
-#include <vector>
-
-#include <calib/core/laser/laser_params.h>
 #include <calib/core/laser/laser_log.h>
+#include <calib/core/laser/laser_params.h>
 #include <calib/core/status.h>
 #include <calib/solvers/laser/censi_closed_form.h>
 #include <calib/solvers/laser/laser_motion.h>
 #include <calib/solvers/laser/laser_observability.h>
 #include <calib/solvers/laser/laser_refinement.h>
+
+#include <Eigen/Core>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
 
 // Laser–odometry calibration in one call: closed form → robust Ceres refinement with the scan
 // noise estimated from the data → covariance → observability report.
@@ -42,6 +42,7 @@ struct LaserCalibrationResult {
   LaserParamVector stddev = LaserParamVector::Zero();
   CensiClosedFormResult closed_form;          // The paper's closed form on all data.
   CensiClosedFormResult closed_form_trimmed;  // With its trimming: the refinement's seed.
+  bool seed_trimmed = true;  // False: the trimming failed and the seed is `closed_form`.
   int samples = 0;
   int inliers = 0;
   std::vector<std::vector<bool>> is_inlier;  // Per log, per interval.
@@ -50,6 +51,10 @@ struct LaserCalibrationResult {
   LaserObservability observability;
   double covariance_scale = 1.0;  // The loss correction κ applied to Ceres' covariance.
   int iterations = 0;
+  bool converged = true;  // The final refinement stopped by a convergence test.
+  // What went wrong on the way without stopping the calibration (a failed trimming, no
+  // convergence, a log without inliers); also appended to observability.warnings.
+  std::vector<std::string> warnings;
   double closed_form_seconds = 0.0;
   double refinement_seconds = 0.0;
   double covariance_seconds = 0.0;

@@ -1,12 +1,11 @@
+#include <calib/core/se2.h>
 #include <calib/solvers/laser/censi_closed_form.h>
+#include <calib/solvers/laser/laser_motion.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <string>
-
-#include <calib/core/se2.h>
-#include <calib/solvers/laser/laser_motion.h>
 
 namespace calib {
 namespace {
@@ -40,7 +39,7 @@ StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>
                                                 const CensiClosedFormOptions& options) {
   const LaserMotionCensus census = CountLaserMotion(intervals, use);
   const std::string missing = DescribeMissingLaserMotion(census);
-  if (!missing.empty()) return Status::Error(missing);
+  if (!missing.empty()) return Status::NotObservable(missing);
 
   // §II-B: [Δφ_l Δφ_r] [J21 J22]ᵀ = ŝ_θ, by linear least squares.
   Eigen::Matrix2d ata = Eigen::Matrix2d::Zero();
@@ -56,9 +55,10 @@ StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>
   // Condition number of the stacked system itself is the square root of that of AᵀA.
   result.j_condition_number = std::sqrt(ScaledConditionNumber(ata));
   if (!(result.j_condition_number < options.max_condition_number)) {
-    return Status::Error("the rotation system for J21, J22 is degenerate (condition number " +
-                         std::to_string(result.j_condition_number) +
-                         "): the log needs turns with different wheel-speed ratios");
+    return Status::NotObservable(
+        "the rotation system for J21, J22 is degenerate (condition number " +
+        std::to_string(result.j_condition_number) +
+        "): the log needs turns with different wheel-speed ratios");
   }
   const Eigen::Vector2d j = ata.ldlt().solve(atb);
   result.j21 = j(0);
@@ -85,7 +85,7 @@ StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>
   const Eigen::Matrix2d cc = m.bottomRightCorner<2, 2>();
   const double a_condition = ScaledConditionNumber(a);
   if (!(a_condition < options.max_condition_number * options.max_condition_number)) {
-    return Status::Error(
+    return Status::NotObservable(
         "the system for b and the sensor position is degenerate (condition number " +
         std::to_string(a_condition) + "): the log needs both arcs (or straight runs) and turns");
   }
@@ -99,7 +99,7 @@ StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>
   x.tail<2>() = q;
   if (x(0) < 0.0) x = -x;  // Constraint (19): b > 0.
   if (!(x(0) > 0.0) || !x.allFinite()) {
-    return Status::Error(
+    return Status::NotObservable(
         "the closed form gave a non-positive wheelbase: the data do not fit a "
         "differential-drive robot (check the sign of the wheel speeds)");
   }
@@ -108,10 +108,11 @@ StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>
   result.calibration.base_T_sensor = Pose2d(x(1), x(2), std::atan2(x(4), x(3)));
   if (result.calibration.odometry.left_radius_m <= 0.0 ||
       result.calibration.odometry.right_radius_m <= 0.0) {
-    return Status::Error("the closed form gave a non-positive wheel radius (r_l = " +
-                         std::to_string(result.calibration.odometry.left_radius_m) +
-                         ", r_r = " + std::to_string(result.calibration.odometry.right_radius_m) +
-                         "): check that positive wheel speeds drive the robot forward");
+    return Status::NotObservable(
+        "the closed form gave a non-positive wheel radius (r_l = " +
+        std::to_string(result.calibration.odometry.left_radius_m) +
+        ", r_r = " + std::to_string(result.calibration.odometry.right_radius_m) +
+        "): check that positive wheel speeds drive the robot forward");
   }
   return result;
 }
@@ -121,13 +122,11 @@ StatusOr<TrimmedClosedFormResult> CensiClosedFormTrimmed(
   TrimmedClosedFormResult result;
   result.kept.assign(intervals.size(), true);
   for (int round = 0;; ++round) {
-    StatusOr<CensiClosedFormResult> estimate =
-        CensiClosedForm(intervals, &result.kept, options.closed_form);
-    if (!estimate.ok()) return estimate.status();
-    result.estimate = *estimate;
+    CALIB_ASSIGN_OR_RETURN(result.estimate,
+                           CensiClosedForm(intervals, &result.kept, options.closed_form));
     if (round == options.rounds) break;
     // e = ℓ ⊕ ŝ − ô ⊕ ℓ (§III-B), in the robot frame.
-    const LaserCalibration& cal = estimate->calibration;
+    const LaserCalibration& cal = result.estimate.calibration;
     std::vector<double> xy_error(intervals.size()), theta_error(intervals.size());
     std::vector<double> kept_xy, kept_theta;
     for (size_t k = 0; k < intervals.size(); ++k) {

@@ -1,3 +1,6 @@
+#include <calib/problems/laser/laser_residual.h>
+#include <calib/problems/positive_manifold.h>
+#include <calib/solvers/common/solver_options.h>
 #include <calib/solvers/laser/laser_refinement.h>
 
 #include <Eigen/Dense>
@@ -6,12 +9,13 @@
 #include <cmath>
 #include <thread>
 
-#include <calib/problems/laser/laser_residual.h>
-#include <calib/problems/positive_manifold.h>
-
 namespace calib {
 
 namespace {
+
+constexpr char kSingular[] =
+    "the information matrix is singular: the log does not determine all six parameters";
+constexpr char kTooFew[] = "too few intervals for a covariance";
 
 // Runs body(chunk, begin, end) over [0, n) split into `threads` contiguous chunks, in parallel:
 // the per-interval passes (errors, covariance) are a noticeable share of a million-interval run.
@@ -58,29 +62,12 @@ LaserProblem::LaserProblem(const std::vector<LaserDataset>& datasets,
 LaserProblem::~LaserProblem() = default;
 
 Status LaserProblem::Solve(ceres::Solver::Summary* summary) {
-  ceres::Solver::Options solver_options;
-  solver_options.minimizer_type = ceres::TRUST_REGION;
-  solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  solver_options.max_num_iterations = options_.max_iterations;
-  solver_options.num_threads = options_.num_threads;
-  // Stop once an iteration lowers the cost by less than ~0.01 (in units of whitened χ²/2): the
-  // step then moved the estimate by about a tenth of its sigma, and what remains is smaller
-  // still. The cost is about 1.5 per interval, hence the relative tolerance.
-  solver_options.function_tolerance =
-      std::min(1e-6, 0.005 / std::max<size_t>(1, cost_functions_.size()));
-  solver_options.gradient_tolerance = 1e-12;
-  solver_options.parameter_tolerance = 1e-10;
-  solver_options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary local_summary;
-  ceres::Solve(solver_options, problem_.get(), &local_summary);
-  if (summary != nullptr) *summary = local_summary;
-  if (local_summary.termination_type == ceres::FAILURE ||
-      !std::isfinite(local_summary.final_cost)) {
-    return Status::Error("the refinement failed: " + local_summary.message);
-  }
+  CALIB_RETURN_IF_ERROR(
+      calib::Solve(LaserRefinementSettings(cost_functions_.size(), options_.max_iterations,
+                                           options_.num_threads),
+                   "the refinement", problem_.get(), summary));
   if (!(odometry_[0] > 0.0 && odometry_[1] > 0.0 && odometry_[2] > 0.0)) {
-    return Status::Error(
+    return Status::NotObservable(
         "the refinement drove a wheel radius or the wheelbase to a non-positive "
         "value: the data do not fit a differential-drive robot");
   }
@@ -123,56 +110,31 @@ std::vector<double> LaserProblem::WhitenedSquaredNorms(size_t dataset) const {
   return s;
 }
 
-double LaserProblem::LossWeight(double s) const {
-  if (!loss_) return 1.0;
-  double rho[3];
-  loss_->Evaluate(s, rho);
-  return rho[1];
-}
+double LaserProblem::LossWeight(double s) const { return EvaluateLoss(loss_.get(), s).rho1; }
 
-StatusOr<LaserParamMatrix> LaserProblem::Covariance() const {
-  ceres::Covariance::Options covariance_options;
-  covariance_options.num_threads = options_.num_threads;
-  covariance_options.algorithm_type = ceres::SPARSE_QR;
-  covariance_options.apply_loss_function = true;
-  ceres::Covariance covariance(covariance_options);
+StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::Covariance() const {
+  ceres::Covariance covariance(MakeCovarianceOptions(options_.num_threads));
   const std::vector<const double*> blocks = {odometry_, base_T_sensor_};
-  if (!covariance.Compute(blocks, problem_.get())) {
-    return Status::Error(
-        "the information matrix is singular: the log does not determine all six "
-        "parameters");
-  }
+  if (!covariance.Compute(blocks, problem_.get())) return Status::NotObservable(kSingular);
   LaserParamMatrix cov;
   if (!covariance.GetCovarianceMatrix(blocks, cov.data())) {
-    return Status::Error("could not read the covariance from Ceres");
+    return Status::Internal("could not read the covariance from Ceres");
   }
   // Ceres fills row-major; the matrix is symmetric, so the layout does not matter.
-  double sum_weight = 0.0, sum_meat = 0.0, sum_bread = 0.0;
-  size_t n = 0;
+  LossCorrectionSums sums;
   for (size_t d = 0; d < datasets_.size(); ++d) {
-    for (double s : WhitenedSquaredNorms(d)) {
-      double rho[3] = {s, 1.0, 0.0};
-      if (loss_) loss_->Evaluate(s, rho);
-      sum_weight += rho[1];
-      sum_meat += rho[1] * rho[1] * s / 3.0;
-      sum_bread += rho[1] + 2.0 * rho[2] * s / 3.0;
-      ++n;
-    }
+    for (double s : WhitenedSquaredNorms(d)) sums.Add(s, loss_.get(), 3);
   }
-  const double components = 3.0 * n;
-  if (components <= kNumLaserParams || sum_bread <= 0.0) {
-    return Status::Error("too few intervals for a covariance");
-  }
-  const double mean_weight = sum_weight / n, mean_meat = sum_meat / n, mean_bread = sum_bread / n;
-  covariance_scale_ = mean_weight * mean_meat / (mean_bread * mean_bread) * components /
-                      (components - kNumLaserParams);
-  return LaserParamMatrix(cov * covariance_scale_);
+  const double components = 3.0 * sums.blocks;
+  if (components <= kNumLaserParams) return Status::NotObservable(kTooFew);
+  CALIB_ASSIGN_OR_RETURN(const double kappa,
+                         LossCorrection(sums, components, components - kNumLaserParams));
+  return CorrectedCovariance<LaserParamMatrix>{cov * kappa, kappa};
 }
 
-StatusOr<LaserParamMatrix> LaserProblem::SandwichCovariance() const {
+StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::SandwichCovariance() const {
   const int threads = std::max(1, options_.num_threads);
-  std::vector<LaserParamMatrix> breads(threads, LaserParamMatrix::Zero());
-  std::vector<LaserParamMatrix> meats(threads, LaserParamMatrix::Zero());
+  std::vector<SandwichSums<kNumLaserParams>> sums(threads);
   std::atomic<bool> failed{false};
   ParallelChunks(cost_functions_.size(), threads, [&](size_t chunk, size_t begin, size_t end) {
     const double* parameters[2] = {odometry_, base_T_sensor_};
@@ -186,30 +148,19 @@ StatusOr<LaserParamMatrix> LaserProblem::SandwichCovariance() const {
         return;
       }
       j << j_odometry, j_sensor;
-      const double s = r.squaredNorm();
-      double rho[3] = {s, 1.0, 0.0};
-      if (loss_) loss_->Evaluate(s, rho);
-      const Eigen::Matrix<double, kNumLaserParams, 1> g = j.transpose() * r;
-      breads[chunk] += rho[1] * j.transpose() * j + 2.0 * rho[2] * g * g.transpose();
-      meats[chunk] += rho[1] * rho[1] * g * g.transpose();
+      sums[chunk].Add(j, r, EvaluateLoss(loss_.get(), r.squaredNorm()));
     }
   });
-  if (failed) return Status::Error("a residual could not be evaluated at the estimate");
-  LaserParamMatrix bread = LaserParamMatrix::Zero(), meat = LaserParamMatrix::Zero();
-  for (int c = 0; c < threads; ++c) {
-    bread += breads[c];
-    meat += meats[c];
-  }
+  if (failed) return Status::Internal("a residual could not be evaluated at the estimate");
+  for (int c = 1; c < threads; ++c) sums[0] += sums[c];
   const double n = 3.0 * cost_functions_.size();
-  if (n <= kNumLaserParams) return Status::Error("too few intervals for a covariance");
-  const Eigen::LDLT<LaserParamMatrix> ldlt(bread);
-  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
-    return Status::Error(
-        "the information matrix is singular: the log does not determine all six "
-        "parameters");
+  if (n <= kNumLaserParams) return Status::NotObservable(kTooFew);
+  StatusOr<CorrectedCovariance<LaserParamMatrix>> sandwich =
+      calib::SandwichCovariance(sums[0], n, n - kNumLaserParams);
+  if (!sandwich.ok() && sandwich.code() == StatusCode::kNotObservable) {
+    return Status::NotObservable(kSingular);
   }
-  const LaserParamMatrix inverse = ldlt.solve(LaserParamMatrix::Identity());
-  return LaserParamMatrix(inverse * meat * inverse * (n / (n - kNumLaserParams)));
+  return sandwich;
 }
 
 Eigen::Vector3d RobustNoiseSigma(const std::vector<Eigen::Vector3d>& errors) {

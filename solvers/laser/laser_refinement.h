@@ -1,17 +1,17 @@
 #ifndef CALIB_SOLVERS_LASER_LASER_REFINEMENT_H_
 #define CALIB_SOLVERS_LASER_LASER_REFINEMENT_H_
 
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/laser/laser_params.h>
+#include <calib/core/status.h>
+#include <calib/solvers/common/robust_covariance.h>
+#include <calib/solvers/common/robust_loss.h>
 #include <ceres/ceres.h>
 
 #include <Eigen/Core>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <calib/core/laser/laser_params.h>
-#include <calib/core/laser/laser_log.h>
-#include <calib/core/status.h>
-#include <calib/solvers/common/robust_loss.h>
 
 // Maximum-likelihood refinement of the laser–odometry calibration with Ceres
 // (Levenberg–Marquardt, robust loss instead of the paper's trimming).
@@ -57,17 +57,13 @@ class LaserProblem {
   std::vector<double> WhitenedSquaredNorms(size_t dataset) const;
 
   // Covariance of the six parameters: ceres::Covariance of the robustified problem (whose
-  // Jacobian carries the IRLS weights √ρ'), times Huber's correction
-  //   κ = mean(ρ')·mean(ρ'²·s/3) / mean(ρ' + 2ρ''·s/3)² · n/(n − 6)
-  // (n residual components), which makes it the sandwich H⁻¹·B·H⁻¹ of the M-estimator and, for
-  // the plain squared loss, the usual σ̂²(JᵀJ)⁻¹.
-  StatusOr<LaserParamMatrix> Covariance() const;
-  double covariance_scale() const { return covariance_scale_; }
+  // Jacobian carries the IRLS weights √ρ'), times the loss correction κ with n/(n − 6), n the
+  // residual components (solvers/common/robust_covariance.h), and that κ.
+  StatusOr<CorrectedCovariance<LaserParamMatrix>> Covariance() const;
 
-  // The M-estimator's sandwich H⁻¹·B·H⁻¹·n/(n − 6) from per-interval Jacobians J_i and whitened
-  // residuals r_i: H = Σ J_iᵀ(ρ'·I + 2ρ''·r_i r_iᵀ)J_i, B = Σ ρ'²·J_iᵀ r_i r_iᵀ J_i. Unlike the
-  // scalar correction it stays honest when the residual scatter differs between kinds of motion.
-  StatusOr<LaserParamMatrix> SandwichCovariance() const;
+  // The M-estimator's sandwich H⁻¹·B·H⁻¹·n/(n − 6) from the per-interval Jacobians (κ = 1): one
+  // pass over the intervals, for logs where ceres::Covariance takes too long.
+  StatusOr<CorrectedCovariance<LaserParamMatrix>> SandwichCovariance() const;
 
   // The loss's weight ρ'(s) for a squared whitened norm s (1 without a robust loss).
   double LossWeight(double s) const;
@@ -82,7 +78,6 @@ class LaserProblem {
   LaserRefinementOptions options_;
   double odometry_[3];
   double base_T_sensor_[3];
-  mutable double covariance_scale_ = 1.0;
 };
 
 // Robust per-component noise level of errors: 1.4826 × median absolute deviation about the

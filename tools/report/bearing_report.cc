@@ -37,7 +37,7 @@ nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
   out["closed_form"] =
       BearingParamObject(ToVector(result.seed), result.has_seed_metric ? &seed_metric : nullptr);
   out["closed_form_method"] =
-      result.seed_method == "closed_form"
+      result.seed_method == BearingSeedMethod::kClosedForm
           ? "Martinelli's closed form on the circular runs"
           : "coarse search (the closed form does not apply: " + result.closed_form_message + ")";
   out["samples"] = result.samples;
@@ -110,7 +110,7 @@ std::string BearingResultSummary(const BearingCalibrationResult& result, const s
                 input.c_str(), result.runs.size(), result.samples, result.inliers, loss.c_str());
   text += line;
   std::snprintf(line, sizeof(line), "  %-14s %14s   %-12s %14s\n", "parameter", "estimate", "± σ",
-                result.seed_method == "closed_form" ? "closed form" : "search seed");
+                result.seed_method == BearingSeedMethod::kClosedForm ? "closed form" : "search seed");
   text += line;
   const auto row = [&](const std::string& name, double value, double sigma, double seed,
                        double scale) {

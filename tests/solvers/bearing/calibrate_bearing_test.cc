@@ -1,8 +1,10 @@
 // Bearing-only calibration end to end: CalibrateBearing on simulated logs (circles, a
 // non-circular trajectory, outliers, degenerate logs) and `calib calibrate` on bearing log
 // directories (the shipped sample and broken ones).
+#include <calib/core/bearing/bearing_log_io.h>
+#include <calib/core/bearing/bearing_simulator.h>
+#include <calib/solvers/bearing/bearing_crlb.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
-
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -18,9 +20,6 @@
 #include <string>
 #include <vector>
 
-#include <calib/core/bearing/bearing_log_io.h>
-#include <calib/core/bearing/bearing_simulator.h>
-#include <calib/solvers/bearing/bearing_crlb.h>
 #include "tests/tools/cli_runner.h"
 
 namespace calib {
@@ -73,6 +72,25 @@ void ExpectHonest(const BearingCalibrationResult& r, const BearingSimTruth& trut
   }
 }
 
+// A simulated log, its calibration and the bound at the truth with the simulated noise.
+struct SimulatedCalibration {
+  BearingSimTruth truth;
+  BearingLog log;
+  BearingCalibrationResult result;
+  BearingBound bound;
+};
+
+void CalibrateSimulated(const BearingSimOptions& o, SimulatedCalibration* out) {
+  out->log = SimulateBearingLog(o, &out->truth);
+  const StatusOr<BearingCalibrationResult> r = CalibrateBearing(out->log);
+  ASSERT_TRUE(r.ok()) << r.message();
+  out->result = *r;
+  const StatusOr<BearingBound> bound =
+      BearingCramerRaoBound(out->log, out->truth, {o.bearing_noise_rad, o.encoder_noise_k});
+  ASSERT_TRUE(bound.ok()) << bound.message();
+  out->bound = *bound;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Recovery on noisy logs.
 
@@ -81,16 +99,13 @@ TEST(CalibrateBearingTest, Section81CirclesWithinThreeSigmaWithSigmasAtTheBound)
   o.bearing_noise_rad = 1.0 * kDeg;
   o.initial_distance_run = 1;
   o.seed = 11;
-  BearingSimTruth truth;
-  const BearingLog log = SimulateBearingLog(o, &truth);
-  const StatusOr<BearingCalibrationResult> r = CalibrateBearing(log);
-  ASSERT_TRUE(r.ok()) << r.message();
-  const StatusOr<BearingBound> bound = BearingCramerRaoBound(log, truth, {1.0 * kDeg, 1e-3});
-  ASSERT_TRUE(bound.ok()) << bound.message();
-  EXPECT_EQ(r->seed_method, "closed_form");
+  SimulatedCalibration c;
+  ASSERT_NO_FATAL_FAILURE(CalibrateSimulated(o, &c));
+  const BearingCalibrationResult* r = &c.result;
+  EXPECT_EQ(r->seed_method, BearingSeedMethod::kClosedForm);
   EXPECT_TRUE(r->has_closed_form);
   EXPECT_TRUE(r->has_metric);
-  ExpectHonest(*r, truth, *bound, 0.7, 1.6);
+  ExpectHonest(*r, c.truth, c.bound, 0.7, 1.6);
   EXPECT_NEAR(r->noise.bearing_sigma_rad / (1.0 * kDeg), 1.0, 0.1);
   EXPECT_GE(r->noise.encoder_k, 1e-3);  // Never below its floor.
   EXPECT_EQ(r->samples, 814);
@@ -105,18 +120,15 @@ TEST(CalibrateBearingTest, NonCircularTrajectoryIsSeededBySearchAndRecovered) {
   o.runs = {NonCircularRun()};
   o.bearing_noise_rad = 1.0 * kDeg;
   o.seed = 12;
-  BearingSimTruth truth;
-  const BearingLog log = SimulateBearingLog(o, &truth);
-  const StatusOr<BearingCalibrationResult> r = CalibrateBearing(log);
-  ASSERT_TRUE(r.ok()) << r.message();
-  const StatusOr<BearingBound> bound = BearingCramerRaoBound(log, truth, {1.0 * kDeg, 1e-3});
-  ASSERT_TRUE(bound.ok()) << bound.message();
-  EXPECT_EQ(r->seed_method, "search");
+  SimulatedCalibration c;
+  ASSERT_NO_FATAL_FAILURE(CalibrateSimulated(o, &c));
+  const BearingCalibrationResult* r = &c.result;
+  EXPECT_EQ(r->seed_method, BearingSeedMethod::kSearch);
   EXPECT_FALSE(r->has_closed_form);
   EXPECT_NE(r->closed_form_message.find("circular runs"), std::string::npos)
       << r->closed_form_message;
   EXPECT_FALSE(r->has_metric);
-  ExpectHonest(*r, truth, *bound, 0.7, 1.6);
+  ExpectHonest(*r, c.truth, c.bound, 0.7, 1.6);
   EXPECT_FALSE(r->runs[0].circular);
 }
 
@@ -143,16 +155,13 @@ TEST(CalibrateBearingTest, MixedCircularAndNonCircularRunsUseTheClosedFormSeed) 
   o.bearing_noise_rad = 1.0 * kDeg;
   o.initial_distance_run = 4;  // The distance of the non-circular run's start.
   o.seed = 14;
-  BearingSimTruth truth;
-  const BearingLog log = SimulateBearingLog(o, &truth);
-  const StatusOr<BearingCalibrationResult> r = CalibrateBearing(log);
-  ASSERT_TRUE(r.ok()) << r.message();
-  const StatusOr<BearingBound> bound = BearingCramerRaoBound(log, truth, {1.0 * kDeg, 1e-3});
-  ASSERT_TRUE(bound.ok()) << bound.message();
-  EXPECT_EQ(r->seed_method, "closed_form");
+  SimulatedCalibration c;
+  ASSERT_NO_FATAL_FAILURE(CalibrateSimulated(o, &c));
+  const BearingCalibrationResult* r = &c.result;
+  EXPECT_EQ(r->seed_method, BearingSeedMethod::kClosedForm);
   ASSERT_EQ(r->runs.size(), 4u);
   EXPECT_FALSE(r->runs[3].circular);
-  ExpectHonest(*r, truth, *bound);
+  ExpectHonest(*r, c.truth, c.bound);
 }
 
 TEST(CalibrateBearingTest, OutlierBearingsAreRejected) {
@@ -223,6 +232,31 @@ TEST(CalibrateBearingTest, KnownNoiseLevelsAreUsedAsGiven) {
   const StatusOr<BearingBound> bound = BearingCramerRaoBound(log, truth, {1.0 * kDeg, 5e-4});
   ASSERT_TRUE(bound.ok());
   ExpectHonest(*r, truth, *bound, 0.8, 1.3);
+}
+
+// An adjustment cut short by its iteration limit is reported, not accepted silently.
+TEST(CalibrateBearingTest, NoConvergenceIsReported) {
+  BearingSimOptions o;
+  o.runs = ShortCircles();
+  o.bearing_noise_rad = 1.0 * kDeg;
+  o.seed = 17;
+  const BearingLog log = SimulateBearingLog(o);
+  const StatusOr<BearingCalibrationResult> full = CalibrateBearing(log);
+  ASSERT_TRUE(full.ok()) << full.message();
+  EXPECT_TRUE(full->converged);
+  EXPECT_TRUE(full->warnings.empty());
+  BearingCalibrationOptions options;
+  options.adjustment.max_iterations = 2;
+  const StatusOr<BearingCalibrationResult> cut = CalibrateBearing(log, options);
+  ASSERT_TRUE(cut.ok()) << cut.message();
+  EXPECT_FALSE(cut->converged);
+  ASSERT_FALSE(cut->warnings.empty());
+  EXPECT_NE(cut->warnings[0].find("without converging"), std::string::npos) << cut->warnings[0];
+}
+
+TEST(CalibrateBearingTest, SeedMethodNamesAreTheReportsWords) {
+  EXPECT_STREQ(SeedMethodName(BearingSeedMethod::kClosedForm), "closed_form");
+  EXPECT_STREQ(SeedMethodName(BearingSeedMethod::kSearch), "search");
 }
 
 // ---------------------------------------------------------------------------------------------

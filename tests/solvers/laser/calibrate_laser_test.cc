@@ -1,11 +1,9 @@
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/core/laser/laser_simulator.h>
 #include <calib/solvers/laser/calibrate_laser.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
-
-#include <calib/core/laser/laser_log_io.h>
-#include <calib/core/laser/laser_simulator.h>
 
 namespace calib {
 namespace {
@@ -137,11 +135,13 @@ TEST(CalibrateLaserTest, CovarianceMatchesTheSandwich) {
   dataset.sqrt_information = result->noise_sigma[0].cwiseInverse().asDiagonal();
   LaserProblem problem({dataset}, result->estimate, LaserRefinementOptions{});
   ASSERT_TRUE(problem.Solve().ok());
-  const StatusOr<LaserParamMatrix> scaled = problem.Covariance();
-  const StatusOr<LaserParamMatrix> sandwich = problem.SandwichCovariance();
+  const StatusOr<CorrectedCovariance<LaserParamMatrix>> scaled = problem.Covariance();
+  const StatusOr<CorrectedCovariance<LaserParamMatrix>> sandwich = problem.SandwichCovariance();
   ASSERT_TRUE(scaled.ok() && sandwich.ok());
+  EXPECT_EQ(sandwich->kappa, 1.0);
   for (int i = 0; i < kNumLaserParams; ++i) {
-    EXPECT_NEAR(std::sqrt((*scaled)(i, i) / (*sandwich)(i, i)), 1.0, 0.1) << kLaserParamNames[i];
+    EXPECT_NEAR(std::sqrt(scaled->covariance(i, i) / sandwich->covariance(i, i)), 1.0, 0.1)
+        << kLaserParamNames[i];
   }
 }
 
@@ -231,6 +231,78 @@ TEST(CalibrateLaserTest, ThinTurningWarns) {
     warned |= warning.find("few intervals turn") != std::string::npos;
   }
   EXPECT_TRUE(warned);
+}
+
+bool HasWarning(const LaserCalibrationResult& result, const std::string& words) {
+  for (const std::string& warning : result.observability.warnings) {
+    if (warning.find(words) != std::string::npos) return true;
+  }
+  return false;
+}
+
+// A refinement cut short by its iteration limit says so (it is not accepted silently).
+TEST(CalibrateLaserTest, NoConvergenceIsReported) {
+  LaserSimOptions sim;
+  sim.num_intervals = 500;
+  sim.seed = 41;
+  const LaserLog log = SimulateLaserLog(sim);
+  const StatusOr<LaserCalibrationResult> full = CalibrateLaser(log.intervals);
+  ASSERT_TRUE(full.ok()) << full.message();
+  EXPECT_TRUE(full->converged);
+  EXPECT_TRUE(full->warnings.empty());
+  LaserCalibrationOptions options;
+  options.noise_rounds = 1;  // One solve from the closed form, one step long.
+  options.refinement.max_iterations = 1;
+  const StatusOr<LaserCalibrationResult> cut = CalibrateLaser(log.intervals, options);
+  ASSERT_TRUE(cut.ok()) << cut.message();
+  EXPECT_FALSE(cut->converged);
+  EXPECT_TRUE(HasWarning(*cut, "without converging"));
+}
+
+// No interval under the inlier cut: the scan noise is still a number, and a warning says why.
+TEST(CalibrateLaserTest, NoInliersGiveAFiniteFlaggedNoise) {
+  LaserSimOptions sim;
+  sim.num_intervals = 300;
+  sim.seed = 42;
+  LaserCalibrationOptions options;
+  options.inlier_chi2 = 0.0;
+  const StatusOr<LaserCalibrationResult> result =
+      CalibrateLaser(SimulateLaserLog(sim).intervals, options);
+  ASSERT_TRUE(result.ok()) << result.message();
+  EXPECT_EQ(result->inliers, 0);
+  ASSERT_EQ(result->noise_sigma.size(), 1u);
+  EXPECT_TRUE(result->noise_sigma[0].allFinite());
+  EXPECT_TRUE((result->noise_sigma[0].array() > 0.0).all());
+  EXPECT_TRUE(HasWarning(*result, "no interval agrees with the model"));
+}
+
+// When the trimming removes the only turns, the untrimmed closed form seeds the refinement and
+// the result says so.
+TEST(CalibrateLaserTest, FailedTrimmingFallsBackWithAWarning) {
+  LaserSimOptions sim;
+  sim.num_intervals = 300;
+  sim.seed = 43;
+  const LaserLog log = SimulateLaserLog(sim);
+  std::vector<LaserInterval> intervals;
+  int turns = 0;
+  for (const LaserInterval& interval : log.intervals) {
+    const LaserMotionCensus kind = CountLaserMotion({interval});
+    if (kind.turning() == 0) {
+      intervals.push_back(interval);
+    } else if (turns < 3) {
+      // The only three turns, each with a sensor motion off by 5 cm: the trimming drops them.
+      intervals.push_back(interval);
+      intervals.back().sensor_motion(0) += 0.05;
+      ++turns;
+    }
+  }
+  ASSERT_EQ(turns, 3);
+  ASSERT_TRUE(CensiClosedForm(intervals).ok());
+  ASSERT_FALSE(CensiClosedFormTrimmed(intervals).ok());
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(intervals);
+  ASSERT_TRUE(result.ok()) << result.message();
+  EXPECT_FALSE(result->seed_trimmed);
+  EXPECT_TRUE(HasWarning(*result, "the trimmed closed form failed"));
 }
 
 }  // namespace

@@ -1,0 +1,26 @@
+#include <calib/solvers/common/robust_covariance.h>
+
+namespace calib {
+
+LossDerivatives EvaluateLoss(const ceres::LossFunction* loss, double s) {
+  if (loss == nullptr) return {};
+  double rho[3] = {s, 1.0, 0.0};
+  loss->Evaluate(s, rho);
+  return {rho[1], rho[2]};
+}
+
+StatusOr<double> LossCorrection(const LossCorrectionSums& sums, double components,
+                                double redundancy) {
+  if (sums.blocks == 0 || !(redundancy > 0.0)) {
+    return Status::NotObservable("too few residuals for a covariance");
+  }
+  if (!(sums.bread > 0.0)) {
+    return Status::NotObservable("the robust loss leaves no curvature at the estimate");
+  }
+  const double n = static_cast<double>(sums.blocks);
+  const double mean_weight = sums.weight / n, mean_meat = sums.meat / n,
+               mean_bread = sums.bread / n;
+  return mean_weight * mean_meat / (mean_bread * mean_bread) * components / redundancy;
+}
+
+}  // namespace calib

@@ -1,0 +1,101 @@
+#ifndef CALIB_SOLVERS_COMMON_ROBUST_COVARIANCE_H_
+#define CALIB_SOLVERS_COMMON_ROBUST_COVARIANCE_H_
+
+#include <calib/core/status.h>
+#include <ceres/loss_function.h>
+
+#include <Eigen/Core>
+#include <Eigen/Dense>
+
+// The covariance of an M-estimator (a least-squares fit under a robust loss ρ), once for every
+// refinement. Two forms:
+//  - the scalar correction of the weighted Gauss–Newton covariance C = (Σ ρ'·JᵀJ)⁻¹ (what
+//    ceres::Covariance returns with apply_loss_function for the Cauchy and Huber losses):
+//      κ = mean(ρ')·mean(ρ'²·s/d) / mean(ρ' + 2ρ''·s/d)² · n/r
+//    over the residual blocks (s = ‖r‖² whitened, d their dimension), with n residual components
+//    and r their redundancy (n − p for p parameters, or Σ(1 − h) with leverages h). κ·C is the
+//    sandwich below when the blocks are alike, and σ̂²(JᵀJ)⁻¹ for the plain squared loss;
+//  - the sandwich H⁻¹·B·H⁻¹·n/r with H = Σ Jᵀ(ρ'·I + 2ρ''·r rᵀ)J and B = Σ ρ'²·Jᵀ r rᵀ J, which
+//    stays honest when the residual scatter differs between kinds of motion.
+namespace calib {
+
+// A covariance and the loss correction κ it carries (1 for the sandwich, which needs none).
+template <typename Matrix>
+struct CorrectedCovariance {
+  Matrix covariance;
+  double kappa = 1.0;
+};
+
+// ρ'(s) and ρ''(s) of a loss (1 and 0 without one).
+struct LossDerivatives {
+  double rho1 = 1.0;
+  double rho2 = 0.0;
+};
+LossDerivatives EvaluateLoss(const ceres::LossFunction* loss, double s);
+
+// The three sums of κ, accumulated one residual block at a time.
+struct LossCorrectionSums {
+  double weight = 0.0;  // Σ ρ'.
+  double meat = 0.0;    // Σ ρ'²·s/d.
+  double bread = 0.0;   // Σ ρ' + 2ρ''·s/d.
+  size_t blocks = 0;
+
+  // One block of dimension d with squared whitened norm s.
+  void Add(double s, const LossDerivatives& rho, int dimension = 1) {
+    weight += rho.rho1;
+    meat += rho.rho1 * rho.rho1 * s / dimension;
+    bread += rho.rho1 + 2.0 * rho.rho2 * s / dimension;
+    ++blocks;
+  }
+  void Add(double s, const ceres::LossFunction* loss, int dimension = 1) {
+    Add(s, EvaluateLoss(loss, s), dimension);
+  }
+};
+
+// κ = mean(ρ')·mean(ρ'²s/d)/mean(ρ' + 2ρ''s/d)² · n/r (n residual components, r > 0 their
+// redundancy). NotObservable when r ≤ 0 or the bread is not positive (no curvature left).
+StatusOr<double> LossCorrection(const LossCorrectionSums& sums, double components,
+                                double redundancy);
+
+// H and B of the sandwich, accumulated one residual block at a time.
+template <int P>
+struct SandwichSums {
+  using Matrix = Eigen::Matrix<double, P, P>;
+  Matrix bread = Matrix::Zero();  // H.
+  Matrix meat = Matrix::Zero();   // B.
+
+  // A block with Jacobian j (d × P) and whitened residual r.
+  template <int D>
+  void Add(const Eigen::Matrix<double, D, P>& j, const Eigen::Matrix<double, D, 1>& r,
+           const LossDerivatives& rho) {
+    const Eigen::Matrix<double, P, 1> g = j.transpose() * r;
+    bread += rho.rho1 * j.transpose() * j + 2.0 * rho.rho2 * g * g.transpose();
+    meat += rho.rho1 * rho.rho1 * g * g.transpose();
+  }
+  SandwichSums& operator+=(const SandwichSums& other) {
+    bread += other.bread;
+    meat += other.meat;
+    return *this;
+  }
+};
+
+// H⁻¹·B·H⁻¹·n/r (κ = 1). NotObservable when H is singular or r ≤ 0.
+template <int P>
+StatusOr<CorrectedCovariance<Eigen::Matrix<double, P, P>>> SandwichCovariance(
+    const SandwichSums<P>& sums, double components, double redundancy) {
+  using Matrix = Eigen::Matrix<double, P, P>;
+  if (!(redundancy > 0.0)) {
+    return Status::NotObservable("too few residuals for a covariance");
+  }
+  const Eigen::LDLT<Matrix> ldlt(sums.bread);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
+    return Status::NotObservable("the information matrix is singular");
+  }
+  const Matrix inverse = ldlt.solve(Matrix::Identity());
+  return CorrectedCovariance<Matrix>{inverse * sums.meat * inverse * (components / redundancy),
+                                     1.0};
+}
+
+}  // namespace calib
+
+#endif  // CALIB_SOLVERS_COMMON_ROBUST_COVARIANCE_H_

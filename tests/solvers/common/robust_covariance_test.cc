@@ -1,0 +1,98 @@
+#include <calib/solvers/common/robust_covariance.h>
+#include <calib/solvers/common/robust_loss.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <random>
+#include <vector>
+
+namespace calib {
+namespace {
+
+constexpr int kP = 3;
+using Matrix = Eigen::Matrix<double, kP, kP>;
+using Jacobian = Eigen::Matrix<double, 1, kP>;
+
+// A small linear problem: random Jacobians, residuals of one magnitude c with random signs (all
+// blocks alike, where the scalar correction is exact).
+struct SmallProblem {
+  std::vector<Jacobian> j;
+  std::vector<double> r;
+};
+
+SmallProblem MakeProblem(int n, double c, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  SmallProblem p;
+  for (int i = 0; i < n; ++i) {
+    Jacobian j;
+    for (int k = 0; k < kP; ++k) j(k) = uniform(rng);
+    p.j.push_back(j);
+    p.r.push_back(uniform(rng) < 0.0 ? -c : c);
+  }
+  return p;
+}
+
+// The weighted Gauss–Newton covariance (Σ ρ'·JᵀJ)⁻¹, as ceres::Covariance returns it with the
+// loss applied (Cauchy, Huber).
+Matrix WeightedCovariance(const SmallProblem& p, const ceres::LossFunction* loss) {
+  Matrix information = Matrix::Zero();
+  for (size_t i = 0; i < p.j.size(); ++i) {
+    information += EvaluateLoss(loss, p.r[i] * p.r[i]).rho1 * p.j[i].transpose() * p.j[i];
+  }
+  return information.inverse();
+}
+
+TEST(RobustCovarianceTest, KappaTimesWeightedCovarianceIsTheSandwich) {
+  // |r| = 1.2, inside the Cauchy loss's region of positive curvature (scale 1.5). (Beyond its
+  // corner a 1-D Huber residual has none: ρ' + 2ρ''s = 0.)
+  const SmallProblem p = MakeProblem(40, 1.2, 3);
+  for (RobustLoss kind : {RobustLoss::kCauchy, RobustLoss::kNone}) {
+    const std::unique_ptr<ceres::LossFunction> loss = MakeLossFunction(kind, 1.5);
+    LossCorrectionSums kappa_sums;
+    SandwichSums<kP> sandwich_sums;
+    for (size_t i = 0; i < p.j.size(); ++i) {
+      const double s = p.r[i] * p.r[i];
+      kappa_sums.Add(s, loss.get());
+      sandwich_sums.Add(p.j[i], Eigen::Matrix<double, 1, 1>(p.r[i]), EvaluateLoss(loss.get(), s));
+    }
+    const double n = static_cast<double>(p.j.size());
+    const StatusOr<double> kappa = LossCorrection(kappa_sums, n, n - kP);
+    const auto sandwich = SandwichCovariance(sandwich_sums, n, n - kP);
+    ASSERT_TRUE(kappa.ok() && sandwich.ok()) << RobustLossName(kind);
+    EXPECT_EQ(sandwich->kappa, 1.0);
+    const Matrix scaled = *kappa * WeightedCovariance(p, loss.get());
+    EXPECT_LT((scaled - sandwich->covariance).norm(), 1e-12 * sandwich->covariance.norm())
+        << RobustLossName(kind);
+  }
+}
+
+// For the squared loss κ is σ̂² = Σr²/(n − p), whatever the residuals.
+TEST(RobustCovarianceTest, SquaredLossKappaIsTheResidualVariance) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal(0.0, 0.3);
+  LossCorrectionSums sums;
+  double sum_sq = 0.0;
+  const int blocks = 30, dimension = 3;
+  for (int i = 0; i < blocks; ++i) {
+    const Eigen::Vector3d r(normal(rng), normal(rng), normal(rng));
+    sums.Add(r.squaredNorm(), nullptr, dimension);
+    sum_sq += r.squaredNorm();
+  }
+  const double n = blocks * dimension;
+  const StatusOr<double> kappa = LossCorrection(sums, n, n - 6);
+  ASSERT_TRUE(kappa.ok());
+  EXPECT_NEAR(*kappa, sum_sq / (n - 6), 1e-14);
+}
+
+TEST(RobustCovarianceTest, NoRedundancyIsNotObservable) {
+  LossCorrectionSums sums;
+  sums.Add(1.0, nullptr);
+  EXPECT_EQ(LossCorrection(sums, 1.0, 0.0).code(), StatusCode::kNotObservable);
+  EXPECT_EQ(LossCorrection(LossCorrectionSums{}, 1.0, 1.0).code(), StatusCode::kNotObservable);
+  SandwichSums<2> singular;
+  EXPECT_EQ(SandwichCovariance(singular, 4.0, 2.0).code(), StatusCode::kNotObservable);
+}
+
+}  // namespace
+}  // namespace calib
