@@ -1,16 +1,16 @@
 #ifndef CALIB_CORE_BEARING_BEARING_MODEL_H_
 #define CALIB_CORE_BEARING_BEARING_MODEL_H_
 
+#include <calib/core/bearing/bearing_log.h>
+#include <calib/core/diff_drive.h>
+#include <calib/core/se2.h>
+
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <complex>
 #include <utility>
 #include <vector>
-
-#include <calib/core/bearing/bearing_log.h>
-#include <calib/core/diff_drive.h>
-#include <calib/core/se2.h>
 
 // The bearing-only model of Martinelli, "Using the Distribution Theory to Simultaneously
 // Calibrate the Sensors of a Mobile Robot", INRIA RR-6796, 2009 (seed 001). Equation numbers
@@ -437,23 +437,12 @@ inline Eigen::Matrix3d EncoderDisplacementCovariance(const std::vector<EncoderSa
     const double r = wheel_radius_m;
     const double dist = 0.5 * r * (delta_r * d_right + delta_l * d_left);
     const double ang = r * (delta_r * d_right - delta_l * d_left) / (delta_b * wheelbase_m);
-    // The arc (d·S, d·C, a) with S = sin a/a, C = (1 − cos a)/a and their a-derivatives.
-    double s, c, ds, dc;
-    if (std::abs(ang) < 1e-3) {
-      const double a2 = ang * ang;
-      s = 1.0 - a2 / 6.0;
-      c = ang / 2.0 - ang * a2 / 24.0;
-      ds = -ang / 3.0 + ang * a2 / 30.0;
-      dc = 0.5 - a2 / 8.0;
-    } else {
-      s = std::sin(ang) / ang;
-      c = (1.0 - std::cos(ang)) / ang;
-      ds = (ang * std::cos(ang) - std::sin(ang)) / (ang * ang);
-      dc = (ang * std::sin(ang) - 1.0 + std::cos(ang)) / (ang * ang);
-    }
-    const Eigen::Vector3d u(dist * s, dist * c, ang);
-    Eigen::Matrix<double, 3, 2> du_dda;  // ∂u/∂(dist, ang).
-    du_dda << s, dist * ds, c, dist * dc, 0.0, 1.0;
+    // The arc u = Exp(dist, 0, ang) and ∂u/∂(dist, ang): columns 0 and 2 of ∂Exp/∂ξ.
+    const Twist2d twist(dist, 0.0, ang);
+    const Eigen::Vector3d u = Exp(twist);
+    const Eigen::Matrix3d d_exp = ExpJacobian(twist);
+    Eigen::Matrix<double, 3, 2> du_dda;
+    du_dda << d_exp.col(0), d_exp.col(2);
     Eigen::Matrix2d dda_dw;  // ∂(dist, ang)/∂(Δα_R, Δα_L).
     dda_dw << 0.5 * r * delta_r, 0.5 * r * delta_l, r * delta_r / (delta_b * wheelbase_m),
         -r * delta_l / (delta_b * wheelbase_m);

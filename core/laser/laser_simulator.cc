@@ -231,13 +231,9 @@ struct Radii {
   }
 };
 
-// exp of the constant body twist (u, w, ω) over dt: θ = ω·dt and
-// (x, y) = [[sin θ/θ, −(1 − cos θ)/θ], [(1 − cos θ)/θ, sin θ/θ]]·(u, w)·dt.
+// exp of the constant body twist (u, w, ω) held for dt.
 Pose2d TwistExp(double u, double w, double omega, double dt) {
-  const Pose2d unit = ArcDisplacement(1.0, omega * dt);  // (sin θ/θ, (1 − cos θ)/θ, θ).
-  const double along = u * dt;
-  const double across = w * dt;
-  return Pose2d(unit(0) * along - unit(1) * across, unit(1) * along + unit(0) * across, unit(2));
+  return Exp(Twist2d(u * dt, w * dt, omega * dt));
 }
 
 // The robot's motion over each scan window [t_k + δ, t_{k+1} + δ], never storing the path.
