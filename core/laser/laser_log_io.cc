@@ -516,21 +516,21 @@ std::string SampleWhere(const std::string& name, const std::vector<int>* lines, 
 }
 
 // Cumulative wheel angles at time t inside segment [s, s + 1] (or exactly at sample s).
-void Interpolate(const std::vector<WheelAngleSample>& odometry, size_t s, double t, double* left,
+void Interpolate(const std::vector<EncoderSample>& odometry, size_t s, double t, double* left,
                  double* right) {
-  const WheelAngleSample& a = odometry[s];
+  const EncoderSample& a = odometry[s];
   if (t == a.t_s || s + 1 >= odometry.size()) {
     *left = a.left_rad;
     *right = a.right_rad;
     return;
   }
-  const WheelAngleSample& b = odometry[s + 1];
+  const EncoderSample& b = odometry[s + 1];
   const double fraction = (t - a.t_s) / (b.t_s - a.t_s);
   *left = a.left_rad + (b.left_rad - a.left_rad) * fraction;
   *right = a.right_rad + (b.right_rad - a.right_rad) * fraction;
 }
 
-StatusOr<LaserLog> BuildFromStreams(const std::vector<WheelAngleSample>& odometry,
+StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
                                     const std::vector<StampedPose>& poses,
                                     const StreamNames& names) {
   if (odometry.size() < 2) {
@@ -538,7 +538,7 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<WheelAngleSample>& odometr
                          std::to_string(odometry.size()));
   }
   for (size_t k = 0; k < odometry.size(); ++k) {
-    const WheelAngleSample& s = odometry[k];
+    const EncoderSample& s = odometry[k];
     const auto where = [&] {
       return SampleWhere(names.odometry, names.odometry_lines, k, "sample");
     };
@@ -588,7 +588,7 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<WheelAngleSample>& odometr
                          Num(poses.front().t_s) + ", " + Num(poses.back().t_s) + "])");
   }
 
-  const auto by_time = [](const WheelAngleSample& s, double t) { return s.t_s < t; };
+  const auto by_time = [](const EncoderSample& s, double t) { return s.t_s < t; };
   LaserLog log;
   log.source = names.source;
   log.has_timestamps = true;
@@ -739,7 +739,7 @@ StatusOr<LaserLog> ReadLaserLog(const std::string& path, LaserFormat format) {
   return format == LaserFormat::kTuples ? ParseLaserTuples(text, path) : ParseLaserCsv(text, path);
 }
 
-StatusOr<LaserLog> LaserLogFromStreams(const std::vector<WheelAngleSample>& odometry,
+StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometry,
                                        const std::vector<StampedPose>& sensor_poses,
                                        const std::string& source) {
   StreamNames names;
@@ -766,10 +766,10 @@ StatusOr<LaserLog> ReadLaserStream(const std::string& directory) {
   status =
       ReadCsv(text, odometry_path, {{"t", true}, {"left", true}, {"right", true}}, &odometry_table);
   if (!status.ok()) return status;
-  std::vector<WheelAngleSample> odometry(odometry_table.rows());
+  std::vector<EncoderSample> odometry(odometry_table.rows());
   for (size_t k = 0; k < odometry.size(); ++k) {
     const double* v = &odometry_table.values[3 * k];
-    odometry[k] = WheelAngleSample{v[0], v[1], v[2]};
+    odometry[k] = EncoderSample{v[0], v[1], v[2]};
   }
 
   status = ReadWholeFile(poses_path, &text);
@@ -842,7 +842,7 @@ Status WriteLaserCsv(const LaserLog& log, const std::string& path) {
   return WriteWholeFile(path, out);
 }
 
-Status WriteLaserStream(const std::vector<WheelAngleSample>& odometry,
+Status WriteLaserStream(const std::vector<EncoderSample>& odometry,
                         const std::vector<StampedPose>& sensor_poses,
                         const std::string& directory) {
   std::error_code ec;
@@ -850,7 +850,7 @@ Status WriteLaserStream(const std::vector<WheelAngleSample>& odometry,
   if (ec) return Status::Error(directory + ": cannot create the directory: " + ec.message());
   std::string out = "t,left,right\n";
   for (size_t k = 0; k < odometry.size(); ++k) {
-    const WheelAngleSample& s = odometry[k];
+    const EncoderSample& s = odometry[k];
     if (!std::isfinite(s.t_s) || !std::isfinite(s.left_rad) || !std::isfinite(s.right_rad)) {
       return Status::Error(directory + ": cannot write odometry sample " + std::to_string(k + 1) +
                            ": it holds a non-finite value");

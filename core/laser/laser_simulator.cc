@@ -536,7 +536,7 @@ LaserStreams SimulateLaserStreams(const LaserSimOptions& options, double encoder
   size_t cursor = 0;
   const auto sample = [&](double t) {
     const Eigen::Array2d angle = Quantize(simulation.profile.Angle(t, &cursor), ticks);
-    return WheelAngleSample{t, angle(0), angle(1)};
+    return EncoderSample{t, angle(0), angle(1)};
   };
   if (encoder_rate_hz > 0.0) {
     const double end = simulation.boundaries.back();
