@@ -2,6 +2,7 @@
 #define CALIB_CORE_BEARING_BEARING_MODEL_H_
 
 #include <calib/core/bearing/bearing_log.h>
+#include <calib/core/bearing/bearing_params.h>
 #include <calib/core/diff_drive.h>
 #include <calib/core/se2.h>
 
@@ -20,47 +21,6 @@
 // (ρ cos φ, ρ sin φ) in the robot frame with heading φ + ψ; wheel travel = r × wheel rotation;
 // v = (δR·vR + δL·vL)/2, ω = (δR·vR − δL·vL)/(δB·B) with vR, vL the nominal wheel speeds.
 namespace calib {
-
-// The original parameters (Table 2 of the paper).
-struct BearingMetricParams {
-  double phi_rad = 0.0;
-  double rho_m = 0.0;
-  double psi_rad = 0.0;
-  double delta_r = 1.0;
-  double delta_l = 1.0;
-  double delta_b = 1.0;
-};
-
-// The parameters a bearing-only log determines (eq. 5).
-struct BearingParams {
-  double phi_rad = 0.0;
-  double psi_rad = 0.0;
-  double eta_per_m = 0.0;  // η = δR/(2ρ).
-  double delta = 1.0;      // δ = δL/δR.
-  double xi_per_m = 0.0;   // ξ = δR/(B·δB).
-};
-
-inline BearingParams ObservableParams(const BearingMetricParams& m, double wheelbase_m) {
-  BearingParams p;
-  p.phi_rad = m.phi_rad;
-  p.psi_rad = m.psi_rad;
-  p.eta_per_m = m.delta_r / (2.0 * m.rho_m);
-  p.delta = m.delta_l / m.delta_r;
-  p.xi_per_m = m.delta_r / (wheelbase_m * m.delta_b);
-  return p;
-}
-
-// The metric parameters once ρ is known (end of §7): δR = 2ρη, δL = δ·δR, δB = δR/(B·ξ).
-inline BearingMetricParams MetricParams(const BearingParams& p, double rho_m, double wheelbase_m) {
-  BearingMetricParams m;
-  m.phi_rad = p.phi_rad;
-  m.psi_rad = p.psi_rad;
-  m.rho_m = rho_m;
-  m.delta_r = 2.0 * rho_m * p.eta_per_m;
-  m.delta_l = p.delta * m.delta_r;
-  m.delta_b = m.delta_r / (wheelbase_m * p.xi_per_m);
-  return m;
-}
 
 // ---------------------------------------------------------------------------------------------
 // Observation model.
