@@ -1,4 +1,7 @@
 #include <calib/core/bearing/bearing_log_io.h>
+#include <calib/core/csv.h>
+#include <calib/core/text_file.h>
+#include <calib/core/text_number.h>
 
 #include <algorithm>
 #include <cctype>
@@ -13,8 +16,6 @@
 #include <system_error>
 #include <utility>
 
-#include <calib/core/text_file.h>
-
 namespace calib {
 namespace {
 
@@ -23,143 +24,14 @@ namespace fs = std::filesystem;
 // A bearing this far beyond ±π is still taken as wrapped (rounding in the writer's own output).
 constexpr double kBearingSlack = 1e-9;
 
-std::string Num(double value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
-}
-
 std::string At(const std::string& source, int line) {
   return line > 0 ? source + ":" + std::to_string(line) + ": " : source + ": ";
 }
 
-std::string_view Trim(std::string_view s) {
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
-  return s;
-}
-
-std::string_view WithoutBom(std::string_view text) {
-  if (text.size() >= 3 && text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.remove_prefix(3);
-  return text;
-}
-
-// A CSV table: the header's column names, then rows of fields with their line numbers.
-struct CsvRow {
-  int line = 0;
-  std::vector<std::string_view> fields;
-};
-
-struct CsvTable {
-  int header_line = 0;
-  std::vector<std::string> columns;
-  std::vector<CsvRow> rows;
-};
-
-std::vector<std::string_view> SplitFields(std::string_view line) {
-  std::vector<std::string_view> fields;
-  size_t start = 0;
-  while (true) {
-    const size_t comma = line.find(',', start);
-    fields.push_back(Trim(line.substr(start, comma - start)));
-    if (comma == std::string_view::npos) break;
-    start = comma + 1;
-  }
-  return fields;
-}
-
-// Splits `text` into a header and rows, checking that every row has as many fields as the header
-// and that the header names `required` (case-insensitive; other columns are ignored). On success
-// `index[i]` is the column of required[i].
-Status ReadCsv(std::string_view text, const std::string& source,
-               const std::vector<std::string>& required, CsvTable* table,
-               std::vector<size_t>* index) {
-  text = WithoutBom(text);
-  int line_number = 0;
-  size_t start = 0;
-  bool have_header = false;
-  while (start <= text.size()) {
-    size_t end = text.find('\n', start);
-    if (end == std::string_view::npos) end = text.size();
-    const std::string_view line = Trim(text.substr(start, end - start));
-    ++line_number;
-    start = end + 1;
-    if (line.empty() || line.front() == '#') continue;
-    if (!have_header) {
-      have_header = true;
-      table->header_line = line_number;
-      for (std::string_view name : SplitFields(line)) {
-        std::string lower(name);
-        for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-        table->columns.push_back(lower);
-      }
-      continue;
-    }
-    CsvRow row;
-    row.line = line_number;
-    row.fields = SplitFields(line);
-    if (row.fields.size() != table->columns.size()) {
-      return Status::Error(At(source, line_number) + "expected " +
-                           std::to_string(table->columns.size()) + " comma-separated fields (as " +
-                           "in the header), found " + std::to_string(row.fields.size()));
-    }
-    table->rows.push_back(std::move(row));
-  }
-  std::string wanted;
-  for (const std::string& name : required) wanted += (wanted.empty() ? "" : ",") + name;
-  if (!have_header) {
-    return Status::Error(source + ": empty file, expected a header line '" + wanted + "'");
-  }
-  index->clear();
-  for (const std::string& name : required) {
-    const auto first = std::find(table->columns.begin(), table->columns.end(), name);
-    if (first == table->columns.end()) {
-      return Status::Error(At(source, table->header_line) + "the header has no column '" + name +
-                           "' (expected " + wanted + ")");
-    }
-    if (std::find(first + 1, table->columns.end(), name) != table->columns.end()) {
-      return Status::Error(At(source, table->header_line) + "column '" + name +
-                           "' appears twice in the header");
-    }
-    index->push_back(static_cast<size_t>(first - table->columns.begin()));
-  }
-  if (table->rows.empty()) {
-    return Status::Error(source + ": no samples after the header (line " +
-                         std::to_string(table->header_line) + ")");
-  }
-  return Status::Ok();
-}
-
-// A finite double filling the whole field.
-Status ParseDouble(std::string_view field, const std::string& name, const std::string& where,
-                   double* value) {
-  if (field.empty()) return Status::Error(where + "field '" + name + "' is empty");
-  const char* end = field.data() + field.size();
-  const char* begin = field.data();
-  if (*begin == '+') ++begin;  // from_chars rejects a leading '+'.
-  const auto result = std::from_chars(begin, end, *value);
-  if (result.ec == std::errc::result_out_of_range) {
-    *value = std::strtod(std::string(field).c_str(), nullptr);
-  } else if (result.ec != std::errc() || result.ptr != end) {
-    return Status::Error(where + "field '" + name + "' is not a number: '" + std::string(field) +
-                         "'");
-  }
-  if (!std::isfinite(*value)) {
-    return Status::Error(where + "field '" + name + "' must be finite, got '" + std::string(field) +
-                         "'");
-  }
-  return Status::Ok();
-}
-
-Status ParseRunId(std::string_view field, const std::string& where, int* run) {
-  if (field.empty()) return Status::Error(where + "field 'run' is empty");
-  const char* end = field.data() + field.size();
-  const auto result = std::from_chars(field.data(), end, *run);
-  if (result.ec != std::errc() || result.ptr != end) {
-    return Status::Error(where + "field 'run' must be an integer run id, got '" +
-                         std::string(field) + "'");
-  }
-  return Status::Ok();
+// "no samples after the header (line 1)" when the reader saw no record.
+Status NoSamples(const CsvReader& csv) {
+  return Status::InvalidInput(csv.source() + ": no samples after the header (line " +
+                              std::to_string(csv.header_line()) + ")");
 }
 
 // The 1-based line of the first occurrence of `needle` in `text` (0 if absent).
@@ -282,31 +154,27 @@ Status CheckMeta(const BearingLogMeta& meta, const std::vector<BearingRun>& runs
 
 StatusOr<std::vector<BearingRun>> ParseBearingOdometryCsv(const std::string& text,
                                                           const std::string& source) {
-  CsvTable table;
-  std::vector<size_t> col;
-  Status status = ReadCsv(text, source, {"run", "t", "left", "right"}, &table, &col);
-  if (!status.ok()) return status;
+  CALIB_ASSIGN_OR_RETURN(CsvReader csv,
+                         CsvReader::Open(text, source, {{"run"}, {"t"}, {"left"}, {"right"}}));
   std::map<int, BearingRun> runs;
-  for (const CsvRow& row : table.rows) {
-    const std::string where = At(source, row.line);
+  while (true) {
+    CALIB_ASSIGN_OR_RETURN(const bool more, csv.Next());
+    if (!more) break;
     int id = 0;
     EncoderSample e;
-    e.line = row.line;
-    if (!(status = ParseRunId(row.fields[col[0]], where, &id)).ok()) return status;
-    if (!(status = ParseDouble(row.fields[col[1]], "t", where, &e.t_s)).ok()) return status;
-    if (!(status = ParseDouble(row.fields[col[2]], "left", where, &e.left_rad)).ok()) {
-      return status;
-    }
-    if (!(status = ParseDouble(row.fields[col[3]], "right", where, &e.right_rad)).ok()) {
-      return status;
-    }
+    e.line = csv.line();
+    CALIB_RETURN_IF_ERROR(csv.Integer(0, &id, "an integer run id"));
+    CALIB_RETURN_IF_ERROR(csv.Number(1, &e.t_s));
+    CALIB_RETURN_IF_ERROR(csv.Number(2, &e.left_rad));
+    CALIB_RETURN_IF_ERROR(csv.Number(3, &e.right_rad));
     BearingRun& run = runs[id];
     run.id = id;
     run.odometry.push_back(e);
   }
+  if (runs.empty()) return NoSamples(csv);
   std::vector<BearingRun> out;
   for (auto& [id, run] : runs) {
-    if (!(status = CheckRunOdometry(run, source)).ok()) return status;
+    CALIB_RETURN_IF_ERROR(CheckRunOdometry(run, source));
     out.push_back(std::move(run));
   }
   return out;
@@ -314,28 +182,29 @@ StatusOr<std::vector<BearingRun>> ParseBearingOdometryCsv(const std::string& tex
 
 Status ParseBearingsCsv(const std::string& text, const std::string& source,
                         std::vector<BearingRun>* runs) {
-  CsvTable table;
-  std::vector<size_t> col;
-  Status status = ReadCsv(text, source, {"run", "t", "bearing"}, &table, &col);
-  if (!status.ok()) return status;
-  for (const CsvRow& row : table.rows) {
-    const std::string where = At(source, row.line);
+  CALIB_ASSIGN_OR_RETURN(CsvReader csv,
+                         CsvReader::Open(text, source, {{"run"}, {"t"}, {"bearing"}}));
+  bool any = false;
+  while (true) {
+    CALIB_ASSIGN_OR_RETURN(const bool more, csv.Next());
+    if (!more) break;
+    any = true;
+    const std::string where = At(source, csv.line());
     int id = 0;
     BearingSample b;
-    b.line = row.line;
-    if (!(status = ParseRunId(row.fields[col[0]], where, &id)).ok()) return status;
-    if (!(status = ParseDouble(row.fields[col[1]], "t", where, &b.t_s)).ok()) return status;
-    if (!(status = ParseDouble(row.fields[col[2]], "bearing", where, &b.bearing_rad)).ok()) {
-      return status;
-    }
+    b.line = csv.line();
+    CALIB_RETURN_IF_ERROR(csv.Integer(0, &id, "an integer run id"));
+    CALIB_RETURN_IF_ERROR(csv.Number(1, &b.t_s));
+    CALIB_RETURN_IF_ERROR(csv.Number(2, &b.bearing_rad));
     const auto run =
         std::find_if(runs->begin(), runs->end(), [&](const BearingRun& r) { return r.id == id; });
     if (run == runs->end()) {
       return Status::Error(where + "run " + std::to_string(id) + " has no encoder samples");
     }
     run->bearings.push_back(b);
-    if (!(status = CheckBearing(*run, run->bearings.size() - 1, source)).ok()) return status;
+    CALIB_RETURN_IF_ERROR(CheckBearing(*run, run->bearings.size() - 1, source));
   }
+  if (!any) return NoSamples(csv);
   for (const BearingRun& run : *runs) {
     if (run.bearings.empty()) {
       return Status::Error(source + ": run " + std::to_string(run.id) + " has no bearings" +

@@ -1,4 +1,7 @@
+#include <calib/core/csv.h>
 #include <calib/core/laser/laser_log_io.h>
+#include <calib/core/text_file.h>
+#include <calib/core/text_number.h>
 
 #include <algorithm>
 #include <cctype>
@@ -12,8 +15,6 @@
 #include <system_error>
 #include <utility>
 
-#include <calib/core/text_file.h>
-
 namespace calib {
 namespace {
 
@@ -21,27 +22,6 @@ namespace fs = std::filesystem;
 
 // ---------------------------------------------------------------------------------------------
 // Small text helpers.
-
-// Shortest text that reads back to the same double (for messages and CSV output).
-std::string Num(double value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
-}
-
-void AppendGeneral(std::string* out, double value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  out->append(buffer, result.ptr);
-}
-
-// Scientific like the published tuples, but the shortest form that reads back bit-exact.
-void AppendScientific(std::string* out, double value) {
-  char buffer[32];
-  const auto result =
-      std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::scientific);
-  out->append(buffer, result.ptr);
-}
 
 // "source:line: record n: " with the parts that are known.
 std::string Where(const std::string& source, int line, int record) {
@@ -53,45 +33,6 @@ std::string Where(const std::string& source, int line, int record) {
 }
 
 bool IsJsonSpace(char c) { return c == ' ' || c == '\n' || c == '\t' || c == '\r'; }
-
-// A UTF-8 byte-order mark some editors put first; never meaningful here.
-std::string_view WithoutBom(std::string_view text) {
-  if (text.size() >= 3 && text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.remove_prefix(3);
-  return text;
-}
-
-enum class NumberStatus { kOk, kNotNumber, kNotFinite, kOutOfRange };
-
-// Parses a double at [begin, end) and returns where it stops. from_chars is locale-free and
-// fast; it also accepts nan/inf/Infinity, which we then reject as not finite.
-const char* ScanDouble(const char* begin, const char* end, double* value, NumberStatus* status) {
-  const auto result = std::from_chars(begin, end, *value);
-  if (result.ec == std::errc::invalid_argument) {
-    *status = NumberStatus::kNotNumber;
-    return begin;
-  }
-  if (result.ec == std::errc::result_out_of_range) {
-    // Underflow to a denormal or zero is harmless; overflow is not. strtod tells them apart.
-    const std::string token(begin, result.ptr);
-    *value = std::strtod(token.c_str(), nullptr);
-    *status = std::isfinite(*value) ? NumberStatus::kOk : NumberStatus::kOutOfRange;
-    return result.ptr;
-  }
-  *status = std::isfinite(*value) ? NumberStatus::kOk : NumberStatus::kNotFinite;
-  return result.ptr;
-}
-
-std::string NumberProblem(NumberStatus status, std::string_view key, std::string_view token) {
-  const std::string quoted = "'" + std::string(token) + "'";
-  switch (status) {
-    case NumberStatus::kNotFinite:
-      return std::string(key) + " must be finite, got " + quoted;
-    case NumberStatus::kOutOfRange:
-      return "value of " + std::string(key) + " is out of range: " + quoted;
-    default:
-      return "value of " + std::string(key) + " is not a number: " + quoted;
-  }
-}
 
 // ---------------------------------------------------------------------------------------------
 // Checks shared by the tuple and CSV readers: T, the optional t, and the time line.
@@ -366,136 +307,28 @@ class TupleParser {
 };
 
 // ---------------------------------------------------------------------------------------------
-// CSV: a header, then rows of numbers. Shared by the laser CSV and the two stream files.
+// The stream files: every column a required number.
 
-struct CsvColumn {
-  const char* name;
-  bool required;
+struct NumberTable {
+  std::vector<double> values;  // Row-major.
+  std::vector<int> lines;      // 1-based source line of each row.
 };
 
-struct CsvTable {
-  std::vector<bool> column_present;  // Per wanted column.
-  std::vector<double> values;        // Row-major, one entry per wanted column.
-  std::vector<char> present;         // False where an optional field is empty.
-  std::vector<int> lines;            // 1-based source line of each row.
-  size_t rows() const { return lines.size(); }
-};
-
-std::string_view Trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) {
-    s.remove_suffix(1);
-  }
-  return s;
-}
-
-void SplitFields(std::string_view line, std::vector<std::string_view>* fields) {
-  fields->clear();
+StatusOr<NumberTable> ReadNumberTable(std::string_view text, const std::string& source,
+                                      std::vector<CsvColumn> columns) {
+  const size_t width = columns.size();
+  CALIB_ASSIGN_OR_RETURN(CsvReader csv, CsvReader::Open(text, source, std::move(columns)));
+  NumberTable table;
   while (true) {
-    const size_t comma = line.find(',');
-    fields->push_back(Trim(line.substr(0, comma)));
-    if (comma == std::string_view::npos) break;
-    line.remove_prefix(comma + 1);
+    CALIB_ASSIGN_OR_RETURN(const bool more, csv.Next());
+    if (!more) break;
+    for (size_t c = 0; c < width; ++c) {
+      table.values.push_back(0.0);
+      CALIB_RETURN_IF_ERROR(csv.Number(c, &table.values.back()));
+    }
+    table.lines.push_back(csv.line());
   }
-}
-
-Status ReadCsv(std::string_view text, const std::string& source,
-               const std::vector<CsvColumn>& wanted, CsvTable* table) {
-  text = WithoutBom(text);
-  const size_t num_wanted = wanted.size();
-  std::vector<int> field_of(num_wanted, -1);  // Header position of each wanted column.
-  size_t num_fields = 0;
-  bool have_header = false;
-  std::vector<std::string_view> fields;
-  size_t pos = 0;
-  int line_number = 0;
-  while (pos < text.size()) {
-    const size_t newline = text.find('\n', pos);
-    const size_t stop = newline == std::string_view::npos ? text.size() : newline;
-    const std::string_view line = Trim(text.substr(pos, stop - pos));
-    pos = stop + 1;
-    ++line_number;
-    if (line.empty() || line.front() == '#') continue;
-    const auto where = [&] { return Where(source, line_number, 0); };
-    SplitFields(line, &fields);
-    if (!have_header) {
-      have_header = true;
-      num_fields = fields.size();
-      for (size_t i = 0; i < fields.size(); ++i) {
-        std::string_view name = fields[i];
-        // Some writers quote header names.
-        if (name.size() >= 2 && name.front() == '"' && name.back() == '"') {
-          name = name.substr(1, name.size() - 2);
-        }
-        for (size_t j = 0; j < i; ++j) {
-          std::string_view other = fields[j];
-          if (other.size() >= 2 && other.front() == '"' && other.back() == '"') {
-            other = other.substr(1, other.size() - 2);
-          }
-          if (other == name) {
-            return Status::Error(where() + "duplicated column name '" + std::string(name) +
-                                 "' in the header");
-          }
-        }
-        for (size_t w = 0; w < num_wanted; ++w) {
-          if (name == wanted[w].name) field_of[w] = static_cast<int>(i);
-        }
-      }
-      std::string missing;
-      for (size_t w = 0; w < num_wanted; ++w) {
-        if (field_of[w] < 0 && wanted[w].required) {
-          missing += (missing.empty() ? "" : ", ") + std::string(wanted[w].name);
-        }
-      }
-      if (!missing.empty()) {
-        std::string expected;
-        for (const CsvColumn& column : wanted) {
-          if (column.required) expected += (expected.empty() ? "" : ",") + std::string(column.name);
-        }
-        return Status::Error(where() + "the header lacks the required column(s) " + missing +
-                             " (a header names at least " + expected + ")");
-      }
-      table->column_present.resize(num_wanted);
-      for (size_t w = 0; w < num_wanted; ++w) table->column_present[w] = field_of[w] >= 0;
-      continue;
-    }
-    const int record = static_cast<int>(table->rows()) + 1;
-    const auto row_where = [&] { return Where(source, line_number, record); };
-    if (fields.size() != num_fields) {
-      return Status::Error(row_where() + "the row has " + std::to_string(fields.size()) +
-                           " fields but the header has " + std::to_string(num_fields));
-    }
-    for (size_t w = 0; w < num_wanted; ++w) {
-      double value = 0.0;
-      bool here = false;
-      if (field_of[w] >= 0) {
-        std::string_view field = fields[static_cast<size_t>(field_of[w])];
-        if (field.empty()) {
-          if (wanted[w].required) {
-            return Status::Error(row_where() + "empty value for " + wanted[w].name);
-          }
-        } else {
-          std::string_view digits = field;
-          if (digits.size() > 1 && digits.front() == '+') digits.remove_prefix(1);
-          NumberStatus status;
-          const char* stop =
-              ScanDouble(digits.data(), digits.data() + digits.size(), &value, &status);
-          if (status == NumberStatus::kOk && stop != digits.data() + digits.size()) {
-            status = NumberStatus::kNotNumber;
-          }
-          if (status != NumberStatus::kOk) {
-            return Status::Error(row_where() + NumberProblem(status, wanted[w].name, field));
-          }
-          here = true;
-        }
-      }
-      table->values.push_back(value);
-      table->present.push_back(here);
-    }
-    table->lines.push_back(line_number);
-  }
-  if (!have_header) return Status::Error(source + ": holds no records (the input is empty)");
-  return Status::Ok();
+  return table;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -689,27 +522,31 @@ StatusOr<LaserLog> ParseLaserTuples(const std::string& text, const std::string& 
 
 StatusOr<LaserLog> ParseLaserCsv(const std::string& text, const std::string& source) {
   enum { kT, kPhiL, kPhiR, kSmX, kSmY, kSmTheta, kStart };
-  static const std::vector<CsvColumn> kColumns = {
-      {"T", true},    {"phi_l", true},    {"phi_r", true}, {"sm_x", true},
-      {"sm_y", true}, {"sm_theta", true}, {"t", false}};
-  CsvTable table;
-  Status status = ReadCsv(text, source, kColumns, &table);
-  if (!status.ok()) return status;
+  CALIB_ASSIGN_OR_RETURN(CsvReader csv, CsvReader::Open(text, source,
+                                                        {{"T"},
+                                                         {"phi_l"},
+                                                         {"phi_r"},
+                                                         {"sm_x"},
+                                                         {"sm_y"},
+                                                         {"sm_theta"},
+                                                         {"t", /*required=*/false}}));
   LogBuilder builder(source);
-  builder.Reserve(table.rows());
-  const size_t width = kColumns.size();
-  for (size_t row = 0; row < table.rows(); ++row) {
-    const double* v = &table.values[row * width];
+  while (true) {
+    CALIB_ASSIGN_OR_RETURN(const bool more, csv.Next());
+    if (!more) break;
+    double v[kStart + 1] = {};
+    for (int c = kT; c < kStart; ++c) CALIB_RETURN_IF_ERROR(csv.Number(c, &v[c]));
+    bool has_t = false;
+    CALIB_RETURN_IF_ERROR(csv.Number(kStart, &v[kStart], &has_t));
     LaserInterval interval;
     interval.duration_s = v[kT];
     interval.left_speed = v[kPhiL];
     interval.right_speed = v[kPhiR];
     interval.sensor_motion = Pose2d(v[kSmX], v[kSmY], v[kSmTheta]);
     interval.start_s = v[kStart];
-    interval.line = table.lines[row];
-    interval.record = static_cast<int>(row) + 1;
-    status = builder.Add(std::move(interval), table.present[row * width + kStart] != 0);
-    if (!status.ok()) return status;
+    interval.line = csv.line();
+    interval.record = csv.record();
+    CALIB_RETURN_IF_ERROR(builder.Add(std::move(interval), has_t));
   }
   return std::move(builder).Finish(" (only a header)");
 }
@@ -760,25 +597,19 @@ StatusOr<LaserLog> ReadLaserStream(const std::string& directory) {
   const std::string poses_path = (fs::path(directory) / "sensor_poses.csv").string();
 
   std::string text;
-  Status status = ReadWholeFile(odometry_path, &text);
-  if (!status.ok()) return status;
-  CsvTable odometry_table;
-  status =
-      ReadCsv(text, odometry_path, {{"t", true}, {"left", true}, {"right", true}}, &odometry_table);
-  if (!status.ok()) return status;
-  std::vector<EncoderSample> odometry(odometry_table.rows());
+  CALIB_RETURN_IF_ERROR(ReadWholeFile(odometry_path, &text));
+  CALIB_ASSIGN_OR_RETURN(const NumberTable odometry_table,
+                         ReadNumberTable(text, odometry_path, {{"t"}, {"left"}, {"right"}}));
+  std::vector<EncoderSample> odometry(odometry_table.lines.size());
   for (size_t k = 0; k < odometry.size(); ++k) {
     const double* v = &odometry_table.values[3 * k];
-    odometry[k] = EncoderSample{v[0], v[1], v[2]};
+    odometry[k] = EncoderSample{v[0], v[1], v[2], odometry_table.lines[k]};
   }
 
-  status = ReadWholeFile(poses_path, &text);
-  if (!status.ok()) return status;
-  CsvTable pose_table;
-  status = ReadCsv(text, poses_path, {{"t", true}, {"x", true}, {"y", true}, {"theta", true}},
-                   &pose_table);
-  if (!status.ok()) return status;
-  std::vector<StampedPose> poses(pose_table.rows());
+  CALIB_RETURN_IF_ERROR(ReadWholeFile(poses_path, &text));
+  CALIB_ASSIGN_OR_RETURN(const NumberTable pose_table,
+                         ReadNumberTable(text, poses_path, {{"t"}, {"x"}, {"y"}, {"theta"}}));
+  std::vector<StampedPose> poses(pose_table.lines.size());
   for (size_t k = 0; k < poses.size(); ++k) {
     const double* v = &pose_table.values[4 * k];
     poses[k].t_s = v[0];
