@@ -48,17 +48,18 @@ Status JsonPositiveNumber(const nlohmann::json& object, const std::string& key,
                           const std::string& source, double* value) {
   const int line = LineOf(text, "\"" + key + "\"");
   if (!object.contains(key)) {
-    return Status::Error(source + ": missing field \"" + path + "\" (" + what + ")");
+    return Status::InvalidInput(source + ": missing field \"" + path + "\" (" + what + ")");
   }
   const nlohmann::json& v = object.at(key);
   if (!v.is_number()) {
-    return Status::Error(At(source, line) + "field \"" + path + "\" must be a number (" + what +
-                         "), found " + JsonTypeName(v));
+    return Status::InvalidInput(At(source, line) + "field \"" + path + "\" must be a number (" +
+                                what + "), found " + JsonTypeName(v));
   }
   *value = v.get<double>();
   if (!std::isfinite(*value) || !(*value > 0.0)) {
-    return Status::Error(At(source, line) + "field \"" + path + "\" must be positive and finite (" +
-                         what + "), got " + Num(*value));
+    return Status::InvalidInput(At(source, line) + "field \"" + path +
+                                "\" must be positive and finite (" + what + "), got " +
+                                Num(*value));
   }
   return Status::Ok();
 }
@@ -74,19 +75,19 @@ std::string OdometryLines(const BearingRun& run) {
 Status CheckRunOdometry(const BearingRun& run, const std::string& source) {
   if (run.odometry.size() < 2) {
     const int line = run.odometry.empty() ? 0 : run.odometry.front().line;
-    return Status::Error(At(source, line) + "run " + std::to_string(run.id) + " has " +
-                         std::to_string(run.odometry.size()) +
-                         " encoder sample(s); at least two are needed");
+    return Status::InvalidInput(At(source, line) + "run " + std::to_string(run.id) + " has " +
+                                std::to_string(run.odometry.size()) +
+                                " encoder sample(s); at least two are needed");
   }
   for (size_t i = 0; i < run.odometry.size(); ++i) {
     const EncoderSample& e = run.odometry[i];
     const std::string where = At(source, e.line) + "run " + std::to_string(run.id) + ": ";
     if (!std::isfinite(e.t_s) || !std::isfinite(e.left_rad) || !std::isfinite(e.right_rad)) {
-      return Status::Error(where + "encoder sample " + std::to_string(i) + " is not finite");
+      return Status::InvalidInput(where + "encoder sample " + std::to_string(i) + " is not finite");
     }
     if (i > 0 && !(e.t_s > run.odometry[i - 1].t_s)) {
       const int prev = run.odometry[i - 1].line;
-      return Status::Error(
+      return Status::InvalidInput(
           where + "t = " + Num(e.t_s) +
           " is not after the previous sample's t = " + Num(run.odometry[i - 1].t_s) +
           (prev > 0 ? " (line " + std::to_string(prev) + ")" : std::string()) +
@@ -100,26 +101,27 @@ Status CheckBearing(const BearingRun& run, size_t i, const std::string& source) 
   const BearingSample& b = run.bearings[i];
   const std::string where = At(source, b.line) + "run " + std::to_string(run.id) + ": ";
   if (!std::isfinite(b.t_s) || !std::isfinite(b.bearing_rad)) {
-    return Status::Error(where + "bearing sample " + std::to_string(i) + " is not finite");
+    return Status::InvalidInput(where + "bearing sample " + std::to_string(i) + " is not finite");
   }
   if (!(b.bearing_rad > -M_PI - kBearingSlack && b.bearing_rad <= M_PI + kBearingSlack)) {
-    return Status::Error(where + "bearing " + Num(b.bearing_rad) +
-                         " is outside (−π, π]; bearings are in radians, wrapped");
+    return Status::InvalidInput(where + "bearing " + Num(b.bearing_rad) +
+                                " is outside (−π, π]; bearings are in radians, wrapped");
   }
   const double t0 = run.odometry.front().t_s;
   const double t1 = run.odometry.back().t_s;
   if (b.t_s < t0 || b.t_s > t1) {
-    return Status::Error(where + "t = " + Num(b.t_s) +
-                         " is outside the run's odometry time span [" + Num(t0) + ", " + Num(t1) +
-                         "]" + OdometryLines(run) +
-                         "; bearings must be taken while the encoders are logged");
+    return Status::InvalidInput(where + "t = " + Num(b.t_s) +
+                                " is outside the run's odometry time span [" + Num(t0) + ", " +
+                                Num(t1) + "]" + OdometryLines(run) +
+                                "; bearings must be taken while the encoders are logged");
   }
   if (i > 0 && !(b.t_s > run.bearings[i - 1].t_s)) {
     const int prev = run.bearings[i - 1].line;
-    return Status::Error(where + "t = " + Num(b.t_s) + " is not after the previous bearing's t = " +
-                         Num(run.bearings[i - 1].t_s) +
-                         (prev > 0 ? " (line " + std::to_string(prev) + ")" : std::string()) +
-                         "; times must increase within a run");
+    return Status::InvalidInput(
+        where + "t = " + Num(b.t_s) +
+        " is not after the previous bearing's t = " + Num(run.bearings[i - 1].t_s) +
+        (prev > 0 ? " (line " + std::to_string(prev) + ")" : std::string()) +
+        "; times must increase within a run");
   }
   return Status::Ok();
 }
@@ -127,24 +129,24 @@ Status CheckBearing(const BearingRun& run, size_t i, const std::string& source) 
 Status CheckMeta(const BearingLogMeta& meta, const std::vector<BearingRun>& runs,
                  const std::string& source) {
   if (!(meta.wheel_radius_m > 0.0) || !std::isfinite(meta.wheel_radius_m)) {
-    return Status::Error(source + ": wheel_radius must be positive and finite, got " +
-                         Num(meta.wheel_radius_m));
+    return Status::InvalidInput(source + ": wheel_radius must be positive and finite, got " +
+                                Num(meta.wheel_radius_m));
   }
   if (!(meta.wheelbase_m > 0.0) || !std::isfinite(meta.wheelbase_m)) {
-    return Status::Error(source + ": wheelbase must be positive and finite, got " +
-                         Num(meta.wheelbase_m));
+    return Status::InvalidInput(source + ": wheelbase must be positive and finite, got " +
+                                Num(meta.wheelbase_m));
   }
   if (meta.initial_distance) {
     const InitialDistance& d = *meta.initial_distance;
     if (!(d.meters > 0.0) || !std::isfinite(d.meters)) {
-      return Status::Error(source + ": initial_distance.meters must be positive and finite, got " +
-                           Num(d.meters));
+      return Status::InvalidInput(
+          source + ": initial_distance.meters must be positive and finite, got " + Num(d.meters));
     }
     const bool found =
         std::any_of(runs.begin(), runs.end(), [&](const BearingRun& r) { return r.id == d.run; });
     if (!found) {
-      return Status::Error(source + ": initial_distance.run = " + std::to_string(d.run) +
-                           " names no run of the odometry");
+      return Status::InvalidInput(source + ": initial_distance.run = " + std::to_string(d.run) +
+                                  " names no run of the odometry");
     }
   }
   return Status::Ok();
@@ -199,7 +201,7 @@ Status ParseBearingsCsv(const std::string& text, const std::string& source,
     const auto run =
         std::find_if(runs->begin(), runs->end(), [&](const BearingRun& r) { return r.id == id; });
     if (run == runs->end()) {
-      return Status::Error(where + "run " + std::to_string(id) + " has no encoder samples");
+      return Status::InvalidInput(where + "run " + std::to_string(id) + " has no encoder samples");
     }
     run->bearings.push_back(b);
     CALIB_RETURN_IF_ERROR(CheckBearing(*run, run->bearings.size() - 1, source));
@@ -207,8 +209,9 @@ Status ParseBearingsCsv(const std::string& text, const std::string& source,
   if (!any) return NoSamples(csv);
   for (const BearingRun& run : *runs) {
     if (run.bearings.empty()) {
-      return Status::Error(source + ": run " + std::to_string(run.id) + " has no bearings" +
-                           OdometryLines(run) + "; every run needs bearings of the landmark");
+      return Status::InvalidInput(source + ": run " + std::to_string(run.id) + " has no bearings" +
+                                  OdometryLines(run) +
+                                  "; every run needs bearings of the landmark");
     }
   }
   return Status::Ok();
@@ -220,49 +223,48 @@ StatusOr<BearingLogMeta> ParseBearingMeta(const std::string& text, const std::st
     json = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     // e.what() names the line and column.
-    return Status::Error(source + ": not valid JSON: " + e.what());
+    return Status::InvalidInput(source + ": not valid JSON: " + e.what());
   }
   if (!json.is_object()) {
-    return Status::Error(source + ": expected a JSON object {\"wheel_radius\": m, " +
-                         "\"wheelbase\": m}, found " + JsonTypeName(json));
+    return Status::InvalidInput(source + ": expected a JSON object {\"wheel_radius\": m, " +
+                                "\"wheelbase\": m}, found " + JsonTypeName(json));
   }
   BearingLogMeta meta;
-  Status status =
-      JsonPositiveNumber(json, "wheel_radius", "wheel_radius", "nominal wheel radius in metres",
-                         text, source, &meta.wheel_radius_m);
-  if (!status.ok()) return status;
-  status = JsonPositiveNumber(json, "wheelbase", "wheelbase",
-                              "nominal distance between the wheels in metres", text, source,
-                              &meta.wheelbase_m);
-  if (!status.ok()) return status;
+  CALIB_RETURN_IF_ERROR(JsonPositiveNumber(json, "wheel_radius", "wheel_radius",
+                                           "nominal wheel radius in metres", text, source,
+                                           &meta.wheel_radius_m));
+  CALIB_RETURN_IF_ERROR(JsonPositiveNumber(json, "wheelbase", "wheelbase",
+                                           "nominal distance between the wheels in metres", text,
+                                           source, &meta.wheelbase_m));
   if (json.contains("initial_distance")) {
     const nlohmann::json& d = json.at("initial_distance");
     const int line = LineOf(text, "\"initial_distance\"");
     if (!d.is_object()) {
-      return Status::Error(At(source, line) +
-                           "field \"initial_distance\" must be an object {\"run\": R, " +
-                           "\"meters\": D0}, found " + JsonTypeName(d));
+      return Status::InvalidInput(At(source, line) +
+                                  "field \"initial_distance\" must be an object {\"run\": R, " +
+                                  "\"meters\": D0}, found " + JsonTypeName(d));
     }
     InitialDistance initial;
     if (!d.contains("run")) {
-      return Status::Error(At(source, line) +
-                           "missing field \"initial_distance.run\" (the run whose start distance "
-                           "is given)");
+      return Status::InvalidInput(
+          At(source, line) +
+          "missing field \"initial_distance.run\" (the run whose start distance "
+          "is given)");
     }
     const nlohmann::json& run = d.at("run");
     const bool integral =
         run.is_number_integer() || (run.is_number_float() && std::isfinite(run.get<double>()) &&
                                     run.get<double>() == std::floor(run.get<double>()));
     if (!integral || std::abs(run.get<double>()) > 2e9) {
-      return Status::Error(At(source, LineOf(text, "\"run\"")) +
-                           "field \"initial_distance.run\" must be an integer run id, found " +
-                           (run.is_number() ? Num(run.get<double>()) : JsonTypeName(run)));
+      return Status::InvalidInput(
+          At(source, LineOf(text, "\"run\"")) +
+          "field \"initial_distance.run\" must be an integer run id, found " +
+          (run.is_number() ? Num(run.get<double>()) : JsonTypeName(run)));
     }
     initial.run = static_cast<int>(run.get<double>());
-    status = JsonPositiveNumber(d, "meters", "initial_distance.meters",
-                                "robot–landmark distance at the run's start in metres", text,
-                                source, &initial.meters);
-    if (!status.ok()) return status;
+    CALIB_RETURN_IF_ERROR(JsonPositiveNumber(d, "meters", "initial_distance.meters",
+                                             "robot–landmark distance at the run's start in metres",
+                                             text, source, &initial.meters));
     meta.initial_distance = initial;
   }
   return meta;
@@ -270,22 +272,21 @@ StatusOr<BearingLogMeta> ParseBearingMeta(const std::string& text, const std::st
 
 Status ValidateBearingLog(const BearingLog& log) {
   const std::string& source = log.source.empty() ? std::string("bearing log") : log.source;
-  if (log.runs.empty()) return Status::Error(source + ": no runs");
+  if (log.runs.empty()) return Status::InvalidInput(source + ": no runs");
   for (size_t i = 0; i < log.runs.size(); ++i) {
     const BearingRun& run = log.runs[i];
     if (i > 0 && !(run.id > log.runs[i - 1].id)) {
-      return Status::Error(source + ": run ids must be unique and increasing, run " +
-                           std::to_string(run.id) + " follows run " +
-                           std::to_string(log.runs[i - 1].id));
+      return Status::InvalidInput(source + ": run ids must be unique and increasing, run " +
+                                  std::to_string(run.id) + " follows run " +
+                                  std::to_string(log.runs[i - 1].id));
     }
-    Status status = CheckRunOdometry(run, source + "/odometry.csv");
-    if (!status.ok()) return status;
+    CALIB_RETURN_IF_ERROR(CheckRunOdometry(run, source + "/odometry.csv"));
     if (run.bearings.empty()) {
-      return Status::Error(source + "/bearings.csv: run " + std::to_string(run.id) +
-                           " has no bearings" + OdometryLines(run));
+      return Status::InvalidInput(source + "/bearings.csv: run " + std::to_string(run.id) +
+                                  " has no bearings" + OdometryLines(run));
     }
     for (size_t j = 0; j < run.bearings.size(); ++j) {
-      if (!(status = CheckBearing(run, j, source + "/bearings.csv")).ok()) return status;
+      CALIB_RETURN_IF_ERROR(CheckBearing(run, j, source + "/bearings.csv"));
     }
   }
   return CheckMeta(log.meta, log.runs, source + "/meta.json");
@@ -294,34 +295,32 @@ Status ValidateBearingLog(const BearingLog& log) {
 StatusOr<BearingLog> ReadBearingLog(const std::string& directory) {
   std::error_code ec;
   if (!fs::is_directory(directory, ec)) {
-    return Status::Error(directory + ": not a directory (a bearing log is a directory with " +
-                         "odometry.csv, bearings.csv and meta.json)");
+    return Status::Io(directory + ": not a directory (a bearing log is a directory with " +
+                      "odometry.csv, bearings.csv and meta.json)");
   }
   const std::string odometry_path = (fs::path(directory) / "odometry.csv").string();
   const std::string bearings_path = (fs::path(directory) / "bearings.csv").string();
   const std::string meta_path = (fs::path(directory) / "meta.json").string();
   std::string text;
-  Status status = ReadWholeFile(odometry_path, &text);
-  if (!status.ok()) return status;
-  StatusOr<std::vector<BearingRun>> runs = ParseBearingOdometryCsv(text, odometry_path);
-  if (!runs.ok()) return runs.status();
-  if (!(status = ReadWholeFile(bearings_path, &text)).ok()) return status;
-  if (!(status = ParseBearingsCsv(text, bearings_path, &*runs)).ok()) return status;
-  if (!(status = ReadWholeFile(meta_path, &text)).ok()) return status;
-  StatusOr<BearingLogMeta> meta = ParseBearingMeta(text, meta_path);
-  if (!meta.ok()) return meta.status();
-  if (!(status = CheckMeta(*meta, *runs, meta_path)).ok()) return status;
+  CALIB_RETURN_IF_ERROR(ReadWholeFile(odometry_path, &text));
+  CALIB_ASSIGN_OR_RETURN(std::vector<BearingRun> runs,
+                         ParseBearingOdometryCsv(text, odometry_path));
+  CALIB_RETURN_IF_ERROR(ReadWholeFile(bearings_path, &text));
+  CALIB_RETURN_IF_ERROR(ParseBearingsCsv(text, bearings_path, &runs));
+  CALIB_RETURN_IF_ERROR(ReadWholeFile(meta_path, &text));
+  CALIB_ASSIGN_OR_RETURN(const BearingLogMeta meta, ParseBearingMeta(text, meta_path));
+  CALIB_RETURN_IF_ERROR(CheckMeta(meta, runs, meta_path));
   BearingLog log;
   log.source = directory;
-  log.meta = *meta;
-  log.runs = std::move(*runs);
+  log.meta = meta;
+  log.runs = std::move(runs);
   return log;
 }
 
 Status WriteBearingLog(const BearingLog& log, const std::string& directory) {
   std::error_code ec;
   fs::create_directories(directory, ec);
-  if (ec) return Status::Error(directory + ": cannot create directory: " + ec.message());
+  if (ec) return Status::Io(directory + ": cannot create directory: " + ec.message());
   std::string odometry = "run,t,left,right\n";
   std::string bearings = "run,t,bearing\n";
   for (const BearingRun& run : log.runs) {
@@ -339,10 +338,8 @@ Status WriteBearingLog(const BearingLog& log, const std::string& directory) {
     meta["initial_distance"] = {{"run", log.meta.initial_distance->run},
                                 {"meters", log.meta.initial_distance->meters}};
   }
-  Status status = WriteWholeFile((fs::path(directory) / "odometry.csv").string(), odometry);
-  if (!status.ok()) return status;
-  status = WriteWholeFile((fs::path(directory) / "bearings.csv").string(), bearings);
-  if (!status.ok()) return status;
+  CALIB_RETURN_IF_ERROR(WriteWholeFile((fs::path(directory) / "odometry.csv").string(), odometry));
+  CALIB_RETURN_IF_ERROR(WriteWholeFile((fs::path(directory) / "bearings.csv").string(), bearings));
   return WriteWholeFile((fs::path(directory) / "meta.json").string(), meta.dump(2) + "\n");
 }
 

@@ -49,15 +49,15 @@ class LogBuilder {
     const auto where = [&] { return Where(log_.source, interval.line, interval.record); };
     const double duration = interval.duration_s;
     if (!(duration > 0.0) || !std::isfinite(duration)) {
-      return Status::Error(where() + "T must be positive and finite, got " + Num(duration));
+      return Status::InvalidInput(where() + "T must be positive and finite, got " + Num(duration));
     }
     if (log_.intervals.empty()) {
       has_t_ = has_t;
     } else if (has_t != has_t_) {
       const int first = log_.intervals.front().record;
-      return Status::Error(where() + "t must be given in every record or in none: record " +
-                           std::to_string(first) +
-                           (has_t_ ? " has it, this one does not" : " does not, this one has it"));
+      return Status::InvalidInput(
+          where() + "t must be given in every record or in none: record " + std::to_string(first) +
+          (has_t_ ? " has it, this one does not" : " does not, this one has it"));
     }
     if (log_.intervals.empty()) {
       if (!has_t) interval.start_s = 0.0;
@@ -70,16 +70,18 @@ class LogBuilder {
       interval.start_s = previous_end;
     } else {
       const double t = interval.start_s;
-      if (!std::isfinite(t)) return Status::Error(where() + "t must be finite, got " + Num(t));
+      if (!std::isfinite(t))
+        return Status::InvalidInput(where() + "t must be finite, got " + Num(t));
       if (t < previous.start_s) {
-        return Status::Error(where() + "t must be non-decreasing, got " + Num(t) + " after " +
-                             Num(previous.start_s));
+        return Status::InvalidInput(where() + "t must be non-decreasing, got " + Num(t) +
+                                    " after " + Num(previous.start_s));
       }
       // Clocks and rounding of printed values make starts and ends differ slightly.
       const double tolerance = 1e-6 + 1e-3 * previous.duration_s;
       if (t < previous_end - tolerance) {
-        return Status::Error(where() + "interval starting at t=" + Num(t) +
-                             " overlaps the previous interval, which ends at " + Num(previous_end));
+        return Status::InvalidInput(where() + "interval starting at t=" + Num(t) +
+                                    " overlaps the previous interval, which ends at " +
+                                    Num(previous_end));
       }
       interval.gap_before = t > previous_end + tolerance;
     }
@@ -89,7 +91,7 @@ class LogBuilder {
 
   StatusOr<LaserLog> Finish(const std::string& detail) && {
     if (log_.intervals.empty()) {
-      return Status::Error(log_.source + ": holds no records" + detail);
+      return Status::InvalidInput(log_.source + ": holds no records" + detail);
     }
     log_.has_timestamps = has_t_;
     return std::move(log_);
@@ -119,15 +121,14 @@ class TupleParser {
       if (*p_ != '{') {
         const std::string after =
             record_ > 0 ? "after record " + std::to_string(record_) + ": " : "";
-        return Status::Error(Where(source_, line_, 0) + after + "unexpected text '" + Token() +
-                             "' between records (each record is a { ... } object)");
+        return Status::InvalidInput(Where(source_, line_, 0) + after + "unexpected text '" +
+                                    Token() +
+                                    "' between records (each record is a { ... } object)");
       }
       LaserInterval interval;
       bool has_t = false;
-      Status status = ParseRecord(&interval, &has_t);
-      if (!status.ok()) return status;
-      status = builder_.Add(std::move(interval), has_t);
-      if (!status.ok()) return status;
+      CALIB_RETURN_IF_ERROR(ParseRecord(&interval, &has_t));
+      CALIB_RETURN_IF_ERROR(builder_.Add(std::move(interval), has_t));
       SkipSpace();
     }
     return std::move(builder_).Finish("");
@@ -170,12 +171,12 @@ class TupleParser {
   }
 
   Status Error(const std::string& problem) const {
-    return Status::Error(Where(source_, line_, record_) + problem);
+    return Status::InvalidInput(Where(source_, line_, record_) + problem);
   }
   // Names the line where the record started, which is where a reader looks.
   Status Truncated(const char* inside) const {
-    return Status::Error(Where(source_, record_line_, record_) +
-                         "truncated record: the input ends inside " + inside);
+    return Status::InvalidInput(Where(source_, record_line_, record_) +
+                                "truncated record: the input ends inside " + inside);
   }
 
   Status ParseNumber(const char* key, double* value) {
@@ -203,8 +204,7 @@ class TupleParser {
     } else {
       while (true) {
         double value = 0.0;
-        Status status = ParseNumber("sm", &value);
-        if (!status.ok()) return status;
+        CALIB_RETURN_IF_ERROR(ParseNumber("sm", &value));
         if (count < 3) (*sm)(count) = value;
         ++count;
         SkipSpace();
@@ -261,14 +261,12 @@ class TupleParser {
         ++p_;
         SkipSpace();
         if (index == kKeySm) {
-          Status status = ParseSm(&interval->sensor_motion);
-          if (!status.ok()) return status;
+          CALIB_RETURN_IF_ERROR(ParseSm(&interval->sensor_motion));
         } else {
           if (p_ < end_ && *p_ == '[') {
             return Error(std::string(kTupleKeyNames[index]) + " must be a number, not an array");
           }
-          Status status = ParseNumber(kTupleKeyNames[index], &values[index]);
-          if (!status.ok()) return status;
+          CALIB_RETURN_IF_ERROR(ParseNumber(kTupleKeyNames[index], &values[index]));
         }
         SkipSpace();
         if (p_ >= end_) return Truncated("the record");
@@ -285,8 +283,8 @@ class TupleParser {
     }
     for (int index = 0; index < kKeyStart; ++index) {
       if (!seen[index]) {
-        return Status::Error(Where(source_, record_line_, record_) + "missing key \"" +
-                             kTupleKeyNames[index] + "\"");
+        return Status::InvalidInput(Where(source_, record_line_, record_) + "missing key \"" +
+                                    kTupleKeyNames[index] + "\"");
       }
     }
     interval->duration_s = values[kKeyT];
@@ -367,8 +365,8 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
                                     const std::vector<StampedPose>& poses,
                                     const StreamNames& names) {
   if (odometry.size() < 2) {
-    return Status::Error(names.odometry + ": needs at least 2 odometry samples, got " +
-                         std::to_string(odometry.size()));
+    return Status::InvalidInput(names.odometry + ": needs at least 2 odometry samples, got " +
+                                std::to_string(odometry.size()));
   }
   for (size_t k = 0; k < odometry.size(); ++k) {
     const EncoderSample& s = odometry[k];
@@ -376,26 +374,26 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
       return SampleWhere(names.odometry, names.odometry_lines, k, "sample");
     };
     if (!std::isfinite(s.t_s) || !std::isfinite(s.left_rad) || !std::isfinite(s.right_rad)) {
-      return Status::Error(where() + "values must be finite (NaN or inf found)");
+      return Status::InvalidInput(where() + "values must be finite (NaN or inf found)");
     }
     if (k > 0 && !(s.t_s > odometry[k - 1].t_s)) {
-      return Status::Error(where() + "timestamps must be strictly increasing, got t=" + Num(s.t_s) +
-                           " after " + Num(odometry[k - 1].t_s));
+      return Status::InvalidInput(where() + "timestamps must be strictly increasing, got t=" +
+                                  Num(s.t_s) + " after " + Num(odometry[k - 1].t_s));
     }
   }
   if (poses.size() < 2) {
-    return Status::Error(names.poses + ": needs at least 2 sensor poses, got " +
-                         std::to_string(poses.size()));
+    return Status::InvalidInput(names.poses + ": needs at least 2 sensor poses, got " +
+                                std::to_string(poses.size()));
   }
   for (size_t k = 0; k < poses.size(); ++k) {
     const StampedPose& p = poses[k];
     const auto where = [&] { return SampleWhere(names.poses, names.pose_lines, k, "pose"); };
     if (!std::isfinite(p.t_s) || !p.world_T_sensor.allFinite()) {
-      return Status::Error(where() + "values must be finite (NaN or inf found)");
+      return Status::InvalidInput(where() + "values must be finite (NaN or inf found)");
     }
     if (k > 0 && !(p.t_s > poses[k - 1].t_s)) {
-      return Status::Error(where() + "timestamps must be strictly increasing, got t=" + Num(p.t_s) +
-                           " after " + Num(poses[k - 1].t_s));
+      return Status::InvalidInput(where() + "timestamps must be strictly increasing, got t=" +
+                                  Num(p.t_s) + " after " + Num(poses[k - 1].t_s));
     }
   }
 
@@ -414,11 +412,11 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
   size_t last = poses.size();  // One past the last usable pose.
   while (last > first && poses[last - 1].t_s > t_end) --last;
   if (last < first + 2) {
-    return Status::Error(names.poses +
-                         ": no pair of sensor poses lies within the odometry time "
-                         "span [" +
-                         Num(t_begin) + ", " + Num(t_end) + "] (poses span [" +
-                         Num(poses.front().t_s) + ", " + Num(poses.back().t_s) + "])");
+    return Status::InvalidInput(names.poses +
+                                ": no pair of sensor poses lies within the odometry time "
+                                "span [" +
+                                Num(t_begin) + ", " + Num(t_end) + "] (poses span [" +
+                                Num(poses.front().t_s) + ", " + Num(poses.back().t_s) + "])");
   }
 
   const auto by_time = [](const EncoderSample& s, double t) { return s.t_s < t; };
@@ -479,10 +477,11 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
     log.intervals.push_back(std::move(interval));
   }
   if (log.intervals.empty()) {
-    return Status::Error(names.source +
-                         ": no interval remains: every pair of sensor poses spans an encoder "
-                         "gap longer than 5x the median encoder period (" +
-                         Num(gap_limit / 5.0) + " s)");
+    return Status::InvalidInput(
+        names.source +
+        ": no interval remains: every pair of sensor poses spans an encoder "
+        "gap longer than 5x the median encoder period (" +
+        Num(gap_limit / 5.0) + " s)");
   }
   return log;
 }
@@ -496,8 +495,8 @@ bool Finite(const LaserInterval& interval) {
 Status CheckWritable(const LaserLog& log, const std::string& path) {
   for (size_t k = 0; k < log.intervals.size(); ++k) {
     if (!Finite(log.intervals[k])) {
-      return Status::Error(path + ": cannot write interval " + std::to_string(k + 1) +
-                           ": it holds a non-finite value");
+      return Status::InvalidInput(path + ": cannot write interval " + std::to_string(k + 1) +
+                                  ": it holds a non-finite value");
     }
   }
   return Status::Ok();
@@ -512,8 +511,8 @@ StatusOr<LaserFormat> ParseLaserFormat(const std::string& name) {
   if (lower == "tuples" || lower == "json") return LaserFormat::kTuples;
   if (lower == "csv") return LaserFormat::kCsv;
   if (lower == "stream") return LaserFormat::kStream;
-  return Status::Error("unknown laser log format '" + name +
-                       "'; accepted: auto, tuples, json, csv, stream");
+  return Status::InvalidInput("unknown laser log format '" + name +
+                              "'; accepted: auto, tuples, json, csv, stream");
 }
 
 StatusOr<LaserLog> ParseLaserTuples(const std::string& text, const std::string& source) {
@@ -554,19 +553,18 @@ StatusOr<LaserLog> ParseLaserCsv(const std::string& text, const std::string& sou
 StatusOr<LaserLog> ReadLaserLog(const std::string& path, LaserFormat format) {
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
-  if (!fs::exists(status)) return Status::Error(path + ": no such file or directory");
+  if (!fs::exists(status)) return Status::Io(path + ": no such file or directory");
   const bool directory = fs::is_directory(status);
   if (format == LaserFormat::kStream || (format == LaserFormat::kAuto && directory)) {
     if (!directory) {
-      return Status::Error(path +
-                           ": the stream format reads a directory holding odometry.csv "
-                           "and sensor_poses.csv, but this is a file");
+      return Status::InvalidInput(path +
+                                  ": the stream format reads a directory holding odometry.csv "
+                                  "and sensor_poses.csv, but this is a file");
     }
     return ReadLaserStream(path);
   }
   std::string text;
-  Status read = ReadWholeFile(path, &text);
-  if (!read.ok()) return read;
+  CALIB_RETURN_IF_ERROR(ReadWholeFile(path, &text));
   if (format == LaserFormat::kAuto) {
     const std::string_view body = WithoutBom(text);
     size_t i = 0;
@@ -589,9 +587,9 @@ StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometr
 StatusOr<LaserLog> ReadLaserStream(const std::string& directory) {
   std::error_code ec;
   if (!fs::is_directory(directory, ec)) {
-    return Status::Error(directory +
-                         ": not a directory (the stream format reads a directory "
-                         "holding odometry.csv and sensor_poses.csv)");
+    return Status::Io(directory +
+                      ": not a directory (the stream format reads a directory "
+                      "holding odometry.csv and sensor_poses.csv)");
   }
   const std::string odometry_path = (fs::path(directory) / "odometry.csv").string();
   const std::string poses_path = (fs::path(directory) / "sensor_poses.csv").string();
@@ -626,8 +624,7 @@ StatusOr<LaserLog> ReadLaserStream(const std::string& directory) {
 }
 
 Status WriteLaserTuples(const LaserLog& log, const std::string& path) {
-  Status status = CheckWritable(log, path);
-  if (!status.ok()) return status;
+  CALIB_RETURN_IF_ERROR(CheckWritable(log, path));
   std::string out;
   out.reserve(log.intervals.size() * 160);
   for (const LaserInterval& interval : log.intervals) {
@@ -655,8 +652,7 @@ Status WriteLaserTuples(const LaserLog& log, const std::string& path) {
 }
 
 Status WriteLaserCsv(const LaserLog& log, const std::string& path) {
-  Status status = CheckWritable(log, path);
-  if (!status.ok()) return status;
+  CALIB_RETURN_IF_ERROR(CheckWritable(log, path));
   std::string out = "t,T,phi_l,phi_r,sm_x,sm_y,sm_theta\n";
   out.reserve(log.intervals.size() * 120 + out.size());
   for (const LaserInterval& interval : log.intervals) {
@@ -678,13 +674,13 @@ Status WriteLaserStream(const std::vector<EncoderSample>& odometry,
                         const std::string& directory) {
   std::error_code ec;
   fs::create_directories(directory, ec);
-  if (ec) return Status::Error(directory + ": cannot create the directory: " + ec.message());
+  if (ec) return Status::Io(directory + ": cannot create the directory: " + ec.message());
   std::string out = "t,left,right\n";
   for (size_t k = 0; k < odometry.size(); ++k) {
     const EncoderSample& s = odometry[k];
     if (!std::isfinite(s.t_s) || !std::isfinite(s.left_rad) || !std::isfinite(s.right_rad)) {
-      return Status::Error(directory + ": cannot write odometry sample " + std::to_string(k + 1) +
-                           ": it holds a non-finite value");
+      return Status::InvalidInput(directory + ": cannot write odometry sample " +
+                                  std::to_string(k + 1) + ": it holds a non-finite value");
     }
     AppendGeneral(&out, s.t_s);
     out += ',';
@@ -693,14 +689,13 @@ Status WriteLaserStream(const std::vector<EncoderSample>& odometry,
     AppendGeneral(&out, s.right_rad);
     out += '\n';
   }
-  Status status = WriteWholeFile((fs::path(directory) / "odometry.csv").string(), out);
-  if (!status.ok()) return status;
+  CALIB_RETURN_IF_ERROR(WriteWholeFile((fs::path(directory) / "odometry.csv").string(), out));
   out = "t,x,y,theta\n";
   for (size_t k = 0; k < sensor_poses.size(); ++k) {
     const StampedPose& p = sensor_poses[k];
     if (!std::isfinite(p.t_s) || !p.world_T_sensor.allFinite()) {
-      return Status::Error(directory + ": cannot write sensor pose " + std::to_string(k + 1) +
-                           ": it holds a non-finite value");
+      return Status::InvalidInput(directory + ": cannot write sensor pose " +
+                                  std::to_string(k + 1) + ": it holds a non-finite value");
     }
     AppendGeneral(&out, p.t_s);
     for (int i = 0; i < 3; ++i) {
