@@ -154,18 +154,16 @@ Twist2<T> Log(const Pose2<T>& pose) {
 // ∂Log(p)/∂p = (∂Exp/∂ξ)⁻¹ at ξ = Log(p): [[V⁻¹, −V⁻¹·V'·ρ], [0, 0, 1]].
 template <typename T>
 Eigen::Matrix<T, 3, 3> LogJacobian(const Pose2<T>& pose) {
-  const Twist2<T> twist = Log(pose);
-  T s, c, ds, dc;
-  ArcCoefficients(pose(2), &s, &c);
-  ArcCoefficientDerivatives(pose(2), &ds, &dc);
+  const Eigen::Matrix<T, 3, 3> d_exp = ExpJacobian(Log(pose));
+  // V = [[S, −C], [C, S]], so V⁻¹ = [[S, C], [−C, S]]/(S² + C²).
+  const T s = d_exp(0, 0);
+  const T c = d_exp(1, 0);
   const T norm = s * s + c * c;
   Eigen::Matrix<T, 2, 2> v_inverse;
   v_inverse << s / norm, c / norm, -c / norm, s / norm;
-  const Eigen::Matrix<T, 2, 1> v_prime_rho(ds * twist(0) - dc * twist(1),
-                                           dc * twist(0) + ds * twist(1));
   Eigen::Matrix<T, 3, 3> j = Eigen::Matrix<T, 3, 3>::Identity();
   j.template topLeftCorner<2, 2>() = v_inverse;
-  j.template topRightCorner<2, 1>() = -(v_inverse * v_prime_rho);
+  j.template topRightCorner<2, 1>() = -(v_inverse * d_exp.template topRightCorner<2, 1>());
   return j;
 }
 
