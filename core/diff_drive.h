@@ -1,11 +1,11 @@
 #ifndef CALIB_CORE_DIFF_DRIVE_H_
 #define CALIB_CORE_DIFF_DRIVE_H_
 
+#include <calib/core/se2.h>
+
 #include <Eigen/Core>
 #include <cmath>
 #include <vector>
-
-#include <calib/core/se2.h>
 
 // Differential-drive kinematics (Censi et al. 2008, §II-A). Wheel speeds are positive when the
 // wheel drives the robot forward: v = (r_l·φ_l + r_r·φ_r)/2, ω = (r_r·φ_r − r_l·φ_l)/b.
@@ -27,23 +27,10 @@ Eigen::Matrix<T, 2, 2> WheelJacobian(const T& left_radius, const T& right_radius
 }
 
 // The displacement along an arc of length `distance` that turns by `angle` (eqs. 5–7 with
-// distance = v·T, angle = ω·T): (d·sin θ/θ, d·(1 − cos θ)/θ, θ), by its series near θ = 0.
+// distance = v·T, angle = ω·T): Exp(distance, 0, angle) = (d·sin θ/θ, d·(1 − cos θ)/θ, θ).
 template <typename T>
 Pose2<T> ArcDisplacement(const T& distance, const T& angle) {
-  using std::abs;
-  using std::cos;
-  using std::sin;
-  T sin_over_angle;
-  T one_minus_cos_over_angle;
-  if (abs(angle) < T(1e-2)) {
-    const T a2 = angle * angle;
-    sin_over_angle = T(1) - a2 / T(6) + a2 * a2 / T(120);
-    one_minus_cos_over_angle = angle / T(2) * (T(1) - a2 / T(12) + a2 * a2 / T(360));
-  } else {
-    sin_over_angle = sin(angle) / angle;
-    one_minus_cos_over_angle = (T(1) - cos(angle)) / angle;
-  }
-  return Pose2<T>(distance * sin_over_angle, distance * one_minus_cos_over_angle, angle);
+  return Exp(Twist2<T>(distance, T(0), angle));
 }
 
 // The robot displacement over a step in which the wheels turn by (left_rad, right_rad) at

@@ -1,6 +1,8 @@
 #ifndef CALIB_CORE_BEARING_BEARING_LOG_H_
 #define CALIB_CORE_BEARING_BEARING_LOG_H_
 
+#include <calib/core/encoder_sample.h>
+
 #include <optional>
 #include <string>
 #include <vector>
@@ -8,14 +10,6 @@
 // A bearing-only calibration log (CONTRACT.md, "Bearing problem (Martinelli)"): runs of wheel
 // encoder samples and bearings of a single landmark, plus the nominal odometry of meta.json.
 namespace calib {
-
-// Cumulative wheel rotations (rad, positive when the wheel drives the robot forward).
-struct EncoderSample {
-  double t_s = 0.0;
-  double left_rad = 0.0;
-  double right_rad = 0.0;
-  int line = 0;  // 1-based line in odometry.csv (0: not from a file).
-};
 
 // Direction of the landmark in the sensor frame, wrapped to (−π, π].
 struct BearingSample {

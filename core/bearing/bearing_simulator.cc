@@ -1,8 +1,8 @@
 #include <calib/core/bearing/bearing_simulator.h>
+#include <calib/core/random.h>
 
 #include <algorithm>
 #include <cmath>
-#include <random>
 
 namespace calib {
 namespace {
@@ -56,8 +56,8 @@ BearingLog SimulateBearingLog(const BearingSimOptions& options, BearingSimTruth*
   const double b = options.wheelbase_m;
   const BearingParams params = ObservableParams(m, b);
   const std::vector<BearingRunSpec> specs = options.runs.empty() ? MartinelliRuns() : options.runs;
-  std::mt19937_64 rng(options.seed);
-  std::normal_distribution<double> unit(0.0, 1.0);
+  // The Gaussians of std::normal_distribution under libstdc++, with any standard library.
+  Random random(options.seed);
 
   BearingLog log;
   log.source = "simulation";
@@ -112,8 +112,8 @@ BearingLog SimulateBearingLog(const BearingSimOptions& options, BearingSimTruth*
         steps.push_back(step);
       }
       const double k2 = options.encoder_noise_k * options.encoder_noise_k / r;
-      left_read += left_true + std::sqrt(k2 * std::abs(left_true)) * unit(rng);
-      right_read += right_true + std::sqrt(k2 * std::abs(right_true)) * unit(rng);
+      left_read += left_true + std::sqrt(k2 * std::abs(left_true)) * random.NormalPolar();
+      right_read += right_true + std::sqrt(k2 * std::abs(right_true)) * random.NormalPolar();
       run.odometry.push_back(EncoderSample{clock_s + t_next, left_read, right_read, 0});
     }
 
@@ -139,7 +139,7 @@ BearingLog SimulateBearingLog(const BearingSimOptions& options, BearingSimTruth*
         at = AdvanceTruth(options, step.world_T_robot_start, step.speeds, taken - step.t_s);
       }
       const double clean = BearingFromPose(at, m.phi_rad, m.rho_m, m.psi_rad);
-      const double noisy = WrapAngle(clean + options.bearing_noise_rad * unit(rng));
+      const double noisy = WrapAngle(clean + options.bearing_noise_rad * random.NormalPolar());
       run.bearings.push_back(BearingSample{clock_s + tb, noisy, 0});
       run_truth.world_T_robot_at_bearings.push_back(at);
     }

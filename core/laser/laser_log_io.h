@@ -1,12 +1,13 @@
 #ifndef CALIB_CORE_LASER_LASER_LOG_IO_H_
 #define CALIB_CORE_LASER_LASER_LOG_IO_H_
 
-#include <string>
-#include <vector>
-
+#include <calib/core/encoder_sample.h>
 #include <calib/core/laser/laser_log.h>
 #include <calib/core/se2.h>
 #include <calib/core/status.h>
+
+#include <string>
+#include <vector>
 
 // Readers and writers for laser–odometry logs (formats in CONTRACT.md). Every error message names
 // the file, the line (and record where there is one) and what is wrong.
@@ -30,11 +31,6 @@ StatusOr<LaserLog> ParseLaserCsv(const std::string& text, const std::string& sou
 
 // Raw streams: cumulative wheel rotations (rad, positive forward) on the odometry clock, and
 // sensor poses in any fixed world frame from a scan matcher or lidar odometry.
-struct WheelAngleSample {
-  double t_s = 0.0;
-  double left_rad = 0.0;
-  double right_rad = 0.0;
-};
 struct StampedPose {
   double t_s = 0.0;
   Pose2d world_T_sensor = Pose2d::Zero();
@@ -46,7 +42,7 @@ struct StampedPose {
 // Intervals that contain an encoder gap (a sample period longer than 5x the median period) are
 // dropped and the next kept one is marked gap_before. Poses outside the encoder time span are
 // dropped. `steps` is filled only when encoder samples fall strictly inside the interval.
-StatusOr<LaserLog> LaserLogFromStreams(const std::vector<WheelAngleSample>& odometry,
+StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometry,
                                        const std::vector<StampedPose>& sensor_poses,
                                        const std::string& source);
 StatusOr<LaserLog> ReadLaserStream(const std::string& directory);
@@ -56,7 +52,7 @@ StatusOr<LaserLog> ReadLaserStream(const std::string& directory);
 // when log.has_timestamps, so gaps survive a round trip; the CSV always has the t column.
 Status WriteLaserTuples(const LaserLog& log, const std::string& path);
 Status WriteLaserCsv(const LaserLog& log, const std::string& path);  // Includes the t column.
-Status WriteLaserStream(const std::vector<WheelAngleSample>& odometry,
+Status WriteLaserStream(const std::vector<EncoderSample>& odometry,
                         const std::vector<StampedPose>& sensor_poses, const std::string& directory);
 
 }  // namespace calib

@@ -1,4 +1,5 @@
 #include <calib/core/laser/laser_simulator.h>
+#include <calib/core/random.h>
 
 #include <algorithm>
 #include <cmath>
@@ -40,50 +41,13 @@ namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
-enum class Stream : uint32_t {
+enum Stream : uint32_t {
   kTiming = 1,
   kTargets,
   kScanNoise,
   kOutliers,
   kWheelNoise,
   kPoseNoise,
-};
-
-// Random numbers built from raw mt19937_64 output (whose sequence the standard fixes), so a
-// seed gives the same log with any standard library.
-class Random {
- public:
-  Random(uint64_t seed, Stream stream) {
-    std::seed_seq sequence{static_cast<uint32_t>(seed), static_cast<uint32_t>(seed >> 32),
-                           static_cast<uint32_t>(stream)};
-    engine_.seed(sequence);
-  }
-
-  // Uniform in [0, 1) with 53 random bits.
-  double Uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
-  double Uniform(double lo, double hi) { return lo + (hi - lo) * Uniform(); }
-  double Sign() { return (engine_() >> 63) != 0 ? 1.0 : -1.0; }
-  // Uniform in [0, n); the modulo bias is below n / 2^64.
-  uint64_t Index(uint64_t n) { return engine_() % n; }
-  double Exponential(double mean) { return -mean * std::log1p(-Uniform()); }
-
-  // Box–Muller; the second variate of each pair is kept for the next call.
-  double Normal() {
-    if (has_spare_) {
-      has_spare_ = false;
-      return spare_;
-    }
-    const double radius = std::sqrt(-2.0 * std::log(1.0 - Uniform()));  // 1 − U is in (0, 1].
-    const double angle = 2.0 * M_PI * Uniform();
-    spare_ = radius * std::sin(angle);
-    has_spare_ = true;
-    return radius * std::cos(angle);
-  }
-
- private:
-  std::mt19937_64 engine_;
-  bool has_spare_ = false;
-  double spare_ = 0.0;
 };
 
 // One commanded target, held from start_s until the next segment starts; the first segment also
@@ -231,13 +195,9 @@ struct Radii {
   }
 };
 
-// exp of the constant body twist (u, w, ω) over dt: θ = ω·dt and
-// (x, y) = [[sin θ/θ, −(1 − cos θ)/θ], [(1 − cos θ)/θ, sin θ/θ]]·(u, w)·dt.
+// exp of the constant body twist (u, w, ω) held for dt.
 Pose2d TwistExp(double u, double w, double omega, double dt) {
-  const Pose2d unit = ArcDisplacement(1.0, omega * dt);  // (sin θ/θ, (1 − cos θ)/θ, θ).
-  const double along = u * dt;
-  const double across = w * dt;
-  return Pose2d(unit(0) * along - unit(1) * across, unit(1) * along + unit(0) * across, unit(2));
+  return Exp(Twist2d(u * dt, w * dt, omega * dt));
 }
 
 // The robot's motion over each scan window [t_k + δ, t_{k+1} + δ], never storing the path.
@@ -540,7 +500,7 @@ LaserStreams SimulateLaserStreams(const LaserSimOptions& options, double encoder
   size_t cursor = 0;
   const auto sample = [&](double t) {
     const Eigen::Array2d angle = Quantize(simulation.profile.Angle(t, &cursor), ticks);
-    return WheelAngleSample{t, angle(0), angle(1)};
+    return EncoderSample{t, angle(0), angle(1)};
   };
   if (encoder_rate_hz > 0.0) {
     const double end = simulation.boundaries.back();

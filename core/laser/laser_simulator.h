@@ -75,7 +75,7 @@ std::vector<LaserInterval> DropBackwardIntervals(const std::vector<LaserInterval
 // The same motion as raw streams: encoder samples at `encoder_rate_hz` and scan-matcher poses
 // (world_T_sensor, noisy, one per interval end), for the stream reader.
 struct LaserStreams {
-  std::vector<WheelAngleSample> odometry;
+  std::vector<EncoderSample> odometry;
   std::vector<StampedPose> sensor_poses;
 };
 LaserStreams SimulateLaserStreams(const LaserSimOptions& options, double encoder_rate_hz,

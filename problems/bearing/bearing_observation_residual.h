@@ -1,18 +1,12 @@
 #ifndef CALIB_PROBLEMS_BEARING_BEARING_OBSERVATION_RESIDUAL_H_
 #define CALIB_PROBLEMS_BEARING_BEARING_OBSERVATION_RESIDUAL_H_
 
+#include <calib/core/bearing/bearing_model.h>
+#include <calib/core/bearing/bearing_params.h>
+#include <calib/core/se2.h>
 #include <ceres/autodiff_cost_function.h>
 
-#include <calib/core/bearing/bearing_model.h>
-#include <calib/core/se2.h>
-
 namespace calib {
-
-// Layout of the calibration block of the bearing bundle adjustment: the observable set of
-// Martinelli (eq. 5), estimated in the scale gauge δR ≡ 1 (see
-// solvers/bearing_bundle_adjustment.h).
-enum BearingParamIndex { kBearingPhi = 0, kBearingPsi, kBearingEta, kBearingDelta, kBearingXi };
-constexpr int kNumBearingParams = 5;
 
 // Bearing observation term (eq. 6 as a measurement model). With the robot pose x = (x, y, θ) at
 // the bearing's time (the landmark is the world origin) and the calibration c = (φ, ψ, η, δ, ξ):

@@ -1,6 +1,10 @@
 #ifndef CALIB_PROBLEMS_LASER_LASER_EFFECT_RESIDUAL_H_
 #define CALIB_PROBLEMS_LASER_LASER_EFFECT_RESIDUAL_H_
 
+#include <calib/core/diff_drive.h>
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/se2.h>
+#include <calib/problems/laser/laser_residual.h>
 #include <ceres/autodiff_cost_function.h>
 
 #include <Eigen/Core>
@@ -9,11 +13,6 @@
 #include <cmath>
 #include <limits>
 #include <vector>
-
-#include <calib/core/diff_drive.h>
-#include <calib/core/laser/laser_log.h>
-#include <calib/core/se2.h>
-#include <calib/problems/laser/laser_residual.h>
 
 // Candidate effects that the base laser–odometry model (problems/laser_residual.h) leaves out,
 // each with its own parameter γ; at γ = 0 the residual is exactly the base residual, so autodiff
@@ -89,14 +88,6 @@ struct LaserEffectContext {
 
 namespace effect_internal {
 
-// exp of the constant body twist over a piece: forward travel `along`, lateral travel `across`,
-// rotation `angle`. With across = 0 it is ArcDisplacement(along, angle) bit for bit.
-template <typename T>
-Pose2<T> TwistDisplacement(const T& along, const T& across, const T& angle) {
-  const Pose2<T> unit = ArcDisplacement(T(1), angle);  // (sin θ/θ, (1 − cos θ)/θ, θ).
-  return Pose2<T>(unit(0) * along - unit(1) * across, unit(1) * along + unit(0) * across, angle);
-}
-
 // Wheel radii in effect for wheel speeds φ: r·(1 + γ_s·(|φ| − φ_ref))·(1 + γ_c after the change).
 template <typename T>
 Eigen::Matrix<T, 2, 1> Radii(const T* odometry, const T* gamma, const Eigen::Vector2d& speed,
@@ -146,7 +137,6 @@ template <typename T>
 Pose2<T> EffectRobotMotion(const T* odometry, const T* gamma, const LaserEffectContext& context) {
   using effect_internal::Sign;
   using effect_internal::Twist;
-  using effect_internal::TwistDisplacement;
   const LaserInterval& interval = *context.interval;
   const T& time_offset = gamma[EffectInfo(LaserEffect::kTimeOffset).offset];
   const T& lateral = gamma[EffectInfo(LaserEffect::kLateralSlip).offset];
@@ -194,7 +184,7 @@ Pose2<T> EffectRobotMotion(const T* odometry, const T* gamma, const LaserEffectC
       const double dt = step.duration_s * share;
       // Lateral travel γ·v·ω·Δt = γ·along·angle/Δt.
       const T across = dt > 0.0 ? lateral * along * angle / T(dt) : T(0);
-      core = Compose(core, TwistDisplacement(along, across, angle));
+      core = Compose(core, Exp(Twist2<T>(along, across, angle)));
     }
     t += step.duration_s;
   }

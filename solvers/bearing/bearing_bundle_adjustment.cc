@@ -12,32 +12,6 @@
 #include <utility>
 
 namespace calib {
-const std::array<const char*, kNumBearingParams> kBearingParamNames = {"phi", "psi", "eta", "delta",
-                                                                       "xi"};
-const std::array<const char*, kNumBearingMetricParams> kBearingMetricNames = {
-    "phi", "psi", "rho", "delta_r", "delta_l", "delta_b"};
-
-BearingParamVector ToVector(const BearingParams& p) {
-  BearingParamVector v;
-  v << p.phi_rad, p.psi_rad, p.eta_per_m, p.delta, p.xi_per_m;
-  return v;
-}
-
-BearingParams BearingParamsFromVector(const BearingParamVector& v) {
-  BearingParams p;
-  p.phi_rad = v(kBearingPhi);
-  p.psi_rad = v(kBearingPsi);
-  p.eta_per_m = v(kBearingEta);
-  p.delta = v(kBearingDelta);
-  p.xi_per_m = v(kBearingXi);
-  return p;
-}
-
-BearingMetricVector ToVector(const BearingMetricParams& m) {
-  BearingMetricVector v;
-  v << m.phi_rad, m.psi_rad, m.rho_m, m.delta_r, m.delta_l, m.delta_b;
-  return v;
-}
 
 std::vector<BearingRunNodes> BearingNodes(const BearingLog& log) {
   std::vector<BearingRunNodes> all;

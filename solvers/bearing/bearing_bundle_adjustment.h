@@ -3,6 +3,7 @@
 
 #include <calib/core/bearing/bearing_log.h>
 #include <calib/core/bearing/bearing_model.h>
+#include <calib/core/bearing/bearing_params.h>
 #include <calib/core/se2.h>
 #include <calib/core/status.h>
 #include <calib/problems/bearing/bearing_observation_residual.h>
@@ -48,21 +49,6 @@
 // on the heading as a ramp too, so that premise adds little information (and plugging in the
 // estimated q as if exact overstates it: sigmas too small).
 namespace calib {
-
-using BearingParamVector = Eigen::Matrix<double, kNumBearingParams, 1>;
-using BearingParamMatrix = Eigen::Matrix<double, kNumBearingParams, kNumBearingParams>;
-// The metric set (φ, ψ, ρ, δR, δL, δB).
-constexpr int kNumBearingMetricParams = 6;
-using BearingMetricVector = Eigen::Matrix<double, kNumBearingMetricParams, 1>;
-using BearingMetricMatrix = Eigen::Matrix<double, kNumBearingMetricParams, kNumBearingMetricParams>;
-
-// The contract's names (CONTRACT.md), in the order of the vectors above.
-extern const std::array<const char*, kNumBearingParams> kBearingParamNames;
-extern const std::array<const char*, kNumBearingMetricParams> kBearingMetricNames;
-
-BearingParamVector ToVector(const BearingParams& p);
-BearingParams BearingParamsFromVector(const BearingParamVector& v);
-BearingMetricVector ToVector(const BearingMetricParams& m);
 
 // The two noise levels of the model: bearings N(0, σβ²); each encoder increment Δα read with
 // variance K²/r·|Δα| (§8.1).

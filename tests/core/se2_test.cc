@@ -1,11 +1,12 @@
+#include <calib/core/diff_drive.h>
 #include <calib/core/se2.h>
-
+#include <ceres/jet.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
-
-#include <calib/core/diff_drive.h>
+#include <vector>
 
 namespace calib {
 namespace {
@@ -46,6 +47,130 @@ TEST(Se2Test, BetweenIsInverseThenCompose) {
     ExpectPoseNear(Between(a, c), Compose(Inverse(a), c), 1e-12);
     ExpectPoseNear(Compose(a, Between(a, c)), c, 1e-12);
   }
+}
+
+// Angles around every regime of the series: zero, tiny, both sides of the cut-off, large.
+std::vector<double> TestAngles() {
+  const double below = std::nextafter(kSe2SmallAngle, 0.0);
+  return {0.0,  1e-12, -1e-7, 3e-3, -below, below, kSe2SmallAngle, -kSe2SmallAngle, 0.011,
+          -0.3, 0.7,   2.0,   -3.1, 3.1,    5.0};
+}
+
+template <typename F>
+Eigen::Matrix3d CentralDifferences(const F& f, const Eigen::Vector3d& x) {
+  Eigen::Matrix3d j;
+  for (int k = 0; k < 3; ++k) {
+    const double h = 1e-6;
+    Eigen::Vector3d plus = x, minus = x;
+    plus(k) += h;
+    minus(k) -= h;
+    j.col(k) = (f(plus) - f(minus)) / (2.0 * h);
+  }
+  return j;
+}
+
+using Jet3 = ceres::Jet<double, 3>;
+
+// The value and ∂/∂x of f at x, by ceres::Jet.
+template <typename F>
+Eigen::Matrix3d JetJacobian(const F& f, const Eigen::Vector3d& x, Eigen::Vector3d* value) {
+  Eigen::Matrix<Jet3, 3, 1> xj;
+  for (int k = 0; k < 3; ++k) xj(k) = Jet3(x(k), k);
+  const Eigen::Matrix<Jet3, 3, 1> y = f(xj);
+  Eigen::Matrix3d j;
+  for (int i = 0; i < 3; ++i) {
+    (*value)(i) = y(i).a;
+    j.row(i) = y(i).v.transpose();
+  }
+  return j;
+}
+
+TEST(Se2Test, LogOfExpIsIdentity) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> rho(-2.0, 2.0);
+  for (double angle : TestAngles()) {
+    for (int i = 0; i < 10; ++i) {
+      const Twist2d xi(rho(rng), rho(rng), angle);
+      EXPECT_LT((Log(Exp(xi)) - xi).cwiseAbs().maxCoeff(), 1e-13) << xi.transpose();
+    }
+  }
+}
+
+TEST(Se2Test, ExpOfLogIsIdentity) {
+  std::mt19937 rng(6);
+  for (int i = 0; i < 200; ++i) {
+    const Pose2d p = RandomPose(&rng);
+    EXPECT_LT((Exp(Log(p)) - p).cwiseAbs().maxCoeff(), 1e-13) << p.transpose();
+  }
+  for (double angle : TestAngles()) {
+    const Pose2d p(0.3, -1.2, angle);
+    EXPECT_LT((Exp(Log(p)) - p).cwiseAbs().maxCoeff(), 1e-13) << p.transpose();
+  }
+}
+
+TEST(Se2Test, ExpIsTheArc) {
+  // A pure forward twist is ArcDisplacement; a pure rotation is the identity translation.
+  for (double angle : TestAngles()) {
+    const Pose2d arc = ArcDisplacement(0.8, angle);
+    EXPECT_EQ(Exp(Twist2d(0.8, 0.0, angle)), arc);
+    EXPECT_EQ(Exp(Twist2d(0.0, 0.0, angle)), Pose2d(0.0, 0.0, angle));
+  }
+  // The lateral column is the forward one turned by 90°: Exp(0, d, θ) = R(π/2)·Exp(d, 0, θ).
+  const Pose2d lateral = Exp(Twist2d(0.0, 0.8, 0.4)), forward = Exp(Twist2d(0.8, 0.0, 0.4));
+  EXPECT_NEAR(lateral(0), -forward(1), 1e-15);
+  EXPECT_NEAR(lateral(1), forward(0), 1e-15);
+}
+
+TEST(Se2Test, JacobiansMatchCentralDifferences) {
+  const auto exp = [](const Eigen::Vector3d& x) -> Eigen::Vector3d { return Exp(Twist2d(x)); };
+  const auto log = [](const Eigen::Vector3d& x) -> Eigen::Vector3d { return Log(Pose2d(x)); };
+  for (double angle : TestAngles()) {
+    const Twist2d xi(0.7, -0.4, angle);
+    const Eigen::Matrix3d j_exp = ExpJacobian(xi);
+    EXPECT_LT((j_exp - CentralDifferences(exp, xi)).cwiseAbs().maxCoeff(), 1e-8) << angle;
+    const Pose2d p(0.7, -0.4, angle);
+    const Eigen::Matrix3d j_log = LogJacobian(p);
+    EXPECT_LT((j_log - CentralDifferences(log, p)).cwiseAbs().maxCoeff(), 1e-8) << angle;
+    // The two are inverse at corresponding points.
+    EXPECT_LT((LogJacobian(Exp(xi)) * j_exp - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(),
+              1e-12)
+        << angle;
+  }
+}
+
+TEST(Se2Test, JetDerivativesMatchTheJacobians) {
+  const auto exp = [](const Eigen::Matrix<Jet3, 3, 1>& x) { return Exp(Twist2<Jet3>(x)); };
+  const auto log = [](const Eigen::Matrix<Jet3, 3, 1>& x) { return Log(Pose2<Jet3>(x)); };
+  for (double angle : TestAngles()) {
+    const Eigen::Vector3d x(0.7, -0.4, angle);
+    Eigen::Vector3d value;
+    const Eigen::Matrix3d j_exp = JetJacobian(exp, x, &value);
+    EXPECT_LT((value - Exp(Twist2d(x))).cwiseAbs().maxCoeff(), 1e-15);  // Jet divides by 1/b.
+    EXPECT_LT((j_exp - ExpJacobian(Twist2d(x))).cwiseAbs().maxCoeff(), 1e-11) << angle;
+    const Eigen::Matrix3d j_log = JetJacobian(log, x, &value);
+    EXPECT_LT((value - Log(Pose2d(x))).cwiseAbs().maxCoeff(), 1e-15);
+    EXPECT_LT((j_log - LogJacobian(Pose2d(x))).cwiseAbs().maxCoeff(), 1e-11) << angle;
+  }
+}
+
+TEST(Se2Test, SeriesAreContinuousAtTheCutOff) {
+  const double below = std::nextafter(kSe2SmallAngle, 0.0);
+  double s0, c0, s1, c1, ds0, dc0, ds1, dc1;
+  ArcCoefficients(below, &s0, &c0);
+  ArcCoefficients(kSe2SmallAngle, &s1, &c1);
+  ArcCoefficientDerivatives(below, &ds0, &dc0);
+  ArcCoefficientDerivatives(kSe2SmallAngle, &ds1, &dc1);
+  // The closed forms round (1 − cos θ) to ~1e-16 absolute, i.e. ~1e-14 in C and ~1e-12 in C'.
+  EXPECT_NEAR(s0, s1, 4 * std::numeric_limits<double>::epsilon());
+  EXPECT_NEAR(c0, c1, 1e-14);
+  EXPECT_NEAR(ds0, ds1, 1e-13);
+  EXPECT_NEAR(dc0, dc1, 1e-11);
+  // The series against the exact values in long double (S: the omitted θ⁶/5040 ≈ 2e-16).
+  const long double a = kSe2SmallAngle;
+  EXPECT_NEAR(s0, static_cast<double>(std::sin(a) / a), 3e-16);
+  EXPECT_NEAR(c0, static_cast<double>((1.0L - std::cos(a)) / a), 1e-17);
+  EXPECT_NEAR(ds0, static_cast<double>((a * std::cos(a) - std::sin(a)) / (a * a)), 1e-15);
+  EXPECT_NEAR(dc0, static_cast<double>((a * std::sin(a) - 1.0L + std::cos(a)) / (a * a)), 1e-14);
 }
 
 TEST(Se2Test, ComposeMatchesCensiDefinition) {

@@ -491,8 +491,8 @@ struct WheelSignal {
     return total;
   }
 
-  std::vector<WheelAngleSample> Samples() const {
-    std::vector<WheelAngleSample> samples(times.size());
+  std::vector<EncoderSample> Samples() const {
+    std::vector<EncoderSample> samples(times.size());
     for (size_t i = 0; i < times.size(); ++i) {
       samples[i].t_s = times[i];
       if (i > 0) {
@@ -599,8 +599,8 @@ TEST(LaserStreamTest, IntegratesEncoderSamplesIntoSteps) {
 
 TEST(LaserStreamTest, EncoderGapDropsIntervalsAndMarksTheNext) {
   const WheelSignal signal = MakeWheelSignal(8.0);
-  std::vector<WheelAngleSample> odometry;
-  for (const WheelAngleSample& s : signal.Samples()) {
+  std::vector<EncoderSample> odometry;
+  for (const EncoderSample& s : signal.Samples()) {
     if (!(s.t_s > 3.0 && s.t_s < 3.6)) odometry.push_back(s);  // 0.6 s > 5 × 0.02 s.
   }
   std::vector<StampedPose> poses;
@@ -632,13 +632,13 @@ TEST(LaserStreamTest, EncoderGapDropsIntervalsAndMarksTheNext) {
 }
 
 TEST(LaserStreamTest, Errors) {
-  const std::vector<WheelAngleSample> odometry = MakeWheelSignal(2.0).Samples();
+  const std::vector<EncoderSample> odometry = MakeWheelSignal(2.0).Samples();
   const std::vector<StampedPose> poses = {{0.5, Pose2d::Zero()}, {1.0, Pose2d::Zero()}};
   ExpectError(LaserLogFromStreams(odometry, {{3.0, Pose2d::Zero()}, {4.0, Pose2d::Zero()}}, "s"),
               {"s (sensor poses)", "no pair of sensor poses", "time span"});
   ExpectError(LaserLogFromStreams({odometry[0]}, poses, "s"), {"s (odometry)", "at least 2"});
   ExpectError(LaserLogFromStreams(odometry, {poses[0]}, "s"), {"s (sensor poses)", "at least 2"});
-  std::vector<WheelAngleSample> bad = odometry;
+  std::vector<EncoderSample> bad = odometry;
   bad[4].t_s = bad[3].t_s;
   ExpectError(LaserLogFromStreams(bad, poses, "s"), {"sample 5", "strictly increasing"});
   bad = odometry;
@@ -650,8 +650,8 @@ TEST(LaserStreamTest, Errors) {
   ExpectError(LaserLogFromStreams(odometry, bad_poses, "s"), {"pose 1", "finite"});
 
   // Every interval spans a gap.
-  std::vector<WheelAngleSample> gappy;
-  for (const WheelAngleSample& s : odometry) {
+  std::vector<EncoderSample> gappy;
+  for (const EncoderSample& s : odometry) {
     if (s.t_s < 0.5 || s.t_s > 1.5) gappy.push_back(s);
   }
   ExpectError(LaserLogFromStreams(gappy, {{0.4, Pose2d::Zero()}, {1.6, Pose2d::Zero()}}, "s"),
@@ -661,7 +661,7 @@ TEST(LaserStreamTest, Errors) {
 TEST_F(LaserLogIoTest, StreamRoundTripThroughFiles) {
   std::mt19937 rng(4);
   const WheelSignal signal = MakeWheelSignal(6.0);
-  const std::vector<WheelAngleSample> odometry = signal.Samples();
+  const std::vector<EncoderSample> odometry = signal.Samples();
   const std::vector<StampedPose> poses = IrregularPoses(0.01, 5.9, &rng);
   const std::string directory = Path("new/stream");  // Created by the writer.
   ASSERT_TRUE(WriteLaserStream(odometry, poses, directory).ok());

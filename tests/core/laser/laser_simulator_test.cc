@@ -594,8 +594,8 @@ TEST(LaserSimulatorTest, StreamsMatchTheLog) {
   size_t k = 0;
   int checked = 0;
   for (size_t j = 1; j < streams.odometry.size(); ++j) {
-    const WheelAngleSample& a = streams.odometry[j - 1];
-    const WheelAngleSample& b = streams.odometry[j];
+    const EncoderSample& a = streams.odometry[j - 1];
+    const EncoderSample& b = streams.odometry[j];
     ASSERT_NEAR(b.t_s - a.t_s, 1.0 / rate, 1e-9);
     while (k + 1 < log.intervals.size() && log.intervals[k + 1].start_s <= a.t_s) ++k;
     const LaserInterval& interval = log.intervals[k];

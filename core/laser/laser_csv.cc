@@ -1,0 +1,67 @@
+#include <calib/core/csv.h>
+#include <calib/core/laser/laser_log_builder.h>
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/core/text_file.h>
+#include <calib/core/text_number.h>
+
+#include <cmath>
+#include <string>
+#include <string_view>
+#include <utility>
+
+namespace calib {
+
+using laser_io_internal::CheckWritable;
+using laser_io_internal::LogBuilder;
+
+// The CSV format: a header naming T,phi_l,phi_r,sm_x,sm_y,sm_theta and optionally t.
+StatusOr<LaserLog> ParseLaserCsv(const std::string& text, const std::string& source) {
+  enum { kT, kPhiL, kPhiR, kSmX, kSmY, kSmTheta, kStart };
+  CALIB_ASSIGN_OR_RETURN(CsvReader csv, CsvReader::Open(text, source,
+                                                        {{"T"},
+                                                         {"phi_l"},
+                                                         {"phi_r"},
+                                                         {"sm_x"},
+                                                         {"sm_y"},
+                                                         {"sm_theta"},
+                                                         {"t", /*required=*/false}}));
+  LogBuilder builder(source);
+  while (true) {
+    CALIB_ASSIGN_OR_RETURN(const bool more, csv.Next());
+    if (!more) break;
+    double v[kStart + 1] = {};
+    for (int c = kT; c < kStart; ++c) CALIB_RETURN_IF_ERROR(csv.Number(c, &v[c]));
+    bool has_t = false;
+    CALIB_RETURN_IF_ERROR(csv.Number(kStart, &v[kStart], &has_t));
+    LaserInterval interval;
+    interval.duration_s = v[kT];
+    interval.left_speed = v[kPhiL];
+    interval.right_speed = v[kPhiR];
+    interval.sensor_motion = Pose2d(v[kSmX], v[kSmY], v[kSmTheta]);
+    interval.start_s = v[kStart];
+    interval.line = csv.line();
+    interval.record = csv.record();
+    CALIB_RETURN_IF_ERROR(builder.Add(std::move(interval), has_t));
+  }
+  return std::move(builder).Finish(" (only a header)");
+}
+
+Status WriteLaserCsv(const LaserLog& log, const std::string& path) {
+  CALIB_RETURN_IF_ERROR(CheckWritable(log, path));
+  std::string out = "t,T,phi_l,phi_r,sm_x,sm_y,sm_theta\n";
+  out.reserve(log.intervals.size() * 120 + out.size());
+  for (const LaserInterval& interval : log.intervals) {
+    const double values[7] = {interval.start_s,          interval.duration_s,
+                              interval.left_speed,       interval.right_speed,
+                              interval.sensor_motion(0), interval.sensor_motion(1),
+                              interval.sensor_motion(2)};
+    for (int i = 0; i < 7; ++i) {
+      if (i > 0) out += ',';
+      AppendGeneral(&out, values[i]);
+    }
+    out += '\n';
+  }
+  return WriteWholeFile(path, out);
+}
+
+}  // namespace calib

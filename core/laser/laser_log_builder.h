@@ -1,0 +1,114 @@
+#ifndef CALIB_CORE_LASER_LASER_LOG_BUILDER_H_
+#define CALIB_CORE_LASER_LASER_LOG_BUILDER_H_
+
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/status.h>
+#include <calib/core/text_number.h>
+
+#include <cmath>
+#include <string>
+#include <utility>
+
+// Pieces the laser readers and writers share (not part of the API).
+namespace calib {
+namespace laser_io_internal {
+
+inline bool IsJsonSpace(char c) { return c == ' ' || c == '\n' || c == '\t' || c == '\r'; }
+
+// "source:line: record n: " with the parts that are known.
+inline std::string Where(const std::string& source, int line, int record) {
+  std::string where = source;
+  if (line > 0) where += ":" + std::to_string(line);
+  where += ": ";
+  if (record > 0) where += "record " + std::to_string(record) + ": ";
+  return where;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Checks shared by the tuple and CSV readers: T, the optional t, and the time line.
+
+class LogBuilder {
+ public:
+  explicit LogBuilder(const std::string& source) { log_.source = source; }
+  void Reserve(size_t n) { log_.intervals.reserve(n); }
+  size_t size() const { return log_.intervals.size(); }
+
+  // `interval.start_s` holds t when `has_t`; line and record are set.
+  Status Add(LaserInterval interval, bool has_t) {
+    // Built only on error: formatting it per record would dominate the parse time.
+    const auto where = [&] { return Where(log_.source, interval.line, interval.record); };
+    const double duration = interval.duration_s;
+    if (!(duration > 0.0) || !std::isfinite(duration)) {
+      return Status::InvalidInput(where() + "T must be positive and finite, got " + Num(duration));
+    }
+    if (log_.intervals.empty()) {
+      has_t_ = has_t;
+    } else if (has_t != has_t_) {
+      const int first = log_.intervals.front().record;
+      return Status::InvalidInput(
+          where() + "t must be given in every record or in none: record " + std::to_string(first) +
+          (has_t_ ? " has it, this one does not" : " does not, this one has it"));
+    }
+    if (log_.intervals.empty()) {
+      if (!has_t) interval.start_s = 0.0;
+      log_.intervals.push_back(std::move(interval));
+      return Status::Ok();
+    }
+    const LaserInterval& previous = log_.intervals.back();
+    const double previous_end = previous.start_s + previous.duration_s;
+    if (!has_t) {
+      interval.start_s = previous_end;
+    } else {
+      const double t = interval.start_s;
+      if (!std::isfinite(t))
+        return Status::InvalidInput(where() + "t must be finite, got " + Num(t));
+      if (t < previous.start_s) {
+        return Status::InvalidInput(where() + "t must be non-decreasing, got " + Num(t) +
+                                    " after " + Num(previous.start_s));
+      }
+      // Clocks and rounding of printed values make starts and ends differ slightly.
+      const double tolerance = 1e-6 + 1e-3 * previous.duration_s;
+      if (t < previous_end - tolerance) {
+        return Status::InvalidInput(where() + "interval starting at t=" + Num(t) +
+                                    " overlaps the previous interval, which ends at " +
+                                    Num(previous_end));
+      }
+      interval.gap_before = t > previous_end + tolerance;
+    }
+    log_.intervals.push_back(std::move(interval));
+    return Status::Ok();
+  }
+
+  StatusOr<LaserLog> Finish(const std::string& detail) && {
+    if (log_.intervals.empty()) {
+      return Status::InvalidInput(log_.source + ": holds no records" + detail);
+    }
+    log_.has_timestamps = has_t_;
+    return std::move(log_);
+  }
+
+ private:
+  LaserLog log_;
+  bool has_t_ = false;
+};
+
+inline bool Finite(const LaserInterval& interval) {
+  return std::isfinite(interval.start_s) && std::isfinite(interval.duration_s) &&
+         std::isfinite(interval.left_speed) && std::isfinite(interval.right_speed) &&
+         interval.sensor_motion.allFinite();
+}
+
+inline Status CheckWritable(const LaserLog& log, const std::string& path) {
+  for (size_t k = 0; k < log.intervals.size(); ++k) {
+    if (!Finite(log.intervals[k])) {
+      return Status::InvalidInput(path + ": cannot write interval " + std::to_string(k + 1) +
+                                  ": it holds a non-finite value");
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace laser_io_internal
+}  // namespace calib
+
+#endif  // CALIB_CORE_LASER_LASER_LOG_BUILDER_H_

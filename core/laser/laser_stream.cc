@@ -1,0 +1,294 @@
+#include <calib/core/csv.h>
+#include <calib/core/laser/laser_log_builder.h>
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/core/text_file.h>
+#include <calib/core/text_number.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+namespace calib {
+namespace {
+
+using laser_io_internal::Where;
+
+namespace fs = std::filesystem;
+
+// ---------------------------------------------------------------------------------------------
+// The stream files: every column a required number.
+
+struct NumberTable {
+  std::vector<double> values;  // Row-major.
+  std::vector<int> lines;      // 1-based source line of each row.
+};
+
+StatusOr<NumberTable> ReadNumberTable(std::string_view text, const std::string& source,
+                                      std::vector<CsvColumn> columns) {
+  const size_t width = columns.size();
+  CALIB_ASSIGN_OR_RETURN(CsvReader csv, CsvReader::Open(text, source, std::move(columns)));
+  NumberTable table;
+  while (true) {
+    CALIB_ASSIGN_OR_RETURN(const bool more, csv.Next());
+    if (!more) break;
+    for (size_t c = 0; c < width; ++c) {
+      table.values.push_back(0.0);
+      CALIB_RETURN_IF_ERROR(csv.Number(c, &table.values.back()));
+    }
+    table.lines.push_back(csv.line());
+  }
+  return table;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Raw streams.
+
+struct StreamNames {
+  std::string source;
+  std::string odometry;
+  std::string poses;
+  const std::vector<int>* odometry_lines = nullptr;  // Source lines, when read from files.
+  const std::vector<int>* pose_lines = nullptr;
+};
+
+std::string SampleWhere(const std::string& name, const std::vector<int>* lines, size_t k,
+                        const char* noun) {
+  if (lines != nullptr) return Where(name, (*lines)[k], 0);
+  return name + ": " + noun + " " + std::to_string(k + 1) + ": ";
+}
+
+// Cumulative wheel angles at time t inside segment [s, s + 1] (or exactly at sample s).
+void Interpolate(const std::vector<EncoderSample>& odometry, size_t s, double t, double* left,
+                 double* right) {
+  const EncoderSample& a = odometry[s];
+  if (t == a.t_s || s + 1 >= odometry.size()) {
+    *left = a.left_rad;
+    *right = a.right_rad;
+    return;
+  }
+  const EncoderSample& b = odometry[s + 1];
+  const double fraction = (t - a.t_s) / (b.t_s - a.t_s);
+  *left = a.left_rad + (b.left_rad - a.left_rad) * fraction;
+  *right = a.right_rad + (b.right_rad - a.right_rad) * fraction;
+}
+
+StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
+                                    const std::vector<StampedPose>& poses,
+                                    const StreamNames& names) {
+  if (odometry.size() < 2) {
+    return Status::InvalidInput(names.odometry + ": needs at least 2 odometry samples, got " +
+                                std::to_string(odometry.size()));
+  }
+  for (size_t k = 0; k < odometry.size(); ++k) {
+    const EncoderSample& s = odometry[k];
+    const auto where = [&] {
+      return SampleWhere(names.odometry, names.odometry_lines, k, "sample");
+    };
+    if (!std::isfinite(s.t_s) || !std::isfinite(s.left_rad) || !std::isfinite(s.right_rad)) {
+      return Status::InvalidInput(where() + "values must be finite (NaN or inf found)");
+    }
+    if (k > 0 && !(s.t_s > odometry[k - 1].t_s)) {
+      return Status::InvalidInput(where() + "timestamps must be strictly increasing, got t=" +
+                                  Num(s.t_s) + " after " + Num(odometry[k - 1].t_s));
+    }
+  }
+  if (poses.size() < 2) {
+    return Status::InvalidInput(names.poses + ": needs at least 2 sensor poses, got " +
+                                std::to_string(poses.size()));
+  }
+  for (size_t k = 0; k < poses.size(); ++k) {
+    const StampedPose& p = poses[k];
+    const auto where = [&] { return SampleWhere(names.poses, names.pose_lines, k, "pose"); };
+    if (!std::isfinite(p.t_s) || !p.world_T_sensor.allFinite()) {
+      return Status::InvalidInput(where() + "values must be finite (NaN or inf found)");
+    }
+    if (k > 0 && !(p.t_s > poses[k - 1].t_s)) {
+      return Status::InvalidInput(where() + "timestamps must be strictly increasing, got t=" +
+                                  Num(p.t_s) + " after " + Num(poses[k - 1].t_s));
+    }
+  }
+
+  std::vector<double> periods(odometry.size() - 1);
+  for (size_t k = 0; k + 1 < odometry.size(); ++k) {
+    periods[k] = odometry[k + 1].t_s - odometry[k].t_s;
+  }
+  std::nth_element(periods.begin(), periods.begin() + periods.size() / 2, periods.end());
+  const double gap_limit = 5.0 * periods[periods.size() / 2];
+
+  // Poses outside the encoder span cannot be integrated: drop those at the ends.
+  const double t_begin = odometry.front().t_s;
+  const double t_end = odometry.back().t_s;
+  size_t first = 0;
+  while (first < poses.size() && poses[first].t_s < t_begin) ++first;
+  size_t last = poses.size();  // One past the last usable pose.
+  while (last > first && poses[last - 1].t_s > t_end) --last;
+  if (last < first + 2) {
+    return Status::InvalidInput(names.poses +
+                                ": no pair of sensor poses lies within the odometry time "
+                                "span [" +
+                                Num(t_begin) + ", " + Num(t_end) + "] (poses span [" +
+                                Num(poses.front().t_s) + ", " + Num(poses.back().t_s) + "])");
+  }
+
+  const auto by_time = [](const EncoderSample& s, double t) { return s.t_s < t; };
+  LaserLog log;
+  log.source = names.source;
+  log.has_timestamps = true;
+  log.intervals.reserve(last - first - 1);
+  bool pending_gap = false;
+  for (size_t k = first; k + 1 < last; ++k) {
+    const double ta = poses[k].t_s;
+    const double tb = poses[k + 1].t_s;
+    // j: last sample at or before ta; m: first sample at or after tb. Samples j+1..m-1 lie
+    // strictly inside the interval.
+    const size_t m = static_cast<size_t>(
+        std::lower_bound(odometry.begin(), odometry.end(), tb, by_time) - odometry.begin());
+    size_t j = static_cast<size_t>(std::lower_bound(odometry.begin(), odometry.end(), ta, by_time) -
+                                   odometry.begin());
+    if (odometry[j].t_s > ta) --j;
+    bool gap = false;
+    for (size_t s = j; s < m && !gap; ++s) {
+      gap = odometry[s + 1].t_s - odometry[s].t_s > gap_limit;
+    }
+    if (gap) {
+      // Interpolating across missing encoder data would invent wheel motion.
+      pending_gap = true;
+      continue;
+    }
+    LaserInterval interval;
+    interval.start_s = ta;
+    interval.duration_s = tb - ta;
+    interval.sensor_motion = Between(poses[k].world_T_sensor, poses[k + 1].world_T_sensor);
+    interval.sensor_motion(2) = WrapAngle(interval.sensor_motion(2));
+    interval.gap_before = pending_gap;
+    pending_gap = false;
+    interval.record = static_cast<int>(k) + 1;
+    interval.line = names.pose_lines != nullptr ? (*names.pose_lines)[k] : 0;
+
+    double left_a, right_a, left_b, right_b;
+    Interpolate(odometry, j, ta, &left_a, &right_a);
+    Interpolate(odometry, odometry[m].t_s == tb ? m : m - 1, tb, &left_b, &right_b);
+    interval.left_speed = (left_b - left_a) / interval.duration_s;
+    interval.right_speed = (right_b - right_a) / interval.duration_s;
+    if (m > j + 1) {
+      // Encoder samples inside the interval: keep the speed profile as constant-speed steps.
+      interval.steps.reserve(m - j);
+      double t_prev = ta, left_prev = left_a, right_prev = right_a;
+      for (size_t s = j + 1; s <= m; ++s) {
+        const bool at_end = s == m;
+        const double t = at_end ? tb : odometry[s].t_s;
+        const double left = at_end ? left_b : odometry[s].left_rad;
+        const double right = at_end ? right_b : odometry[s].right_rad;
+        interval.steps.push_back(WheelStep{t - t_prev, left - left_prev, right - right_prev});
+        t_prev = t;
+        left_prev = left;
+        right_prev = right;
+      }
+    }
+    log.intervals.push_back(std::move(interval));
+  }
+  if (log.intervals.empty()) {
+    return Status::InvalidInput(
+        names.source +
+        ": no interval remains: every pair of sensor poses spans an encoder "
+        "gap longer than 5x the median encoder period (" +
+        Num(gap_limit / 5.0) + " s)");
+  }
+  return log;
+}
+
+}  // namespace
+
+StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometry,
+                                       const std::vector<StampedPose>& sensor_poses,
+                                       const std::string& source) {
+  StreamNames names;
+  names.source = source;
+  names.odometry = source + " (odometry)";
+  names.poses = source + " (sensor poses)";
+  return BuildFromStreams(odometry, sensor_poses, names);
+}
+
+StatusOr<LaserLog> ReadLaserStream(const std::string& directory) {
+  std::error_code ec;
+  if (!fs::is_directory(directory, ec)) {
+    return Status::Io(directory +
+                      ": not a directory (the stream format reads a directory "
+                      "holding odometry.csv and sensor_poses.csv)");
+  }
+  const std::string odometry_path = (fs::path(directory) / "odometry.csv").string();
+  const std::string poses_path = (fs::path(directory) / "sensor_poses.csv").string();
+
+  std::string text;
+  CALIB_RETURN_IF_ERROR(ReadWholeFile(odometry_path, &text));
+  CALIB_ASSIGN_OR_RETURN(const NumberTable odometry_table,
+                         ReadNumberTable(text, odometry_path, {{"t"}, {"left"}, {"right"}}));
+  std::vector<EncoderSample> odometry(odometry_table.lines.size());
+  for (size_t k = 0; k < odometry.size(); ++k) {
+    const double* v = &odometry_table.values[3 * k];
+    odometry[k] = EncoderSample{v[0], v[1], v[2], odometry_table.lines[k]};
+  }
+
+  CALIB_RETURN_IF_ERROR(ReadWholeFile(poses_path, &text));
+  CALIB_ASSIGN_OR_RETURN(const NumberTable pose_table,
+                         ReadNumberTable(text, poses_path, {{"t"}, {"x"}, {"y"}, {"theta"}}));
+  std::vector<StampedPose> poses(pose_table.lines.size());
+  for (size_t k = 0; k < poses.size(); ++k) {
+    const double* v = &pose_table.values[4 * k];
+    poses[k].t_s = v[0];
+    poses[k].world_T_sensor = Pose2d(v[1], v[2], v[3]);
+  }
+
+  StreamNames names;
+  names.source = directory;
+  names.odometry = odometry_path;
+  names.poses = poses_path;
+  names.odometry_lines = &odometry_table.lines;
+  names.pose_lines = &pose_table.lines;
+  return BuildFromStreams(odometry, poses, names);
+}
+
+Status WriteLaserStream(const std::vector<EncoderSample>& odometry,
+                        const std::vector<StampedPose>& sensor_poses,
+                        const std::string& directory) {
+  std::error_code ec;
+  fs::create_directories(directory, ec);
+  if (ec) return Status::Io(directory + ": cannot create the directory: " + ec.message());
+  std::string out = "t,left,right\n";
+  for (size_t k = 0; k < odometry.size(); ++k) {
+    const EncoderSample& s = odometry[k];
+    if (!std::isfinite(s.t_s) || !std::isfinite(s.left_rad) || !std::isfinite(s.right_rad)) {
+      return Status::InvalidInput(directory + ": cannot write odometry sample " +
+                                  std::to_string(k + 1) + ": it holds a non-finite value");
+    }
+    AppendGeneral(&out, s.t_s);
+    out += ',';
+    AppendGeneral(&out, s.left_rad);
+    out += ',';
+    AppendGeneral(&out, s.right_rad);
+    out += '\n';
+  }
+  CALIB_RETURN_IF_ERROR(WriteWholeFile((fs::path(directory) / "odometry.csv").string(), out));
+  out = "t,x,y,theta\n";
+  for (size_t k = 0; k < sensor_poses.size(); ++k) {
+    const StampedPose& p = sensor_poses[k];
+    if (!std::isfinite(p.t_s) || !p.world_T_sensor.allFinite()) {
+      return Status::InvalidInput(directory + ": cannot write sensor pose " +
+                                  std::to_string(k + 1) + ": it holds a non-finite value");
+    }
+    AppendGeneral(&out, p.t_s);
+    for (int i = 0; i < 3; ++i) {
+      out += ',';
+      AppendGeneral(&out, p.world_T_sensor(i));
+    }
+    out += '\n';
+  }
+  return WriteWholeFile((fs::path(directory) / "sensor_poses.csv").string(), out);
+}
+
+}  // namespace calib

@@ -1,0 +1,255 @@
+#include <calib/core/laser/laser_log_builder.h>
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/core/text_file.h>
+#include <calib/core/text_number.h>
+
+#include <cmath>
+#include <string>
+#include <string_view>
+#include <utility>
+
+namespace calib {
+namespace {
+
+using laser_io_internal::CheckWritable;
+using laser_io_internal::IsJsonSpace;
+using laser_io_internal::LogBuilder;
+using laser_io_internal::Where;
+
+// ---------------------------------------------------------------------------------------------
+// JSON tuples: a hand-written scanner for exactly the subset the published files use.
+
+enum TupleKey { kKeyT, kKeyPhiL, kKeyPhiR, kKeySm, kKeyStart, kNumKeys };
+constexpr const char* kTupleKeyNames[kNumKeys] = {"T", "phi_l", "phi_r", "sm", "t"};
+
+class TupleParser {
+ public:
+  TupleParser(std::string_view text, const std::string& source)
+      : p_(text.data()), end_(text.data() + text.size()), builder_(source), source_(source) {
+    builder_.Reserve(CountBraces());
+  }
+
+  StatusOr<LaserLog> Parse() {
+    SkipSpace();
+    while (p_ < end_) {
+      if (*p_ != '{') {
+        const std::string after =
+            record_ > 0 ? "after record " + std::to_string(record_) + ": " : "";
+        return Status::InvalidInput(Where(source_, line_, 0) + after + "unexpected text '" +
+                                    Token() +
+                                    "' between records (each record is a { ... } object)");
+      }
+      LaserInterval interval;
+      bool has_t = false;
+      CALIB_RETURN_IF_ERROR(ParseRecord(&interval, &has_t));
+      CALIB_RETURN_IF_ERROR(builder_.Add(std::move(interval), has_t));
+      SkipSpace();
+    }
+    return std::move(builder_).Finish("");
+  }
+
+ private:
+  // An exact reserve saves regrowing a large vector; memchr is several times faster than
+  // std::count here.
+  size_t CountBraces() const {
+    size_t count = 0;
+    for (const char* q = p_; q < end_; ++count, ++q) {
+      q = static_cast<const char*>(std::memchr(q, '{', static_cast<size_t>(end_ - q)));
+      if (q == nullptr) break;
+    }
+    return count;
+  }
+
+  void SkipSpace() {
+    while (p_ < end_) {
+      const char c = *p_;
+      if (c == '\n') {
+        ++line_;
+      } else if (c != ' ' && c != '\t' && c != '\r') {
+        break;
+      }
+      ++p_;
+    }
+  }
+
+  // A short excerpt of the input at p_ for messages.
+  std::string Token() const {
+    if (p_ >= end_) return "end of input";
+    const char* q = p_;
+    while (q < end_ && q - p_ < 24 && !IsJsonSpace(*q) && *q != ',' && *q != '}' && *q != ']' &&
+           *q != '{' && *q != ':') {
+      ++q;
+    }
+    if (q == p_) ++q;
+    return std::string(p_, q);
+  }
+
+  Status Error(const std::string& problem) const {
+    return Status::InvalidInput(Where(source_, line_, record_) + problem);
+  }
+  // Names the line where the record started, which is where a reader looks.
+  Status Truncated(const char* inside) const {
+    return Status::InvalidInput(Where(source_, record_line_, record_) +
+                                "truncated record: the input ends inside " + inside);
+  }
+
+  Status ParseNumber(const char* key, double* value) {
+    if (p_ >= end_) return Truncated("the record");
+    NumberStatus status;
+    const char* stop = ScanDouble(p_, end_, value, &status);
+    if (status == NumberStatus::kNotNumber ||
+        (stop < end_ && !IsJsonSpace(*stop) && *stop != ',' && *stop != '}' && *stop != ']')) {
+      return Error(NumberProblem(NumberStatus::kNotNumber, key, Token()));
+    }
+    if (status != NumberStatus::kOk) return Error(NumberProblem(status, key, Token()));
+    p_ = stop;
+    return Status::Ok();
+  }
+
+  Status ParseSm(Pose2d* sm) {
+    if (p_ >= end_) return Truncated("the record");
+    if (*p_ != '[') return Error("sm must be an array of 3 numbers, got '" + Token() + "'");
+    ++p_;
+    SkipSpace();
+    if (p_ >= end_) return Truncated("the sm array");
+    int count = 0;
+    if (*p_ == ']') {
+      ++p_;
+    } else {
+      while (true) {
+        double value = 0.0;
+        CALIB_RETURN_IF_ERROR(ParseNumber("sm", &value));
+        if (count < 3) (*sm)(count) = value;
+        ++count;
+        SkipSpace();
+        if (p_ >= end_) return Truncated("the sm array");
+        if (*p_ == ']') {
+          ++p_;
+          break;
+        }
+        if (*p_ != ',') return Error("expected ',' or ']' in sm, got '" + Token() + "'");
+        ++p_;
+        SkipSpace();
+        if (p_ >= end_) return Truncated("the sm array");
+      }
+    }
+    if (count != 3) {
+      return Error("sm must hold 3 numbers (x, y, theta), got " + std::to_string(count));
+    }
+    return Status::Ok();
+  }
+
+  Status ParseRecord(LaserInterval* interval, bool* has_t) {
+    ++record_;
+    record_line_ = line_;
+    interval->line = line_;
+    interval->record = record_;
+    ++p_;  // '{'
+    bool seen[kNumKeys] = {};
+    double values[kNumKeys] = {};
+    SkipSpace();
+    if (p_ < end_ && *p_ == '}') {
+      ++p_;
+    } else {
+      while (true) {
+        SkipSpace();
+        if (p_ >= end_) return Truncated("the record");
+        if (*p_ != '"') return Error("expected a quoted key, got '" + Token() + "'");
+        const char* key_begin = ++p_;
+        while (p_ < end_ && *p_ != '"' && *p_ != '\n') ++p_;
+        if (p_ >= end_) return Truncated("a key");
+        if (*p_ != '"') return Error("unterminated key");
+        const std::string_view key(key_begin, static_cast<size_t>(p_ - key_begin));
+        ++p_;
+        int index = 0;
+        while (index < kNumKeys && key != kTupleKeyNames[index]) ++index;
+        if (index == kNumKeys) {
+          return Error("unknown key \"" + std::string(key) +
+                       "\" (expected T, phi_l, phi_r, sm and optionally t)");
+        }
+        if (seen[index]) return Error("duplicate key \"" + std::string(key) + "\"");
+        seen[index] = true;
+        SkipSpace();
+        if (p_ >= end_) return Truncated("the record");
+        if (*p_ != ':') return Error("expected ':' after \"" + std::string(key) + "\"");
+        ++p_;
+        SkipSpace();
+        if (index == kKeySm) {
+          CALIB_RETURN_IF_ERROR(ParseSm(&interval->sensor_motion));
+        } else {
+          if (p_ < end_ && *p_ == '[') {
+            return Error(std::string(kTupleKeyNames[index]) + " must be a number, not an array");
+          }
+          CALIB_RETURN_IF_ERROR(ParseNumber(kTupleKeyNames[index], &values[index]));
+        }
+        SkipSpace();
+        if (p_ >= end_) return Truncated("the record");
+        if (*p_ == '}') {
+          ++p_;
+          break;
+        }
+        if (*p_ != ',') {
+          return Error("expected ',' or '}' after the value of \"" + std::string(key) +
+                       "\", got '" + Token() + "'");
+        }
+        ++p_;
+      }
+    }
+    for (int index = 0; index < kKeyStart; ++index) {
+      if (!seen[index]) {
+        return Status::InvalidInput(Where(source_, record_line_, record_) + "missing key \"" +
+                                    kTupleKeyNames[index] + "\"");
+      }
+    }
+    interval->duration_s = values[kKeyT];
+    interval->left_speed = values[kKeyPhiL];
+    interval->right_speed = values[kKeyPhiR];
+    interval->start_s = values[kKeyStart];
+    *has_t = seen[kKeyStart];
+    return Status::Ok();
+  }
+
+  const char* p_;
+  const char* end_;
+  LogBuilder builder_;
+  const std::string& source_;
+  int line_ = 1;
+  int record_ = 0;
+  int record_line_ = 0;
+};
+
+}  // namespace
+
+StatusOr<LaserLog> ParseLaserTuples(const std::string& text, const std::string& source) {
+  return TupleParser(WithoutBom(text), source).Parse();
+}
+
+Status WriteLaserTuples(const LaserLog& log, const std::string& path) {
+  CALIB_RETURN_IF_ERROR(CheckWritable(log, path));
+  std::string out;
+  out.reserve(log.intervals.size() * 160);
+  for (const LaserInterval& interval : log.intervals) {
+    out += "{ ";
+    if (log.has_timestamps) {
+      out += "\"t\": ";
+      AppendScientific(&out, interval.start_s);
+      out += ", ";
+    }
+    out += "\"T\": ";
+    AppendScientific(&out, interval.duration_s);
+    out += ", \"phi_l\": ";
+    AppendScientific(&out, interval.left_speed);
+    out += ", \"phi_r\": ";
+    AppendScientific(&out, interval.right_speed);
+    out += ", \"sm\": [ ";
+    AppendScientific(&out, interval.sensor_motion(0));
+    out += ", ";
+    AppendScientific(&out, interval.sensor_motion(1));
+    out += ", ";
+    AppendScientific(&out, interval.sensor_motion(2));
+    out += " ] }\n";
+  }
+  return WriteWholeFile(path, out);
+}
+
+}  // namespace calib
