@@ -25,6 +25,7 @@ Recipe Make(const std::string& name, const LaserSimOptions& sim) {
 
 }  // namespace
 
+// A table, one block per file of data/diagnose (longer than a screen for that reason alone).
 std::vector<Recipe> Recipes() {
   std::vector<Recipe> recipes;
   const auto add = [&](Recipe recipe) { recipes.push_back(std::move(recipe)); };
