@@ -7,18 +7,10 @@
 #include <calib/tools/report/svg_plot.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 
 namespace calib {
-namespace {
-
-namespace fs = std::filesystem;
-
-}  // namespace
 
 nlohmann::ordered_json BearingDiagnosisJson(const BearingDiagnosis& diagnosis,
                                             const std::string& input,

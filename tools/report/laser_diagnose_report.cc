@@ -5,19 +5,10 @@
 #include <calib/tools/report/text_format.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
 
 namespace calib {
-namespace {
-
-namespace fs = std::filesystem;
-
-}  // namespace
 
 PlotFiles DiagnosisPlots(const DiagnosisReport& report, const std::string& residuals) {
   PlotFiles files;
