@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdarg>
 #include <thread>
 
 namespace calib::bench {
@@ -17,15 +16,6 @@ void ParallelFor(int n, int threads, const std::function<void(int)>& f) {
   for (int t = 1; t < std::min(threads, n); ++t) pool.emplace_back(worker);
   worker();
   for (std::thread& thread : pool) thread.join();
-}
-
-std::string Format(const char* format, ...) {
-  va_list args;
-  va_start(args, format);
-  char buffer[512];
-  std::vsnprintf(buffer, sizeof(buffer), format, args);
-  va_end(args);
-  return buffer;
 }
 
 double Median(std::vector<double> values) {

@@ -1,6 +1,9 @@
 #ifndef CALIB_BENCHMARKS_BENCH_COMMON_H_
 #define CALIB_BENCHMARKS_BENCH_COMMON_H_
 
+#include <calib/core/laser/laser_params.h>
+#include <calib/tools/report/text_format.h>
+
 #include <Eigen/Core>
 #include <chrono>
 #include <cstdio>
@@ -9,9 +12,8 @@
 #include <string>
 #include <vector>
 
-#include <calib/core/laser/laser_params.h>
-
-// Shared pieces of calib_bench: run settings, timing, a parallel loop and plain-text tables.
+// Shared pieces of calib_bench: run settings, timing, a parallel loop and plain-text tables
+// (text through calib::Format of tools/report/text_format.h).
 namespace calib::bench {
 
 struct BenchConfig {
@@ -35,9 +37,6 @@ class Stopwatch {
 
 // Calls f(0) … f(n − 1) on `threads` workers; f must be safe to run concurrently.
 void ParallelFor(int n, int threads, const std::function<void(int)>& f);
-
-// printf into a std::string.
-std::string Format(const char* format, ...) __attribute__((format(printf, 1, 2)));
 
 double Median(std::vector<double> values);
 

@@ -196,9 +196,103 @@ nlohmann::ordered_json CandidateTable(const std::vector<CleanGroup>& groups, int
   return candidates_json;
 }
 
+// Simulates and diagnoses the clean logs of each group (their first `n` seeds: `smooth_n` for the
+// even groups, `piecewise_n` for the odd ones).
+void RunCleanGroups(std::vector<CleanGroup>* groups, int smooth_n, int piecewise_n, int intervals) {
+  for (size_t g = 0; g < groups->size(); ++g) {
+    CleanGroup& group = (*groups)[g];
+    const int n = g % 2 == 0 ? smooth_n : piecewise_n;
+    std::printf("  %-24s %3d logs, seeds %llu..%llu: %s\n", group.name.c_str(), n,
+                static_cast<unsigned long long>(group.seed_base),
+                static_cast<unsigned long long>(group.seed_base + n - 1),
+                group.regime.description.c_str());
+    group.logs = RunLogs(n, [&](int i) {
+      return MakeLog(group.regime, LaserEffects(), group.outliers, group.seed_base + i, intervals);
+    });
+  }
+}
+
+// Any adoption on the clean logs, per group and pooled.
+struct CleanAlarms {
+  Proportion all, without, with;  // All logs; the groups without and with outliers.
+  std::vector<double> all_seconds;
+  std::map<std::string, int> adopted_names;
+  nlohmann::ordered_json alarms = nlohmann::ordered_json::array();  // Which log adopted what.
+  nlohmann::ordered_json groups = nlohmann::ordered_json::array();
+  int failed = 0;
+};
+
+// Counts the adoptions of `groups` into `out` and a row of `table` per group.
+void CountAlarms(const std::vector<CleanGroup>& groups, int intervals, TextTable* table,
+                 CleanAlarms* out) {
+  for (const CleanGroup& group : groups) {
+    Proportion p;
+    int failed = 0;
+    std::vector<double> secs;
+    for (size_t i = 0; i < group.logs.size(); ++i) {
+      const LogOutcome& log = group.logs[i];
+      secs.push_back(log.seconds);
+      out->all_seconds.push_back(log.seconds);
+      if (!log.ok) {
+        ++failed;
+        continue;
+      }
+      ++p.n;
+      if (!log.adopted.empty()) {
+        ++p.k;
+        for (const std::string& name : log.adopted) ++out->adopted_names[name];
+        out->alarms.push_back(
+            {{"group", group.name}, {"seed", group.seed_base + i}, {"adopted", log.adopted}});
+      }
+    }
+    out->failed += failed;
+    out->all.k += p.k;
+    out->all.n += p.n;
+    Proportion& half = group.outliers > 0 ? out->with : out->without;
+    half.k += p.k;
+    half.n += p.n;
+    table->AddRow({group.name, std::to_string(p.n), std::to_string(p.k), p.Percent(), p.Interval(),
+                   Format("%.1f%%", 100.0 * (1.0 - p.rate())), std::to_string(failed),
+                   Format("%.2f", Median(secs))});
+    out->groups.push_back({{"name", group.name},
+                           {"simulation", SimJson(group.regime, intervals, group.outliers)},
+                           {"seeds", {group.seed_base, group.seed_base + group.logs.size() - 1}},
+                           {"false_alarm", p.Json()},
+                           {"failed", failed},
+                           {"median_seconds", Median(secs)}});
+  }
+}
+
+// Prints the adoption table, per group and pooled, and the target; returns the counts.
+CleanAlarms TabulateAlarms(const std::vector<CleanGroup>& groups, int intervals, double seconds) {
+  TextTable table(
+      {"logs", "n", "adopted any", "rate", "95% CI", "nothing adopted", "failed", "median s/log"});
+  CleanAlarms a;
+  CountAlarms(groups, intervals, &table, &a);
+  table.AddRule();
+  const auto pooled_row = [&](const std::string& name, const Proportion& p) {
+    table.AddRow({name, std::to_string(p.n), std::to_string(p.k), p.Percent(), p.Interval(),
+                  Format("%.1f%%", 100.0 * (1.0 - p.rate())), "", ""});
+  };
+  pooled_row("without outliers", a.without);
+  pooled_row("with 5% outliers", a.with);
+  pooled_row("all clean logs", a.all);
+  table.Print();
+  std::printf(
+      "Target (nothing adopted on >= 95%% of clean logs): %s (%.1f%% clean; the false-alarm "
+      "rate's 95%% upper bound %.1f%% %s 5%%). %d failed runs. %.1f s wall.\n",
+      1.0 - a.all.rate() >= 0.95 ? "MET" : "NOT MET", 100.0 * (1.0 - a.all.rate()),
+      100.0 * a.all.upper(), a.all.upper() < 0.05 ? "<" : ">=", a.failed, seconds);
+  if (!a.adopted_names.empty()) {
+    std::printf("Adopted on clean logs:");
+    for (const auto& [name, count] : a.adopted_names) std::printf(" %s x%d", name.c_str(), count);
+    std::printf("\n");
+  }
+  return a;
+}
+
 nlohmann::ordered_json RunFalseAlarms(bool quick, int seeds, int intervals) {
   const int per_half = seeds > 0 ? seeds : (quick ? 10 : 100);
-  const int smooth_n = (per_half + 1) / 2, piecewise_n = per_half / 2;
   // Seeds: 1000·(group + 1) + i, i = 0 … count − 1.
   std::vector<CleanGroup> groups = {
       {"smooth", SmoothRegime(intervals), 0.0, 1000, {}},
@@ -214,106 +308,28 @@ nlohmann::ordered_json RunFalseAlarms(bool quick, int seeds, int intervals) {
   std::printf("%d logs without and %d with 5%% slip outliers (x20 sigma), %d intervals each:\n",
               per_half, per_half, intervals);
   const Stopwatch watch;
-  for (size_t g = 0; g < groups.size(); ++g) {
-    CleanGroup& group = groups[g];
-    const int n = g % 2 == 0 ? smooth_n : piecewise_n;
-    std::printf("  %-24s %3d logs, seeds %llu..%llu: %s\n", group.name.c_str(), n,
-                static_cast<unsigned long long>(group.seed_base),
-                static_cast<unsigned long long>(group.seed_base + n - 1),
-                group.regime.description.c_str());
-    group.logs = RunLogs(n, [&](int i) {
-      return MakeLog(group.regime, LaserEffects(), group.outliers, group.seed_base + i, intervals);
-    });
-  }
+  RunCleanGroups(&groups, (per_half + 1) / 2, per_half / 2, intervals);
   const double seconds = watch.Seconds();
-
-  // Any adoption, per group and pooled.
-  TextTable table(
-      {"logs", "n", "adopted any", "rate", "95% CI", "nothing adopted", "failed", "median s/log"});
-  nlohmann::ordered_json groups_json = nlohmann::ordered_json::array();
-  Proportion all, without, with;
-  std::vector<double> all_seconds;
-  std::map<std::string, int> adopted_names;
-  nlohmann::ordered_json alarms = nlohmann::ordered_json::array();
-  int failed_total = 0;
-  for (size_t g = 0; g < groups.size(); ++g) {
-    const CleanGroup& group = groups[g];
-    Proportion p;
-    int failed = 0;
-    std::vector<double> secs;
-    for (size_t i = 0; i < group.logs.size(); ++i) {
-      const LogOutcome& log = group.logs[i];
-      secs.push_back(log.seconds);
-      all_seconds.push_back(log.seconds);
-      if (!log.ok) {
-        ++failed;
-        continue;
-      }
-      ++p.n;
-      if (!log.adopted.empty()) {
-        ++p.k;
-        for (const std::string& name : log.adopted) ++adopted_names[name];
-        alarms.push_back(
-            {{"group", group.name}, {"seed", group.seed_base + i}, {"adopted", log.adopted}});
-      }
-    }
-    failed_total += failed;
-    all.k += p.k;
-    all.n += p.n;
-    Proportion& half = group.outliers > 0 ? with : without;
-    half.k += p.k;
-    half.n += p.n;
-    table.AddRow({group.name, std::to_string(p.n), std::to_string(p.k), p.Percent(), p.Interval(),
-                  Format("%.1f%%", 100.0 * (1.0 - p.rate())), std::to_string(failed),
-                  Format("%.2f", Median(secs))});
-    groups_json.push_back({{"name", group.name},
-                           {"simulation", SimJson(group.regime, intervals, group.outliers)},
-                           {"seeds", {group.seed_base, group.seed_base + group.logs.size() - 1}},
-                           {"false_alarm", p.Json()},
-                           {"failed", failed},
-                           {"median_seconds", Median(secs)}});
-  }
-  table.AddRule();
-  const auto pooled_row = [&](const std::string& name, const Proportion& p) {
-    table.AddRow({name, std::to_string(p.n), std::to_string(p.k), p.Percent(), p.Interval(),
-                  Format("%.1f%%", 100.0 * (1.0 - p.rate())), "", ""});
-  };
-  pooled_row("without outliers", without);
-  pooled_row("with 5% outliers", with);
-  pooled_row("all clean logs", all);
-  table.Print();
-  const bool target_met = 1.0 - all.rate() >= 0.95;
-  const bool target_significant = all.upper() < 0.05;
-  std::printf(
-      "Target (nothing adopted on >= 95%% of clean logs): %s (%.1f%% clean; the false-alarm "
-      "rate's 95%% upper bound %.1f%% %s 5%%). %d failed runs. %.1f s wall.\n",
-      target_met ? "MET" : "NOT MET", 100.0 * (1.0 - all.rate()), 100.0 * all.upper(),
-      target_significant ? "<" : ">=", failed_total, seconds);
-  if (!adopted_names.empty()) {
-    std::printf("Adopted on clean logs:");
-    for (const auto& [name, count] : adopted_names) std::printf(" %s x%d", name.c_str(), count);
-    std::printf("\n");
-  }
-
-  const nlohmann::ordered_json candidates_json = CandidateTable(groups, all.n, defaults.alpha);
+  const CleanAlarms a = TabulateAlarms(groups, intervals, seconds);
+  const nlohmann::ordered_json candidates_json = CandidateTable(groups, a.all.n, defaults.alpha);
 
   nlohmann::ordered_json j;
   j["intervals"] = intervals;
   j["logs_without_outliers"] = per_half;
   j["logs_with_outliers"] = per_half;
   j["alpha"] = defaults.alpha;
-  j["groups"] = groups_json;
-  j["false_alarm_without_outliers"] = without.Json();
-  j["false_alarm_with_outliers"] = with.Json();
-  j["false_alarm"] = all.Json();
-  j["nothing_adopted_rate"] = 1.0 - all.rate();
+  j["groups"] = a.groups;
+  j["false_alarm_without_outliers"] = a.without.Json();
+  j["false_alarm_with_outliers"] = a.with.Json();
+  j["false_alarm"] = a.all.Json();
+  j["nothing_adopted_rate"] = 1.0 - a.all.rate();
   j["target_nothing_adopted"] = 0.95;
-  j["target_met"] = target_met;
-  j["target_met_at_95_confidence"] = target_significant;
-  j["alarms"] = alarms;
-  j["failed"] = failed_total;
+  j["target_met"] = 1.0 - a.all.rate() >= 0.95;
+  j["target_met_at_95_confidence"] = a.all.upper() < 0.05;
+  j["alarms"] = a.alarms;
+  j["failed"] = a.failed;
   j["candidates"] = candidates_json;
-  j["median_seconds_per_log"] = Median(all_seconds);
+  j["median_seconds_per_log"] = Median(a.all_seconds);
   j["wall_seconds"] = seconds;
   return j;
 }

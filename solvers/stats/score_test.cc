@@ -13,6 +13,81 @@ namespace {
 // leaves ~1e-12 after the subtraction, a weakly identified effect orders of magnitude more.
 constexpr double kConfoundedInformation = 1e-6;
 
+// Sample k of a robust fit against a sensitivity S: its blocks and the products that every cross
+// product of θ and γ needs.
+struct SampleTerms {
+  Eigen::MatrixXd::ConstRowsBlockXpr j, s;  // J_k, S_k (d rows each).
+  Eigen::VectorXd r, jr, sr;                // r_k, J_kᵀr_k, S_kᵀr_k.
+  double w, w2;                             // ρ'_k, 2ρ''_k.
+};
+
+SampleTerms TermsAt(const RobustFitBlocks& blocks, const Eigen::MatrixXd& sensitivity, size_t k) {
+  const Eigen::Index d = blocks.dimension();
+  const auto j = blocks.jacobian.middleRows(d * k, d);
+  const auto s = sensitivity.middleRows(d * k, d);
+  Eigen::VectorXd r = blocks.residual.row(k).transpose();
+  Eigen::VectorXd jr = j.transpose() * r;
+  Eigen::VectorXd sr = s.transpose() * r;
+  return {j, s, std::move(r), std::move(jr), std::move(sr), blocks.rho1(k), 2.0 * blocks.rho2(k)};
+}
+
+// Full-bread (M_k) and IRLS (ρ'_k·I in place of M_k) cross products over all samples.
+struct CrossProducts {
+  Eigen::MatrixXd a_tg, a_gg;        // A_θγ, A_γγ.
+  Eigen::MatrixXd w_tt, w_tg, w_gg;  // Their IRLS versions, and Σ ρ'_k·J_kᵀJ_k.
+  Eigen::MatrixXd raw_scores;        // N × m: ρ'_k·S_kᵀr_k.
+};
+
+CrossProducts AccumulateCrossProducts(const RobustFitBlocks& blocks,
+                                      const Eigen::MatrixXd& sensitivity) {
+  const size_t n = blocks.size();
+  const Eigen::Index p = blocks.jacobian.cols();
+  const Eigen::Index m = sensitivity.cols();
+  CrossProducts c;
+  c.a_tg = Eigen::MatrixXd::Zero(p, m);
+  c.a_gg = Eigen::MatrixXd::Zero(m, m);
+  c.w_tt = Eigen::MatrixXd::Zero(p, p);
+  c.w_tg = Eigen::MatrixXd::Zero(p, m);
+  c.w_gg = Eigen::MatrixXd::Zero(m, m);
+  c.raw_scores.resize(n, m);
+  for (size_t k = 0; k < n; ++k) {
+    const SampleTerms t = TermsAt(blocks, sensitivity, k);
+    const Eigen::MatrixXd js = t.j.transpose() * t.s;
+    const Eigen::MatrixXd ss = t.s.transpose() * t.s;
+    c.a_tg += t.w * js + t.w2 * t.jr * t.sr.transpose();
+    c.a_gg += t.w * ss + t.w2 * t.sr * t.sr.transpose();
+    c.w_tt += t.w * t.j.transpose() * t.j;
+    c.w_tg += t.w * js;
+    c.w_gg += t.w * ss;
+    c.raw_scores.row(k) = t.w * t.sr.transpose();
+  }
+  return c;
+}
+
+// Concealment and identifiability in the IRLS metric (positive weights) into `result`; returns
+// the efficient information in that metric, W_γγ − W_θγᵀW_θθ⁻¹W_θγ.
+Eigen::MatrixXd IrlsConcealment(const CrossProducts& c, ScoreTestResult* result) {
+  const Eigen::Index m = c.w_gg.cols();
+  const Eigen::LDLT<Eigen::MatrixXd> w_nuisance(c.w_tt);
+  const Eigen::MatrixXd w_eff = c.w_gg - c.w_tg.transpose() * w_nuisance.solve(c.w_tg);
+  const Eigen::LLT<Eigen::MatrixXd> w_llt(c.w_gg);
+  if (c.w_gg.trace() > 0.0 && w_llt.info() == Eigen::Success) {
+    const Eigen::MatrixXd l_inv = w_llt.matrixL().solve(Eigen::MatrixXd::Identity(m, m));
+    const Eigen::MatrixXd relative = l_inv * w_eff * l_inv.transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(0.5 *
+                                                               (relative + relative.transpose()));
+    result->concealment = 1.0 - relative.trace() / m;
+    result->identifiable = eigen.eigenvalues().minCoeff() > kConfoundedInformation;
+  } else {
+    result->concealment = std::numeric_limits<double>::quiet_NaN();
+  }
+  return w_eff;
+}
+
+bool PositiveDefinite(const Eigen::LDLT<Eigen::MatrixXd>& ldlt) {
+  return ldlt.info() == Eigen::Success && (ldlt.vectorD().array() > 0.0).all();
+}
+
 }  // namespace
 
 double ChiSquareSurvival(double x, int dof) {
@@ -89,7 +164,6 @@ ScoreTestResult ScoreTester::Test(const Eigen::MatrixXd& sensitivity) const {
   const size_t n = blocks_.size();
   const Eigen::Index p = blocks_.jacobian.cols();
   const Eigen::Index m = sensitivity.cols();
-  const Eigen::Index d = blocks_.dimension();
   ScoreTestResult result;
   result.dof = static_cast<int>(m);
   result.gamma = Eigen::VectorXd::Zero(m);
@@ -99,60 +173,19 @@ ScoreTestResult ScoreTester::Test(const Eigen::MatrixXd& sensitivity) const {
   result.contributions = Eigen::VectorXd::Zero(n);
   if (!ok_ || m == 0) return result;
 
-  // Full-bread (M_k) and IRLS (ρ'_k) cross products.
-  Eigen::MatrixXd a_tg = Eigen::MatrixXd::Zero(p, m), a_gg = Eigen::MatrixXd::Zero(m, m);
-  Eigen::MatrixXd w_tt = Eigen::MatrixXd::Zero(p, p), w_tg = Eigen::MatrixXd::Zero(p, m);
-  Eigen::MatrixXd w_gg = Eigen::MatrixXd::Zero(m, m);
-  Eigen::MatrixXd raw_scores(n, m);  // ρ'_k·S_kᵀr_k.
-  for (size_t k = 0; k < n; ++k) {
-    const auto j = blocks_.jacobian.middleRows(d * k, d);
-    const auto s = sensitivity.middleRows(d * k, d);
-    const Eigen::VectorXd r = blocks_.residual.row(k).transpose();
-    const Eigen::VectorXd jr = j.transpose() * r;
-    const Eigen::VectorXd sr = s.transpose() * r;
-    const double w = blocks_.rho1(k), w2 = 2.0 * blocks_.rho2(k);
-    const Eigen::MatrixXd js = j.transpose() * s;
-    const Eigen::MatrixXd ss = s.transpose() * s;
-    a_tg += w * js + w2 * jr * sr.transpose();
-    a_gg += w * ss + w2 * sr * sr.transpose();
-    w_tt += w * j.transpose() * j;
-    w_tg += w * js;
-    w_gg += w * ss;
-    raw_scores.row(k) = w * sr.transpose();
-  }
-
-  // Concealment and identifiability in the IRLS metric (positive weights).
-  const Eigen::LDLT<Eigen::MatrixXd> w_nuisance(w_tt);
-  const Eigen::MatrixXd w_eff = w_gg - w_tg.transpose() * w_nuisance.solve(w_tg);
-  const Eigen::LLT<Eigen::MatrixXd> w_llt(w_gg);
-  if (w_gg.trace() > 0.0 && w_llt.info() == Eigen::Success) {
-    const Eigen::MatrixXd l_inv = w_llt.matrixL().solve(Eigen::MatrixXd::Identity(m, m));
-    const Eigen::MatrixXd relative = l_inv * w_eff * l_inv.transpose();
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(0.5 *
-                                                               (relative + relative.transpose()));
-    result.concealment = 1.0 - relative.trace() / m;
-    result.identifiable = eigen.eigenvalues().minCoeff() > kConfoundedInformation;
-  } else {
-    result.concealment = std::numeric_limits<double>::quiet_NaN();
-  }
-
-  const Eigen::MatrixXd b = a_nuisance_.solve(a_tg);
+  const CrossProducts c = AccumulateCrossProducts(blocks_, sensitivity);
+  const Eigen::MatrixXd w_eff = IrlsConcealment(c, &result);
+  const Eigen::MatrixXd b = a_nuisance_.solve(c.a_tg);
   result.absorption = b;
-  const Eigen::MatrixXd u = raw_scores - gradients_ * b;  // N × m projected score contributions.
+  const Eigen::MatrixXd u = c.raw_scores - gradients_ * b;  // N × m projected score contributions.
   const Eigen::VectorXd score = u.colwise().sum().transpose();
   const Eigen::MatrixXd v = LongRunCovariance(u, hac_lag_) * small_sample_;
   // The efficient information from the loss's full second-order weight; where outliers make it
   // indefinite (ρ' + 2ρ''s < 0 beyond the Cauchy scale), its Gauss–Newton (IRLS) version.
-  Eigen::MatrixXd info = a_gg - a_tg.transpose() * b;
-  Eigen::LDLT<Eigen::MatrixXd> info_ldlt(info);
-  if (info_ldlt.info() != Eigen::Success || !(info_ldlt.vectorD().array() > 0.0).all()) {
-    info = w_eff;
-    info_ldlt.compute(info);
-  }
+  Eigen::LDLT<Eigen::MatrixXd> info_ldlt(c.a_gg - c.a_tg.transpose() * b);
+  if (!PositiveDefinite(info_ldlt)) info_ldlt.compute(w_eff);
   const Eigen::LDLT<Eigen::MatrixXd> v_ldlt(v);
-  if (!result.identifiable || v_ldlt.info() != Eigen::Success ||
-      !(v_ldlt.vectorD().array() > 0.0).all() || info_ldlt.info() != Eigen::Success ||
-      !(info_ldlt.vectorD().array() > 0.0).all()) {
+  if (!result.identifiable || !PositiveDefinite(v_ldlt) || !PositiveDefinite(info_ldlt)) {
     return result;
   }
   const Eigen::VectorXd v_inv_score = v_ldlt.solve(score);
@@ -187,16 +220,11 @@ ScoreTester::ChangeScan ScoreTester::ScanChange(const Eigen::MatrixXd& sensitivi
   Eigen::MatrixXd sum_aa = Eigen::MatrixXd::Zero(m, m), sum_ag = Eigen::MatrixXd::Zero(m, p);
   double best = -1.0, best_located = -1.0;
   for (size_t j = n; j-- > lo;) {
-    const auto jk = blocks_.jacobian.middleRows(d * j, d);
-    const auto rk = sensitivity.middleRows(d * j, d);
-    const Eigen::VectorXd r = blocks_.residual.row(j).transpose();
-    const Eigen::VectorXd jr = jk.transpose() * r;
-    const Eigen::VectorXd sr = rk.transpose() * r;
-    const double w = blocks_.rho1(j), w2 = 2.0 * blocks_.rho2(j);
-    const Eigen::VectorXd a = w * sr;
+    const SampleTerms t = TermsAt(blocks_, sensitivity, j);
+    const Eigen::VectorXd a = t.w * t.sr;
     sum_a += a;
-    sum_jmr += w * jk.transpose() * rk + w2 * jr * sr.transpose();
-    sum_rmr += w * rk.transpose() * rk + w2 * sr * sr.transpose();
+    sum_jmr += t.w * t.j.transpose() * t.s + t.w2 * t.jr * t.sr.transpose();
+    sum_rmr += t.w * t.s.transpose() * t.s + t.w2 * t.sr * t.sr.transpose();
     sum_aa += a * a.transpose();
     sum_ag += a * gradients_.row(j);
     if (j > hi) continue;

@@ -7,19 +7,10 @@
 #include <calib/tools/report/svg_plot.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 
 namespace calib {
-namespace {
-
-namespace fs = std::filesystem;
-
-
-}  // namespace
 
 nlohmann::ordered_json BearingDiagnosisJson(const BearingDiagnosis& diagnosis,
                                             const std::string& input,
@@ -37,21 +28,15 @@ std::string BearingDiagnosisSummary(const BearingDiagnosis& diagnosis, const std
   std::snprintf(line, sizeof(line), "%s: bearing-only diagnosis, %d bearings\n", input.c_str(),
                 diagnosis.samples);
   std::string text = line + FindingsSummary(report);
-  std::snprintf(line, sizeof(line), "  %-12s %12s %10s %12s %10s %8s\n", "parameter", "baseline",
-                "± σ", "final", "± σ", "shift/σ");
-  text += line;
-  const BearingParamVector before = ToVector(diagnosis.baseline.estimate);
-  const BearingParamVector after = ToVector(diagnosis.final_fit.estimate);
+  std::vector<ParamDisplay> params;
   for (int i = 0; i < kNumBearingParams; ++i) {
     const ParamInfo& info = BearingParamTable()[i];
-    const double k = info.is_angle ? info.display_scale : 1.0;
-    const std::string name = std::string(info.name) + (info.is_angle ? " [deg]" : "");
-    const double sigma = diagnosis.baseline.stddev(i);
-    std::snprintf(line, sizeof(line), "  %-12s %12.5f %10.5f %12.5f %10.5f %8.2f\n", name.c_str(),
-                  before(i) * k, sigma * k, after(i) * k, diagnosis.final_fit.stddev(i) * k,
-                  sigma > 0.0 ? (after(i) - before(i)) / sigma : 0.0);
-    text += line;
+    params.push_back({std::string(info.name) + (info.is_angle ? " [deg]" : ""),
+                      info.is_angle ? info.display_scale : 1.0});
   }
+  text += ParameterShiftTable(params, ToVector(diagnosis.baseline.estimate),
+                              diagnosis.baseline.stddev, ToVector(diagnosis.final_fit.estimate),
+                              diagnosis.final_fit.stddev, 12, 5);
   std::snprintf(line, sizeof(line), "  bearing RMS of the inliers: before %.4f°, after %.4f°\n",
                 diagnosis.baseline.rms_rad * 180.0 / M_PI,
                 diagnosis.final_fit.rms_rad * 180.0 / M_PI);
@@ -63,6 +48,5 @@ StatusOr<std::vector<std::string>> WriteBearingDiagnosisPlots(const BearingDiagn
   return WritePlotFiles(directory,
                         DiagnosisPlots(ToDiagnosisReport(diagnosis), "bearing residuals"));
 }
-
 
 }  // namespace calib

@@ -2,22 +2,13 @@
 #include <calib/tools/report/bearing_diagnose_report.h>
 #include <calib/tools/report/bearing_report.h>
 #include <calib/tools/report/laser_diagnose_report.h>
+#include <calib/tools/report/text_format.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
 
 namespace calib {
-namespace {
-
-namespace fs = std::filesystem;
-
-
-}  // namespace
 
 PlotFiles DiagnosisPlots(const DiagnosisReport& report, const std::string& residuals) {
   PlotFiles files;
@@ -54,6 +45,22 @@ std::string FindingsSummary(const DiagnosisReport& report) {
   return text;
 }
 
+std::string ParameterShiftTable(const std::vector<ParamDisplay>& params,
+                                const Eigen::VectorXd& before, const Eigen::VectorXd& before_sigma,
+                                const Eigen::VectorXd& after, const Eigen::VectorXd& after_sigma,
+                                int name_width, int precision) {
+  const int w = name_width, p = precision;
+  std::string text = Format("  %-*s %12s %10s %12s %10s %8s\n", w, "parameter", "baseline", "± σ",
+                            "final", "± σ", "shift/σ");
+  for (size_t i = 0; i < params.size(); ++i) {
+    const double k = params[i].scale, sigma = before_sigma(i);
+    text += Format("  %-*s %12.*f %10.*f %12.*f %10.*f %8.2f\n", w, params[i].name.c_str(), p,
+                   before(i) * k, p, sigma * k, p, after(i) * k, p, after_sigma(i) * k,
+                   sigma > 0.0 ? (after(i) - before(i)) / sigma : 0.0);
+  }
+  return text;
+}
+
 std::string ResidualsSummary(const DiagnosisReport& report, const std::vector<std::string>& plots) {
   std::string text = "  residuals before: " + report.structure_before.statement + "\n";
   text += "  residuals after:  " + report.structure_after.statement + "\n";
@@ -79,21 +86,13 @@ std::string LaserDiagnosisSummary(const LaserDiagnosis& diagnosis, const std::st
   std::snprintf(line, sizeof(line), "%s: laser–odometry diagnosis, %d intervals\n", input.c_str(),
                 diagnosis.samples);
   std::string text = line + FindingsSummary(report);
-  std::snprintf(line, sizeof(line), "  %-14s %12s %10s %12s %10s %8s\n", "parameter", "baseline",
-                "± σ", "final", "± σ", "shift/σ");
-  text += line;
-  const LaserParamVector before = diagnosis.baseline.estimate.ToVector();
-  const LaserParamVector after = diagnosis.final_fit.estimate.ToVector();
-  for (int i = 0; i < kNumLaserParams; ++i) {
-    const ParamInfo& info = kLaserParams[i];
-    const double k = info.display_scale;
-    const std::string name = std::string(info.name) + " [" + info.display_unit + "]";
-    const double sigma = diagnosis.baseline.stddev(i);
-    std::snprintf(line, sizeof(line), "  %-14s %12.4f %10.4f %12.4f %10.4f %8.2f\n", name.c_str(),
-                  before(i) * k, sigma * k, after(i) * k, diagnosis.final_fit.stddev(i) * k,
-                  sigma > 0.0 ? (after(i) - before(i)) / sigma : 0.0);
-    text += line;
+  std::vector<ParamDisplay> params;
+  for (const ParamInfo& info : kLaserParams) {
+    params.push_back({std::string(info.name) + " [" + info.display_unit + "]", info.display_scale});
   }
+  text += ParameterShiftTable(params, diagnosis.baseline.estimate.ToVector(),
+                              diagnosis.baseline.stddev, diagnosis.final_fit.estimate.ToVector(),
+                              diagnosis.final_fit.stddev, 14, 4);
   std::snprintf(line, sizeof(line),
                 "  residual RMS of the inliers (x mm, y mm, θ mrad): before %.3f %.3f %.3f, after "
                 "%.3f %.3f %.3f\n",
@@ -102,6 +101,5 @@ std::string LaserDiagnosisSummary(const LaserDiagnosis& diagnosis, const std::st
                 diagnosis.final_fit.rms(1) * 1e3, diagnosis.final_fit.rms(2) * 1e3);
   return text + line + ResidualsSummary(report, plots);
 }
-
 
 }  // namespace calib

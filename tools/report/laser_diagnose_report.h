@@ -39,6 +39,17 @@ PlotFiles DiagnosisPlots(const DiagnosisReport& report, const std::string& resid
 std::string FindingsSummary(const DiagnosisReport& report);
 std::string ResidualsSummary(const DiagnosisReport& report, const std::vector<std::string>& plots);
 
+// The base parameters before and after the adopted effects, in display units (value × scale_i):
+// a header and one row per parameter with baseline ± σ, final ± σ and the shift in baseline σ.
+struct ParamDisplay {
+  std::string name;  // With its unit, e.g. "r_l [mm]".
+  double scale = 1.0;
+};
+std::string ParameterShiftTable(const std::vector<ParamDisplay>& params,
+                                const Eigen::VectorXd& before, const Eigen::VectorXd& before_sigma,
+                                const Eigen::VectorXd& after, const Eigen::VectorXd& after_sigma,
+                                int name_width, int precision);
+
 }  // namespace calib
 
 #endif  // CALIB_TOOLS_REPORT_LASER_DIAGNOSE_REPORT_H_

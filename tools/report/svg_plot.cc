@@ -1,11 +1,11 @@
+#include <calib/tools/report/json_output.h>
 #include <calib/tools/report/svg_plot.h>
+#include <calib/tools/report/text_format.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <sstream>
 
@@ -13,16 +13,6 @@ namespace calib {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string Format(const char* format, ...) __attribute__((format(printf, 1, 2)));
-std::string Format(const char* format, ...) {
-  va_list args;
-  va_start(args, format);
-  char buffer[512];
-  std::vsnprintf(buffer, sizeof(buffer), format, args);
-  va_end(args);
-  return buffer;
-}
 
 // --- Covariate profiles (linear axes) --------------------------------------------------------
 
@@ -277,14 +267,6 @@ void DrawLogPanel(const PlotPanel& panel, double x0, std::ostringstream& svg) {
   }
 }
 
-Status WriteText(const std::string& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  out.close();
-  if (!out) return Status::Io("cannot write " + path);
-  return Status::Ok();
-}
-
 }  // namespace
 
 std::string SvgEscape(const std::string& text) {
@@ -356,7 +338,7 @@ std::string LogLogSvg(const std::string& title, const std::vector<PlotPanel>& pa
 
 Status WriteLogLogSvg(const std::string& path, const std::string& title,
                       const std::vector<PlotPanel>& panels) {
-  return WriteText(path, LogLogSvg(title, panels));
+  return WriteTextFile(path, LogLogSvg(title, panels));
 }
 
 StatusOr<std::vector<std::string>> WritePlotFiles(const std::string& directory,
@@ -369,7 +351,7 @@ StatusOr<std::vector<std::string>> WritePlotFiles(const std::string& directory,
   std::vector<std::string> written;
   for (const auto& [name, svg] : files) {
     const std::string path = (fs::path(directory) / name).string();
-    CALIB_RETURN_IF_ERROR(WriteText(path, svg));
+    CALIB_RETURN_IF_ERROR(WriteTextFile(path, svg));
     written.push_back(path);
   }
   return written;
