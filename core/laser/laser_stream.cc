@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <initializer_list>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -232,6 +233,17 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
   return log;
 }
 
+// One CSV row of shortest round-trip numbers.
+void AppendCsvRow(std::string* out, std::initializer_list<double> values) {
+  const char* separator = "";
+  for (const double value : values) {
+    *out += separator;
+    AppendGeneral(out, value);
+    separator = ",";
+  }
+  *out += '\n';
+}
+
 }  // namespace
 
 StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometry,
@@ -296,12 +308,7 @@ Status WriteLaserStream(const std::vector<EncoderSample>& odometry,
       return Status::InvalidInput(directory + ": cannot write odometry sample " +
                                   std::to_string(k + 1) + ": it holds a non-finite value");
     }
-    AppendGeneral(&out, s.t_s);
-    out += ',';
-    AppendGeneral(&out, s.left_rad);
-    out += ',';
-    AppendGeneral(&out, s.right_rad);
-    out += '\n';
+    AppendCsvRow(&out, {s.t_s, s.left_rad, s.right_rad});
   }
   CALIB_RETURN_IF_ERROR(WriteWholeFile((fs::path(directory) / "odometry.csv").string(), out));
   out = "t,x,y,theta\n";
@@ -311,12 +318,7 @@ Status WriteLaserStream(const std::vector<EncoderSample>& odometry,
       return Status::InvalidInput(directory + ": cannot write sensor pose " +
                                   std::to_string(k + 1) + ": it holds a non-finite value");
     }
-    AppendGeneral(&out, p.t_s);
-    for (int i = 0; i < 3; ++i) {
-      out += ',';
-      AppendGeneral(&out, p.world_T_sensor(i));
-    }
-    out += '\n';
+    AppendCsvRow(&out, {p.t_s, p.world_T_sensor(0), p.world_T_sensor(1), p.world_T_sensor(2)});
   }
   return WriteWholeFile((fs::path(directory) / "sensor_poses.csv").string(), out);
 }
