@@ -24,6 +24,109 @@ Pose2d AdvanceTruth(const BearingSimOptions& o, const Pose2d& pose, const WheelS
                                          speeds.left_mps * dt_s / r, speeds.right_mps * dt_s / r));
 }
 
+// The wheel speeds of a run at time t from its start: vR = ν, vL = q·ν on a circular run.
+WheelSpeeds SpeedsAt(const BearingSimOptions& options, const BearingRunSpec& spec, double t) {
+  const bool circular = !spec.wheel_speeds;
+  const double nu = options.right_wheel_speed_mps;
+  return circular ? WheelSpeeds{spec.q * nu, nu} : spec.wheel_speeds(t);
+}
+
+// The run's length in seconds: its duration_s, else its loops of a circle (60 s if it does not
+// turn).
+double RunDuration(const BearingSimOptions& options, const BearingRunSpec& spec) {
+  const BearingMetricParams& m = options.truth;
+  const double b = options.wheelbase_m;
+  const bool circular = !spec.wheel_speeds;
+  const double nu = options.right_wheel_speed_mps;
+  double duration = spec.duration_s;
+  if (!(duration > 0.0)) {
+    const double omega = (m.delta_r * nu - m.delta_l * spec.q * nu) / (m.delta_b * b);
+    duration = circular && omega != 0.0 ? spec.loops * 2.0 * M_PI / std::abs(omega) : 60.0;
+  }
+  return duration;
+}
+
+// Truth: integrate in steps; encoder samples at the end of each encoder period, appended to
+// `odometry` (stamped from clock_s). Returns the integration steps.
+std::vector<Step> SimulateEncoders(const BearingSimOptions& options, const BearingRunSpec& spec,
+                                   double duration, double clock_s, Random* random,
+                                   std::vector<EncoderSample>* odometry) {
+  const double r = options.wheel_radius_m;
+  const double encoder_dt = 1.0 / options.encoder_rate_hz;
+  const int substeps = std::max(1, options.integration_substeps);
+  std::vector<Step> steps;
+  Pose2d pose = spec.world_T_robot_start;
+  double left_read = 0.0, right_read = 0.0;
+  odometry->push_back(EncoderSample{clock_s, 0.0, 0.0, 0});
+  for (int k = 0;; ++k) {
+    const double t = k * encoder_dt;
+    if (t >= duration - 1e-9 * encoder_dt) break;
+    double t_next = std::min((k + 1) * encoder_dt, duration);
+    if (duration - t_next < 1e-9 * encoder_dt) t_next = duration;
+    const double period = t_next - t;
+    double left_true = 0.0, right_true = 0.0;
+    for (int j = 0; j < substeps; ++j) {
+      Step step;
+      step.t_s = t + period * j / substeps;
+      step.duration_s = period / substeps;
+      step.speeds = SpeedsAt(options, spec, step.t_s + 0.5 * step.duration_s);
+      step.world_T_robot_start = pose;
+      pose = AdvanceTruth(options, pose, step.speeds, step.duration_s);
+      left_true += step.speeds.left_mps * step.duration_s / r;
+      right_true += step.speeds.right_mps * step.duration_s / r;
+      steps.push_back(step);
+    }
+    const double k2 = options.encoder_noise_k * options.encoder_noise_k / r;
+    left_read += left_true + std::sqrt(k2 * std::abs(left_true)) * random->NormalPolar();
+    right_read += right_true + std::sqrt(k2 * std::abs(right_true)) * random->NormalPolar();
+    odometry->push_back(EncoderSample{clock_s + t_next, left_read, right_read, 0});
+  }
+  return steps;
+}
+
+// Bearings at the sensor rate from the run's start (stamps), each taken at the exact true
+// pose of its stamp + the time offset.
+void SimulateBearings(const BearingSimOptions& options, const BearingRunSpec& spec,
+                      const std::vector<Step>& steps, double duration, double clock_s,
+                      Random* random, BearingRun* run, BearingRunTruth* run_truth) {
+  const BearingMetricParams& m = options.truth;
+  const double bearing_dt = 1.0 / options.bearing_rate_hz;
+  size_t step_index = 0;
+  for (int j = 0;; ++j) {
+    const double tb = j * bearing_dt;
+    if (tb > duration + 1e-9) break;
+    const double taken = std::clamp(tb + options.time_offset_s, 0.0, duration);
+    while (step_index + 1 < steps.size() && steps[step_index + 1].t_s <= taken) ++step_index;
+    Pose2d at = spec.world_T_robot_start;
+    if (!steps.empty()) {
+      const Step& step = steps[step_index];
+      at = AdvanceTruth(options, step.world_T_robot_start, step.speeds, taken - step.t_s);
+    }
+    const double clean = BearingFromPose(at, m.phi_rad, m.rho_m, m.psi_rad);
+    const double noisy = WrapAngle(clean + options.bearing_noise_rad * random->NormalPolar());
+    run->bearings.push_back(BearingSample{clock_s + tb, noisy, 0});
+    run_truth->world_T_robot_at_bearings.push_back(at);
+  }
+}
+
+// The closed-form quantities of a circular run (eqs. 3, 15, 17, 21 and its circle).
+void SetCircularTruth(const BearingMetricParams& m, double b, const BearingParams& params,
+                      const BearingRunSpec& spec, BearingRunTruth* run_truth) {
+  run_truth->eta_q_per_m = EtaQ(params.eta_per_m, params.delta, spec.q);
+  run_truth->xi_q_per_m = XiQ(params.xi_per_m, params.delta, spec.q);
+  GammaMuFromPose(spec.world_T_robot_start, m.phi_rad, m.rho_m, &run_truth->gamma0_rad,
+                  &run_truth->mu0);
+  if (run_truth->xi_q_per_m != 0.0) {
+    run_truth->circle = CircleFromStart(m, b, spec.q, spec.world_T_robot_start);
+    run_truth->state0 =
+        CircularStateFromGammaMu(run_truth->mu0, run_truth->gamma0_rad, m.phi_rad, m.psi_rad,
+                                 run_truth->eta_q_per_m, run_truth->xi_q_per_m);
+    run_truth->k_per_m =
+        KFromState(run_truth->state0.A, run_truth->state0.V, run_truth->xi_q_per_m);
+    run_truth->c_rad = CFromKV(run_truth->k_per_m, run_truth->state0.V, run_truth->xi_q_per_m);
+  }
+}
+
 }  // namespace
 
 std::vector<BearingRunSpec> MartinelliRuns(const Pose2d& world_T_robot_start) {
@@ -69,53 +172,16 @@ BearingLog SimulateBearingLog(const BearingSimOptions& options, BearingSimTruth*
     truth->runs.clear();
   }
 
-  const double encoder_dt = 1.0 / options.encoder_rate_hz;
-  const int substeps = std::max(1, options.integration_substeps);
   double clock_s = options.start_time_s;
   for (size_t i = 0; i < specs.size(); ++i) {
     const BearingRunSpec& spec = specs[i];
     const bool circular = !spec.wheel_speeds;
-    const double nu = options.right_wheel_speed_mps;
-    const auto speeds_at = [&](double t) {
-      return circular ? WheelSpeeds{spec.q * nu, nu} : spec.wheel_speeds(t);
-    };
-    double duration = spec.duration_s;
-    if (!(duration > 0.0)) {
-      const double omega = (m.delta_r * nu - m.delta_l * spec.q * nu) / (m.delta_b * b);
-      duration = circular && omega != 0.0 ? spec.loops * 2.0 * M_PI / std::abs(omega) : 60.0;
-    }
+    const double duration = RunDuration(options, spec);
 
     BearingRun run;
     run.id = spec.id != 0 ? spec.id : static_cast<int>(i) + 1;
-
-    // Truth: integrate in steps; encoder samples at the end of each encoder period.
-    std::vector<Step> steps;
-    Pose2d pose = spec.world_T_robot_start;
-    double left_read = 0.0, right_read = 0.0;
-    run.odometry.push_back(EncoderSample{clock_s, 0.0, 0.0, 0});
-    for (int k = 0;; ++k) {
-      const double t = k * encoder_dt;
-      if (t >= duration - 1e-9 * encoder_dt) break;
-      double t_next = std::min((k + 1) * encoder_dt, duration);
-      if (duration - t_next < 1e-9 * encoder_dt) t_next = duration;
-      const double period = t_next - t;
-      double left_true = 0.0, right_true = 0.0;
-      for (int j = 0; j < substeps; ++j) {
-        Step step;
-        step.t_s = t + period * j / substeps;
-        step.duration_s = period / substeps;
-        step.speeds = speeds_at(step.t_s + 0.5 * step.duration_s);
-        step.world_T_robot_start = pose;
-        pose = AdvanceTruth(options, pose, step.speeds, step.duration_s);
-        left_true += step.speeds.left_mps * step.duration_s / r;
-        right_true += step.speeds.right_mps * step.duration_s / r;
-        steps.push_back(step);
-      }
-      const double k2 = options.encoder_noise_k * options.encoder_noise_k / r;
-      left_read += left_true + std::sqrt(k2 * std::abs(left_true)) * random.NormalPolar();
-      right_read += right_true + std::sqrt(k2 * std::abs(right_true)) * random.NormalPolar();
-      run.odometry.push_back(EncoderSample{clock_s + t_next, left_read, right_read, 0});
-    }
+    const std::vector<Step> steps =
+        SimulateEncoders(options, spec, duration, clock_s, &random, &run.odometry);
 
     BearingRunTruth run_truth;
     run_truth.id = run.id;
@@ -123,42 +189,8 @@ BearingLog SimulateBearingLog(const BearingSimOptions& options, BearingSimTruth*
     run_truth.circular = circular;
     run_truth.world_T_robot_start = spec.world_T_robot_start;
     run_truth.initial_distance_m = spec.world_T_robot_start.head<2>().norm();
-
-    // Bearings at the sensor rate from the run's start (stamps), each taken at the exact true
-    // pose of its stamp + the time offset.
-    const double bearing_dt = 1.0 / options.bearing_rate_hz;
-    size_t step_index = 0;
-    for (int j = 0;; ++j) {
-      const double tb = j * bearing_dt;
-      if (tb > duration + 1e-9) break;
-      const double taken = std::clamp(tb + options.time_offset_s, 0.0, duration);
-      while (step_index + 1 < steps.size() && steps[step_index + 1].t_s <= taken) ++step_index;
-      Pose2d at = spec.world_T_robot_start;
-      if (!steps.empty()) {
-        const Step& step = steps[step_index];
-        at = AdvanceTruth(options, step.world_T_robot_start, step.speeds, taken - step.t_s);
-      }
-      const double clean = BearingFromPose(at, m.phi_rad, m.rho_m, m.psi_rad);
-      const double noisy = WrapAngle(clean + options.bearing_noise_rad * random.NormalPolar());
-      run.bearings.push_back(BearingSample{clock_s + tb, noisy, 0});
-      run_truth.world_T_robot_at_bearings.push_back(at);
-    }
-
-    if (circular) {
-      run_truth.eta_q_per_m = EtaQ(params.eta_per_m, params.delta, spec.q);
-      run_truth.xi_q_per_m = XiQ(params.xi_per_m, params.delta, spec.q);
-      GammaMuFromPose(spec.world_T_robot_start, m.phi_rad, m.rho_m, &run_truth.gamma0_rad,
-                      &run_truth.mu0);
-      if (run_truth.xi_q_per_m != 0.0) {
-        run_truth.circle = CircleFromStart(m, b, spec.q, spec.world_T_robot_start);
-        run_truth.state0 =
-            CircularStateFromGammaMu(run_truth.mu0, run_truth.gamma0_rad, m.phi_rad, m.psi_rad,
-                                     run_truth.eta_q_per_m, run_truth.xi_q_per_m);
-        run_truth.k_per_m =
-            KFromState(run_truth.state0.A, run_truth.state0.V, run_truth.xi_q_per_m);
-        run_truth.c_rad = CFromKV(run_truth.k_per_m, run_truth.state0.V, run_truth.xi_q_per_m);
-      }
-    }
+    SimulateBearings(options, spec, steps, duration, clock_s, &random, &run, &run_truth);
+    if (circular) SetCircularTruth(m, b, params, spec, &run_truth);
     if (options.initial_distance_run == run.id) {
       log.meta.initial_distance = InitialDistance{run.id, run_truth.initial_distance_m};
     }

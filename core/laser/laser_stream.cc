@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <initializer_list>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -77,9 +78,7 @@ void Interpolate(const std::vector<EncoderSample>& odometry, size_t s, double t,
   *right = a.right_rad + (b.right_rad - a.right_rad) * fraction;
 }
 
-StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
-                                    const std::vector<StampedPose>& poses,
-                                    const StreamNames& names) {
+Status ValidateOdometry(const std::vector<EncoderSample>& odometry, const StreamNames& names) {
   if (odometry.size() < 2) {
     return Status::InvalidInput(names.odometry + ": needs at least 2 odometry samples, got " +
                                 std::to_string(odometry.size()));
@@ -97,6 +96,10 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
                                   Num(s.t_s) + " after " + Num(odometry[k - 1].t_s));
     }
   }
+  return Status::Ok();
+}
+
+Status ValidatePoses(const std::vector<StampedPose>& poses, const StreamNames& names) {
   if (poses.size() < 2) {
     return Status::InvalidInput(names.poses + ": needs at least 2 sensor poses, got " +
                                 std::to_string(poses.size()));
@@ -112,28 +115,76 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
                                   Num(p.t_s) + " after " + Num(poses[k - 1].t_s));
     }
   }
+  return Status::Ok();
+}
 
+// Five times the median encoder period: a longer step between samples is missing data.
+double EncoderGapLimit(const std::vector<EncoderSample>& odometry) {
   std::vector<double> periods(odometry.size() - 1);
   for (size_t k = 0; k + 1 < odometry.size(); ++k) {
     periods[k] = odometry[k + 1].t_s - odometry[k].t_s;
   }
   std::nth_element(periods.begin(), periods.begin() + periods.size() / 2, periods.end());
-  const double gap_limit = 5.0 * periods[periods.size() / 2];
+  return 5.0 * periods[periods.size() / 2];
+}
 
-  // Poses outside the encoder span cannot be integrated: drop those at the ends.
+// Poses outside the encoder span cannot be integrated: [*first, *last) are those within it, after
+// dropping those at the ends.
+Status UsablePoses(const std::vector<EncoderSample>& odometry,
+                   const std::vector<StampedPose>& poses, const StreamNames& names, size_t* first,
+                   size_t* last) {
   const double t_begin = odometry.front().t_s;
   const double t_end = odometry.back().t_s;
-  size_t first = 0;
-  while (first < poses.size() && poses[first].t_s < t_begin) ++first;
-  size_t last = poses.size();  // One past the last usable pose.
-  while (last > first && poses[last - 1].t_s > t_end) --last;
-  if (last < first + 2) {
+  *first = 0;
+  while (*first < poses.size() && poses[*first].t_s < t_begin) ++*first;
+  *last = poses.size();  // One past the last usable pose.
+  while (*last > *first && poses[*last - 1].t_s > t_end) --*last;
+  if (*last < *first + 2) {
     return Status::InvalidInput(names.poses +
                                 ": no pair of sensor poses lies within the odometry time "
                                 "span [" +
                                 Num(t_begin) + ", " + Num(t_end) + "] (poses span [" +
                                 Num(poses.front().t_s) + ", " + Num(poses.back().t_s) + "])");
   }
+  return Status::Ok();
+}
+
+// The wheel motion over [ta, tb], where j is the last sample at or before ta and m the first at or
+// after tb (samples j+1..m-1 lie strictly inside): mean speeds, and constant-speed steps when
+// samples lie inside.
+void SetWheelMotion(const std::vector<EncoderSample>& odometry, size_t j, size_t m, double ta,
+                    double tb, LaserInterval* interval) {
+  double left_a, right_a, left_b, right_b;
+  Interpolate(odometry, j, ta, &left_a, &right_a);
+  Interpolate(odometry, odometry[m].t_s == tb ? m : m - 1, tb, &left_b, &right_b);
+  interval->left_speed = (left_b - left_a) / interval->duration_s;
+  interval->right_speed = (right_b - right_a) / interval->duration_s;
+  if (m > j + 1) {
+    // Encoder samples inside the interval: keep the speed profile as constant-speed steps.
+    interval->steps.reserve(m - j);
+    double t_prev = ta, left_prev = left_a, right_prev = right_a;
+    for (size_t s = j + 1; s <= m; ++s) {
+      const bool at_end = s == m;
+      const double t = at_end ? tb : odometry[s].t_s;
+      const double left = at_end ? left_b : odometry[s].left_rad;
+      const double right = at_end ? right_b : odometry[s].right_rad;
+      interval->steps.push_back(WheelStep{t - t_prev, left - left_prev, right - right_prev});
+      t_prev = t;
+      left_prev = left;
+      right_prev = right;
+    }
+  }
+}
+
+StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
+                                    const std::vector<StampedPose>& poses,
+                                    const StreamNames& names) {
+  CALIB_RETURN_IF_ERROR(ValidateOdometry(odometry, names));
+  CALIB_RETURN_IF_ERROR(ValidatePoses(poses, names));
+  const double gap_limit = EncoderGapLimit(odometry);
+  size_t first = 0;
+  size_t last = 0;
+  CALIB_RETURN_IF_ERROR(UsablePoses(odometry, poses, names, &first, &last));
 
   const auto by_time = [](const EncoderSample& s, double t) { return s.t_s < t; };
   LaserLog log;
@@ -169,27 +220,7 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
     pending_gap = false;
     interval.record = static_cast<int>(k) + 1;
     interval.line = names.pose_lines != nullptr ? (*names.pose_lines)[k] : 0;
-
-    double left_a, right_a, left_b, right_b;
-    Interpolate(odometry, j, ta, &left_a, &right_a);
-    Interpolate(odometry, odometry[m].t_s == tb ? m : m - 1, tb, &left_b, &right_b);
-    interval.left_speed = (left_b - left_a) / interval.duration_s;
-    interval.right_speed = (right_b - right_a) / interval.duration_s;
-    if (m > j + 1) {
-      // Encoder samples inside the interval: keep the speed profile as constant-speed steps.
-      interval.steps.reserve(m - j);
-      double t_prev = ta, left_prev = left_a, right_prev = right_a;
-      for (size_t s = j + 1; s <= m; ++s) {
-        const bool at_end = s == m;
-        const double t = at_end ? tb : odometry[s].t_s;
-        const double left = at_end ? left_b : odometry[s].left_rad;
-        const double right = at_end ? right_b : odometry[s].right_rad;
-        interval.steps.push_back(WheelStep{t - t_prev, left - left_prev, right - right_prev});
-        t_prev = t;
-        left_prev = left;
-        right_prev = right;
-      }
-    }
+    SetWheelMotion(odometry, j, m, ta, tb, &interval);
     log.intervals.push_back(std::move(interval));
   }
   if (log.intervals.empty()) {
@@ -200,6 +231,17 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
         Num(gap_limit / 5.0) + " s)");
   }
   return log;
+}
+
+// One CSV row of shortest round-trip numbers.
+void AppendCsvRow(std::string* out, std::initializer_list<double> values) {
+  const char* separator = "";
+  for (const double value : values) {
+    *out += separator;
+    AppendGeneral(out, value);
+    separator = ",";
+  }
+  *out += '\n';
 }
 
 }  // namespace
@@ -266,12 +308,7 @@ Status WriteLaserStream(const std::vector<EncoderSample>& odometry,
       return Status::InvalidInput(directory + ": cannot write odometry sample " +
                                   std::to_string(k + 1) + ": it holds a non-finite value");
     }
-    AppendGeneral(&out, s.t_s);
-    out += ',';
-    AppendGeneral(&out, s.left_rad);
-    out += ',';
-    AppendGeneral(&out, s.right_rad);
-    out += '\n';
+    AppendCsvRow(&out, {s.t_s, s.left_rad, s.right_rad});
   }
   CALIB_RETURN_IF_ERROR(WriteWholeFile((fs::path(directory) / "odometry.csv").string(), out));
   out = "t,x,y,theta\n";
@@ -281,12 +318,7 @@ Status WriteLaserStream(const std::vector<EncoderSample>& odometry,
       return Status::InvalidInput(directory + ": cannot write sensor pose " +
                                   std::to_string(k + 1) + ": it holds a non-finite value");
     }
-    AppendGeneral(&out, p.t_s);
-    for (int i = 0; i < 3; ++i) {
-      out += ',';
-      AppendGeneral(&out, p.world_T_sensor(i));
-    }
-    out += '\n';
+    AppendCsvRow(&out, {p.t_s, p.world_T_sensor(0), p.world_T_sensor(1), p.world_T_sensor(2)});
   }
   return WriteWholeFile((fs::path(directory) / "sensor_poses.csv").string(), out);
 }

@@ -4,6 +4,7 @@
 #include <calib/core/diff_drive.h>
 #include <calib/core/laser/laser_log.h>
 #include <calib/core/se2.h>
+#include <calib/problems/laser/laser_effect_context.h>
 #include <calib/problems/laser/laser_residual.h>
 #include <ceres/autodiff_cost_function.h>
 
@@ -54,38 +55,6 @@ inline const LaserEffectInfo& EffectInfo(LaserEffect effect) {
   return kLaserEffectInfo[static_cast<int>(effect)];
 }
 
-// How the wheel speeds behave at interval boundaries, where the time offset and the longitudinal
-// slip act.
-enum class BoundarySpeedModel {
-  // Constant within each interval, jumping at boundaries (the simulator with
-  // speed_time_constant_s = 0): exact for such logs.
-  kPiecewiseConstant,
-  // Smooth: the instantaneous speed at a boundary is the derivative of the polynomial through
-  // the cumulative wheel angles at up to seven neighbouring boundaries (6th order; centred, it
-  // gives the mean of the two sides at an isolated jump, like the piecewise model at γ → 0).
-  kSmooth,
-};
-
-// Wheel speeds (φ_l, φ_r), rad/s, just before and just after an interval end. Piecewise: the
-// neighbouring constant speeds; smooth: both the same estimate of the instantaneous speed.
-struct BoundarySpeeds {
-  Eigen::Vector2d before = Eigen::Vector2d::Zero();
-  Eigen::Vector2d after = Eigen::Vector2d::Zero();
-};
-
-// What an interval's effects need beyond the interval itself.
-struct LaserEffectContext {
-  const LaserInterval* interval = nullptr;
-  BoundarySpeeds start;  // At t_k.
-  BoundarySpeeds end;    // At t_{k+1}.
-  // Radius change time relative to the interval start, t_c − t_k (s): +inf never, −inf (or any
-  // value ≤ 0) the whole interval runs on the changed radii.
-  double change_offset_s = std::numeric_limits<double>::infinity();
-  // φ_ref of the speed-dependent radius (rad/s): the log's median wheel speed magnitude, so that
-  // r keeps meaning the radius at typical speeds.
-  double reference_speed = 0.0;
-};
-
 namespace effect_internal {
 
 // Wheel radii in effect for wheel speeds φ: r·(1 + γ_s·(|φ| − φ_ref))·(1 + γ_c after the change).
@@ -115,6 +84,55 @@ Eigen::Matrix<T, 2, 1> Twist(const T* odometry, const T* gamma, const Eigen::Vec
 template <typename T>
 T Sign(const T& x) {
   return x > T(0) ? T(1) : (x < T(0) ? T(-1) : T(0));
+}
+
+// Wheel speeds (φ_l, φ_r) of a constant-speed step (zero for an empty step).
+inline Eigen::Vector2d StepSpeed(const WheelStep& step) {
+  return step.duration_s > 0.0
+             ? Eigen::Vector2d(step.left_rad / step.duration_s, step.right_rad / step.duration_s)
+             : Eigen::Vector2d::Zero();
+}
+
+// Π_j Exp(ξ_j·Δt_j) over the pieces of constant wheel speed (the steps, split at the radius
+// change `change` s after the interval start), with the full longitudinal impulse at each speed
+// jump between steps (see EffectRobotMotion).
+template <typename T>
+Pose2<T> PiecesMotion(const T* odometry, const T* gamma, const WheelStep* steps, size_t num_steps,
+                      double change, double reference, const T& lateral, const T& longitudinal) {
+  Pose2<T> core = Pose2<T>::Zero();
+  double t = 0.0;  // Since the interval start.
+  for (size_t j = 0; j < num_steps; ++j) {
+    const WheelStep& step = steps[j];
+    const Eigen::Vector2d speed = StepSpeed(step);
+    if (j > 0) {
+      // A speed jump inside the interval: the full impulse, with the radii of that instant.
+      const bool changed = t >= change;
+      const T jump = Twist(odometry, gamma, speed, changed, reference)(0) -
+                     Twist(odometry, gamma, StepSpeed(steps[j - 1]), changed, reference)(0);
+      core = Compose(core, Pose2<T>(-longitudinal * jump, T(0), T(0)));
+    }
+    // The step's share before the radius change (1: no change inside this step).
+    double before_share = 1.0;
+    if (change < t + step.duration_s) {
+      before_share = change <= t ? 0.0 : (change - t) / step.duration_s;
+    }
+    for (int part = 0; part < 2; ++part) {
+      const double share = part == 0 ? before_share : 1.0 - before_share;
+      if (share <= 0.0) continue;
+      const Eigen::Matrix<T, 2, 1> radii =
+          effect_internal::Radii(odometry, gamma, speed, part == 1, reference);
+      const T left_rad(share == 1.0 ? step.left_rad : step.left_rad * share);
+      const T right_rad(share == 1.0 ? step.right_rad : step.right_rad * share);
+      const T along = (radii(0) * left_rad + radii(1) * right_rad) / T(2);
+      const T angle = (radii(1) * right_rad - radii(0) * left_rad) / odometry[2];
+      const double dt = step.duration_s * share;
+      // Lateral travel γ·v·ω·Δt = γ·along·angle/Δt.
+      const T across = dt > 0.0 ? lateral * along * angle / T(dt) : T(0);
+      core = Compose(core, Exp(Twist2<T>(along, across, angle)));
+    }
+    t += step.duration_s;
+  }
+  return core;
 }
 
 }  // namespace effect_internal
@@ -149,45 +167,8 @@ Pose2<T> EffectRobotMotion(const T* odometry, const T* gamma, const LaserEffectC
                          interval.right_speed * interval.duration_s};
   const WheelStep* steps = interval.steps.empty() ? &single : interval.steps.data();
   const size_t num_steps = interval.steps.empty() ? 1 : interval.steps.size();
-  const auto step_speed = [](const WheelStep& step) {
-    return step.duration_s > 0.0
-               ? Eigen::Vector2d(step.left_rad / step.duration_s, step.right_rad / step.duration_s)
-               : Eigen::Vector2d::Zero();
-  };
-
-  Pose2<T> core = Pose2<T>::Zero();
-  double t = 0.0;  // Since the interval start.
-  for (size_t j = 0; j < num_steps; ++j) {
-    const WheelStep& step = steps[j];
-    const Eigen::Vector2d speed = step_speed(step);
-    if (j > 0) {
-      // A speed jump inside the interval: the full impulse, with the radii of that instant.
-      const bool changed = t >= change;
-      const T jump = Twist(odometry, gamma, speed, changed, reference)(0) -
-                     Twist(odometry, gamma, step_speed(steps[j - 1]), changed, reference)(0);
-      core = Compose(core, Pose2<T>(-longitudinal * jump, T(0), T(0)));
-    }
-    // The step's share before the radius change (1: no change inside this step).
-    double before_share = 1.0;
-    if (change < t + step.duration_s) {
-      before_share = change <= t ? 0.0 : (change - t) / step.duration_s;
-    }
-    for (int part = 0; part < 2; ++part) {
-      const double share = part == 0 ? before_share : 1.0 - before_share;
-      if (share <= 0.0) continue;
-      const Eigen::Matrix<T, 2, 1> radii =
-          effect_internal::Radii(odometry, gamma, speed, part == 1, reference);
-      const T left_rad(share == 1.0 ? step.left_rad : step.left_rad * share);
-      const T right_rad(share == 1.0 ? step.right_rad : step.right_rad * share);
-      const T along = (radii(0) * left_rad + radii(1) * right_rad) / T(2);
-      const T angle = (radii(1) * right_rad - radii(0) * left_rad) / odometry[2];
-      const double dt = step.duration_s * share;
-      // Lateral travel γ·v·ω·Δt = γ·along·angle/Δt.
-      const T across = dt > 0.0 ? lateral * along * angle / T(dt) : T(0);
-      core = Compose(core, Exp(Twist2<T>(along, across, angle)));
-    }
-    t += step.duration_s;
-  }
+  const Pose2<T> core = effect_internal::PiecesMotion(odometry, gamma, steps, num_steps, change,
+                                                      reference, lateral, longitudinal);
 
   // Boundary speeds and the impulses at the interval ends.
   const bool changed_start = change <= 0.0;
@@ -197,9 +178,10 @@ Pose2<T> EffectRobotMotion(const T* odometry, const T* gamma, const LaserEffectC
             Twist(odometry, gamma, b.after, changed, reference)(0)) /
            T(2);
   };
-  const T v_first = Twist(odometry, gamma, step_speed(steps[0]), changed_start, reference)(0);
-  const T v_last =
-      Twist(odometry, gamma, step_speed(steps[num_steps - 1]), changed_end, reference)(0);
+  const T v_first =
+      Twist(odometry, gamma, effect_internal::StepSpeed(steps[0]), changed_start, reference)(0);
+  const T v_last = Twist(odometry, gamma, effect_internal::StepSpeed(steps[num_steps - 1]),
+                         changed_end, reference)(0);
   const Pose2<T> impulse_start(
       longitudinal * (boundary_forward(context.start, changed_start) - v_first), T(0), T(0));
   const Pose2<T> impulse_end(longitudinal * (v_last - boundary_forward(context.end, changed_end)),
@@ -262,113 +244,6 @@ class LaserEffectResidual {
   const LaserEffectContext* context_;
   const Eigen::Matrix3d* sqrt_information_;
 };
-
-// Weights w_j of the derivative at x0 of the polynomial through (x_j, y_j): y'(x0) ≈ Σ w_j·y_j.
-inline std::vector<double> DerivativeWeights(const std::vector<double>& nodes, double x0) {
-  const size_t n = nodes.size();
-  std::vector<double> weights(n, 0.0);
-  for (size_t j = 0; j < n; ++j) {
-    // L_j'(x0) = Σ_{m≠j} 1/(x_j − x_m) · Π_{l≠j,m} (x0 − x_l)/(x_j − x_l).
-    for (size_t m = 0; m < n; ++m) {
-      if (m == j) continue;
-      double term = 1.0 / (nodes[j] - nodes[m]);
-      for (size_t l = 0; l < n; ++l) {
-        if (l != j && l != m) term *= (x0 - nodes[l]) / (nodes[j] - nodes[l]);
-      }
-      weights[j] += term;
-    }
-  }
-  return weights;
-}
-
-// One context per interval. Intervals are neighbours unless the later one has gap_before; at a
-// gap or the ends of the log the interval's own speed continues. `change_time_s` is the radius
-// change on the log's clock (start_s), +inf for none.
-inline std::vector<LaserEffectContext> BuildLaserEffectContexts(
-    const std::vector<LaserInterval>& intervals, BoundarySpeedModel model,
-    double change_time_s = std::numeric_limits<double>::infinity()) {
-  const size_t n = intervals.size();
-  std::vector<LaserEffectContext> contexts(n);
-  const auto first_speed = [](const LaserInterval& in) -> Eigen::Vector2d {
-    if (in.steps.empty() || !(in.steps.front().duration_s > 0.0)) {
-      return Eigen::Vector2d(in.left_speed, in.right_speed);
-    }
-    return Eigen::Vector2d(in.steps.front().left_rad, in.steps.front().right_rad) /
-           in.steps.front().duration_s;
-  };
-  const auto last_speed = [](const LaserInterval& in) -> Eigen::Vector2d {
-    if (in.steps.empty() || !(in.steps.back().duration_s > 0.0)) {
-      return Eigen::Vector2d(in.left_speed, in.right_speed);
-    }
-    return Eigen::Vector2d(in.steps.back().left_rad, in.steps.back().right_rad) /
-           in.steps.back().duration_s;
-  };
-  std::vector<double> magnitudes;
-  for (const LaserInterval& in : intervals) {
-    magnitudes.push_back(std::abs(in.left_speed));
-    magnitudes.push_back(std::abs(in.right_speed));
-  }
-  double reference = 0.0;
-  if (!magnitudes.empty()) {
-    std::nth_element(magnitudes.begin(), magnitudes.begin() + magnitudes.size() / 2,
-                     magnitudes.end());
-    reference = magnitudes[magnitudes.size() / 2];
-  }
-  for (size_t k = 0; k < n; ++k) {
-    contexts[k].interval = &intervals[k];
-    contexts[k].reference_speed = reference;
-    contexts[k].change_offset_s = change_time_s - intervals[k].start_s;
-    const bool has_previous = k > 0 && !intervals[k].gap_before;
-    const bool has_next = k + 1 < n && !intervals[k + 1].gap_before;
-    contexts[k].start.after = first_speed(intervals[k]);
-    contexts[k].start.before =
-        has_previous ? last_speed(intervals[k - 1]) : first_speed(intervals[k]);
-    contexts[k].end.before = last_speed(intervals[k]);
-    contexts[k].end.after = has_next ? first_speed(intervals[k + 1]) : last_speed(intervals[k]);
-  }
-  if (model == BoundarySpeedModel::kPiecewiseConstant) return contexts;
-
-  // Smooth: within each gap-free run, boundary times τ_i and cumulative wheel angles Φ_i.
-  size_t run_start = 0;
-  while (run_start < n) {
-    size_t run_end = run_start + 1;
-    while (run_end < n && !intervals[run_end].gap_before) ++run_end;
-    const size_t count = run_end - run_start;  // Intervals; count + 1 boundaries.
-    std::vector<double> times(count + 1);
-    std::vector<Eigen::Vector2d> angles(count + 1, Eigen::Vector2d::Zero());
-    times[0] = intervals[run_start].start_s;
-    for (size_t i = 0; i < count; ++i) {
-      const LaserInterval& in = intervals[run_start + i];
-      times[i + 1] = times[i] + in.duration_s;
-      Eigen::Vector2d rotation(in.left_speed * in.duration_s, in.right_speed * in.duration_s);
-      if (!in.steps.empty()) {
-        rotation.setZero();
-        for (const WheelStep& step : in.steps)
-          rotation += Eigen::Vector2d(step.left_rad, step.right_rad);
-      }
-      angles[i + 1] = angles[i] + rotation;
-    }
-    std::vector<Eigen::Vector2d> speeds(count + 1);
-    for (size_t i = 0; i <= count; ++i) {
-      // Up to seven nodes, as centred as the run allows (fewer did worse on smooth simulated
-      // speeds: the 3-point estimate biased a time offset by −20 %, the 5-point by +5 %).
-      const size_t width = std::min<size_t>(7, count + 1);
-      size_t lo = i >= 3 ? i - 3 : 0;
-      if (lo + width > count + 1) lo = count + 1 - width;
-      std::vector<double> nodes(times.begin() + lo, times.begin() + lo + width);
-      const std::vector<double> weights = DerivativeWeights(nodes, times[i]);
-      speeds[i].setZero();
-      for (size_t j = 0; j < width; ++j) speeds[i] += weights[j] * angles[lo + j];
-    }
-    for (size_t i = 0; i < count; ++i) {
-      LaserEffectContext& c = contexts[run_start + i];
-      c.start.before = c.start.after = speeds[i];
-      c.end.before = c.end.after = speeds[i + 1];
-    }
-    run_start = run_end;
-  }
-  return contexts;
-}
 
 }  // namespace calib
 
