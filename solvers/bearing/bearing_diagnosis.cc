@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <tuple>
 #include <utility>
 
@@ -272,15 +273,13 @@ StatusOr<BearingDiagnosis> DiagnoseBearing(const BearingLog& log,
 }
 
 const ParamTable& BearingParamTable() {
-  static const ParamTable table = {{"phi", "rad", true, 180.0 / M_PI, "deg"},
-                                   {"psi", "rad", true, 180.0 / M_PI, "deg"},
-                                   {"eta", "1/m", false, 1.0, "1/m"},
-                                   {"delta", "", false, 1.0, ""},
-                                   {"xi", "1/m", false, 1.0, "1/m"},
-                                   {"rho", "m", false, 1.0, "m"},
-                                   {"delta_r", "", false, 1.0, ""},
-                                   {"delta_l", "", false, 1.0, ""},
-                                   {"delta_b", "", false, 1.0, ""}};
+  // The five scaled parameters, then the metric ones that are not among them (rho, delta_*).
+  static const ParamTable table = [] {
+    ParamTable t(std::begin(kBearingParams), std::end(kBearingParams));
+    t.insert(t.end(), std::begin(kBearingMetricParams) + kBearingMetricRho,
+             std::end(kBearingMetricParams));
+    return t;
+  }();
   return table;
 }
 
