@@ -59,7 +59,7 @@ struct Steps {
   void Progress(const std::string& line) const {
     if (options.progress) options.progress(line);
   }
-  // `status` with the log named in front.
+  // `status` with the log named in front (ok stays ok).
   Status Failed(const Status& status) const { return status.Prefixed(source + ": "); }
   Status NoLeverages(const char* fit) const {
     return Status::NotObservable(source + ": the " + fit +
@@ -74,8 +74,7 @@ Status FitBase(Steps* steps, BearingDiagnosis* out) {
   steps->base_problem =
       MakeProblem(steps->log, base.estimate, base.poses, base.noise, adjustment, {});
   BearingProblem& p0 = *steps->base_problem;
-  const Status status = p0.Solve();
-  if (!status.ok()) return steps->Failed(status);
+  CALIB_RETURN_IF_ERROR(steps->Failed(p0.Solve()));
   steps->inlier = Inliers(p0);
   if (!p0.VarianceComponents(steps->inlier).ok()) {
     return steps->NoLeverages("base");
@@ -151,8 +150,7 @@ StatusOr<ProblemPtr> RefitAndConfirm(const Steps& steps, BearingFinding* f,
   const BearingAdjustmentOptions& adjustment = steps.options.calibration.adjustment;
   ProblemPtr p2 = MakeProblem(steps.log, p0.params(), p0.poses(), p0.noise(), adjustment,
                               Model{true, f->one_step(0), false});
-  const Status status = p2->Solve();
-  if (!status.ok()) return steps.Failed(status);
+  CALIB_RETURN_IF_ERROR(steps.Failed(p2->Solve()));
   const double log_n = std::log(static_cast<double>(std::max(1, steps.base.samples)));
   const LikelihoodRatio lr =
       TestLikelihoodRatio(p0.Cost(), p2->Cost(), steps.loss.likelihood_ratio_scale, 1, log_n,
