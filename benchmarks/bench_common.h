@@ -2,7 +2,7 @@
 #define CALIB_BENCHMARKS_BENCH_COMMON_H_
 
 #include <calib/core/laser/laser_params.h>
-#include <calib/tools/report/text_format.h>
+#include <calib/core/text_format.h>
 
 #include <Eigen/Core>
 #include <chrono>
@@ -13,7 +13,7 @@
 #include <vector>
 
 // Shared pieces of calib_bench: run settings, timing, a parallel loop and plain-text tables
-// (text through calib::Format of tools/report/text_format.h).
+// (text through calib::Format of core/text_format.h).
 namespace calib::bench {
 
 struct BenchConfig {

@@ -35,9 +35,8 @@ StatusOr<Published> ReadPublished(const fs::path& path) {
 }
 
 StatusOr<LaserCalibrationResult> CalibrateFile(const fs::path& path) {
-  const StatusOr<LaserLog> log = ReadLaserLog(path.string());
-  if (!log.ok()) return log.status();
-  return CalibrateLaser(log->intervals);
+  CALIB_ASSIGN_OR_RETURN(const LaserLog log, ReadLaserLog(path.string()));
+  return CalibrateLaser(log.intervals);
 }
 
 // r and b are nearly proportional in the estimate (the data fix r/b well), so the regression

@@ -34,8 +34,6 @@ class [[nodiscard]] Status {
   static Status NotConverged(std::string m) { return {StatusCode::kNotConverged, std::move(m)}; }
   static Status Io(std::string m) { return {StatusCode::kIo, std::move(m)}; }
   static Status Internal(std::string m) { return {StatusCode::kInternal, std::move(m)}; }
-  // Deprecated spelling of InvalidInput, kept while callers move to the coded factories.
-  static Status Error(std::string m) { return InvalidInput(std::move(m)); }
 
   bool ok() const { return code_ == StatusCode::kOk; }
   StatusCode code() const { return code_; }

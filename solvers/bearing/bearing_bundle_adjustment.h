@@ -152,7 +152,11 @@ class BearingProblem {
   // Robust-loss constants of the bearing terms, with the residuals' shrinkage by their leverage
   // counted back (as the covariance's κ): the likelihood-ratio scale mean(ρ'²s)/mean(ρ' + 2ρ''s)
   // (2·Δcost/scale is χ² under the null) and λ = mean(ρ' + 2ρ''s)/mean(ρ').
-  void LossConstants(double* likelihood_ratio_scale, double* lambda) const;
+  struct LossConstants {
+    double likelihood_ratio_scale = 1.0;
+    double lambda = 1.0;
+  };
+  LossConstants BearingLossConstants() const;
   // Covariance of (φ, ψ, η, δ, ξ, τ) as ceres::Covariance gives it (no loss correction; the
   // poses eliminated), also while τ is held constant (it is freed for the computation, hence not
   // const). Requires model_time_offset.
@@ -182,16 +186,10 @@ class BearingProblem {
   // estimated σβ, and when the loss leaves no curvature.
   double LossCorrection() const;
 
-  // Forwarding aliases of the above for older callers (the matrix alone; κ = LossCorrection()).
-  StatusOr<BearingParamMatrix> Covariance(bool loss_correction = true) const;
-  StatusOr<BearingScaledWithDistanceMatrix> CovarianceWithStartDistance(
-      size_t run_index, bool loss_correction = true) const;
-  double covariance_scale() const { return LossCorrection(); }
-
   // Leverages of every residual from the covariance of all blocks (with the loss's weights, as
   // the solution has them), summed per class; bearings with inlier[i][j] false are left out of
   // the bearing class. Also keeps Σ(1 − h) over all bearings for LossCorrection and
-  // LossConstants (hence not const).
+  // BearingLossConstants (hence not const).
   StatusOr<BearingVarianceComponents> VarianceComponents(
       const std::vector<std::vector<bool>>& inlier);
 

@@ -10,8 +10,7 @@ namespace calib {
 
 StatusOr<BearingBound> BearingCramerRaoBound(const BearingLog& log, const BearingSimTruth& truth,
                                              const BearingNoise& noise) {
-  Status status = ValidateBearingLog(log);
-  if (!status.ok()) return status;
+  CALIB_RETURN_IF_ERROR(ValidateBearingLog(log));
   if (!(noise.bearing_sigma_rad > 0.0) || !(noise.encoder_k >= 0.0)) {
     return Status::InvalidInput("the bound needs σβ > 0 and K ≥ 0");
   }

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <tuple>
 #include <utility>
 
@@ -54,11 +55,11 @@ struct Steps {
   BearingCalibrationResult base;
   ProblemPtr base_problem;  // At the base optimum.
   std::vector<std::vector<bool>> inlier;
-  double lr_scale = 1.0, lambda = 1.0;  // BearingProblem::LossConstants.
+  BearingProblem::LossConstants loss;  // Of the base fit.
   void Progress(const std::string& line) const {
     if (options.progress) options.progress(line);
   }
-  // `status` with the log named in front.
+  // `status` with the log named in front (ok stays ok).
   Status Failed(const Status& status) const { return status.Prefixed(source + ": "); }
   Status NoLeverages(const char* fit) const {
     return Status::NotObservable(source + ": the " + fit +
@@ -73,13 +74,12 @@ Status FitBase(Steps* steps, BearingDiagnosis* out) {
   steps->base_problem =
       MakeProblem(steps->log, base.estimate, base.poses, base.noise, adjustment, {});
   BearingProblem& p0 = *steps->base_problem;
-  const Status status = p0.Solve();
-  if (!status.ok()) return steps->Failed(status);
+  CALIB_RETURN_IF_ERROR(steps->Failed(p0.Solve()));
   steps->inlier = Inliers(p0);
   if (!p0.VarianceComponents(steps->inlier).ok()) {
     return steps->NoLeverages("base");
   }
-  p0.LossConstants(&steps->lr_scale, &steps->lambda);
+  steps->loss = p0.BearingLossConstants();
   out->base = base;
   out->samples = base.samples;
   BearingFitReport& fit = out->baseline;
@@ -123,14 +123,14 @@ StatusOr<BearingSeries> ScoreTest(const Steps& steps, BearingFinding* f,
     f->confounded_with = {"start_pose"};
     f->concealment = 1.0;
   } else {
-    const double kappa = steps.lr_scale / steps.lambda;
+    const double kappa = steps.loss.likelihood_ratio_scale / steps.loss.lambda;
     f->concealment = 1.0 - 1.0 / (c_tt * a_tt);
-    f->statistic = score * score * c_tt / (steps.lr_scale * steps.lambda);
+    f->statistic = score * score * c_tt / (steps.loss.likelihood_ratio_scale * steps.loss.lambda);
     f->p_value = ChiSquareSurvival(f->statistic, 1);
     f->score_significant = f->p_value <= steps.options.alpha;
-    f->one_step(0) = -c_tt * score / steps.lambda;
+    f->one_step(0) = -c_tt * score / steps.loss.lambda;
     f->one_step_stddev(0) = std::sqrt(kappa * c_tt);
-    f->absorbed = cov->joint.topRightCorner<kNumBearingParams, 1>() * score / steps.lambda;
+    f->absorbed = cov->joint.topRightCorner<kNumBearingParams, 1>() * score / steps.loss.lambda;
     f->value = f->one_step(0);
     f->stddev = f->one_step_stddev(0);
   }
@@ -150,11 +150,10 @@ StatusOr<ProblemPtr> RefitAndConfirm(const Steps& steps, BearingFinding* f,
   const BearingAdjustmentOptions& adjustment = steps.options.calibration.adjustment;
   ProblemPtr p2 = MakeProblem(steps.log, p0.params(), p0.poses(), p0.noise(), adjustment,
                               Model{true, f->one_step(0), false});
-  const Status status = p2->Solve();
-  if (!status.ok()) return steps.Failed(status);
+  CALIB_RETURN_IF_ERROR(steps.Failed(p2->Solve()));
   const double log_n = std::log(static_cast<double>(std::max(1, steps.base.samples)));
   const LikelihoodRatio lr =
-      TestLikelihoodRatio(p0.Cost(), p2->Cost(), steps.lr_scale, 1, log_n,
+      TestLikelihoodRatio(p0.Cost(), p2->Cost(), steps.loss.likelihood_ratio_scale, 1, log_n,
                           [](double statistic) { return ChiSquareSurvival(statistic, 1); });
   const std::unique_ptr<ceres::LossFunction> loss =
       MakeLossFunction(adjustment.loss, adjustment.loss_scale);
@@ -191,32 +190,19 @@ Status DescribeFinal(const Steps& steps, BearingProblem* p2, BearingFitReport* f
   BearingNoise reported = p2->noise();
   reported.encoder_k = std::max(reported.encoder_k, steps.base.covariance_encoder_k);
   p2->SetNoise(reported);
-  const BearingLog& log = steps.log;
-  if (log.meta.initial_distance) {
-    const InitialDistance& d = *log.meta.initial_distance;
-    const size_t run = std::find_if(log.runs.begin(), log.runs.end(),
-                                    [&](const BearingRun& r) { return r.id == d.run; }) -
-                       log.runs.begin();
-    const StatusOr<BearingScaledWithDistanceMatrix> joint = p2->CovarianceWithStartDistance(run);
-    if (!joint.ok()) return steps.Failed(joint.status());
-    fit->stddev = joint->diagonal().head<kNumBearingParams>().cwiseMax(0.0).cwiseSqrt();
-    Eigen::Matrix<double, kNumBearingMetricParams, kNumBearingParams + 1> jacobian;
-    fit->metric = BearingMetricFromScaled(fit->estimate, p2->StartDistance(run), d.meters,
-                                          log.meta.wheelbase_m, &jacobian);
-    fit->metric_stddev =
-        (jacobian * *joint * jacobian.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
+  const StatusOr<BearingEstimateCovariance> cov = EstimateCovariance(*p2, steps.log, fit->estimate);
+  if (!cov.ok()) return steps.Failed(cov.status());
+  fit->stddev = cov->covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  if (cov->has_metric) {
+    fit->metric = cov->metric;
+    fit->metric_stddev = cov->metric_covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
     fit->has_metric = true;
-  } else {
-    const StatusOr<BearingParamMatrix> c = p2->Covariance();
-    if (!c.ok()) return steps.Failed(c.status());
-    fit->stddev = c->diagonal().cwiseMax(0.0).cwiseSqrt();
   }
   const StatusOr<BearingProblem::TimeOffsetCovariance> with_offset = p2->CovarianceWithTimeOffset();
   if (!with_offset.ok()) return steps.Failed(with_offset.status());
   fit->time_offset_s = p2->time_offset();
-  fit->time_offset_stddev_s =
-      std::sqrt(std::max(0.0, with_offset->joint(kNumBearingParams, kNumBearingParams)) *
-                p2->covariance_scale());
+  fit->time_offset_stddev_s = std::sqrt(
+      std::max(0.0, with_offset->joint(kNumBearingParams, kNumBearingParams)) * cov->kappa);
   return Status::Ok();
 }
 
@@ -256,7 +242,7 @@ StatusOr<BearingDiagnosis> DiagnoseBearing(const BearingLog& log,
                                            const BearingDiagnosisOptions& options) {
   using namespace bearing_diagnosis;  // NOLINT: the adapter's internals.
   const auto clock = std::chrono::steady_clock::now();
-  Steps steps{log, options, log.source.empty() ? "bearing log" : log.source, LogStart(log), {},
+  Steps steps{log, options, log.source.empty() ? "bearing log" : log.source, LogStart(log), {}, {},
               {},  {}};
   CALIB_ASSIGN_OR_RETURN(steps.base, CalibrateBearing(log, options.calibration));
   BearingDiagnosis out;
@@ -285,15 +271,13 @@ StatusOr<BearingDiagnosis> DiagnoseBearing(const BearingLog& log,
 }
 
 const ParamTable& BearingParamTable() {
-  static const ParamTable table = {{"phi", "rad", true, 180.0 / M_PI, "deg"},
-                                   {"psi", "rad", true, 180.0 / M_PI, "deg"},
-                                   {"eta", "1/m", false, 1.0, "1/m"},
-                                   {"delta", "", false, 1.0, ""},
-                                   {"xi", "1/m", false, 1.0, "1/m"},
-                                   {"rho", "m", false, 1.0, "m"},
-                                   {"delta_r", "", false, 1.0, ""},
-                                   {"delta_l", "", false, 1.0, ""},
-                                   {"delta_b", "", false, 1.0, ""}};
+  // The five scaled parameters, then the metric ones that are not among them (rho, delta_*).
+  static const ParamTable table = [] {
+    ParamTable t(std::begin(kBearingParams), std::end(kBearingParams));
+    t.insert(t.end(), std::begin(kBearingMetricParams) + kBearingMetricRho,
+             std::end(kBearingMetricParams));
+    return t;
+  }();
   return table;
 }
 

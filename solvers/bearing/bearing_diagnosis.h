@@ -24,7 +24,7 @@
 //    U = Σρ'·r·∂r/∂τ, the efficient information I_eff = 1/C_ττ from ceres::Covariance of the
 //    problem with τ added (the calibration AND every pose projected out), the robust loss's
 //    sandwich constants; statistic U²·C_ττ/(s·λ) ~ χ²₁ (s the likelihood-ratio scale, λ the
-//    ratio of Newton to Gauss–Newton curvature; BearingProblem::LossConstants). Concealment
+//    ratio of Newton to Gauss–Newton curvature; BearingProblem::BearingLossConstants). Concealment
 //    1 − I_eff/A_ττ with A_ττ = Σρ'·(∂r/∂τ)²; one-step τ̂ = −C_ττ·U/λ and the shift the base fit
 //    took on, θ(without) − θ(with) ≈ C_θτ·U/λ.
 // 3. Confirmation: the refit with τ free (noise levels held at the base fit's), a likelihood-

@@ -1,22 +1,16 @@
+#include <calib/core/text_format.h>
 #include <calib/solvers/bearing/bearing_diagnosis_internal.h>
 #include <calib/solvers/diagnosis/residual_structure.h>
 #include <calib/solvers/diagnosis/statement.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 
 namespace calib::bearing_diagnosis {
 namespace {
 
 constexpr double kDegrees = 180.0 / M_PI;
-
-std::string Format(const char* format, double a, double b = 0.0) {
-  char text[160];
-  std::snprintf(text, sizeof(text), format, a, b);
-  return text;
-}
 
 const std::vector<double>& Covariate(const BearingSeries& s, size_t which) {
   switch (which) {

@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <utility>
 
 namespace calib {
@@ -25,15 +26,16 @@ Eigen::MatrixXd CovarianceBlock(const ceres::Covariance& covariance, const doubl
 
 }  // namespace
 
-void BearingProblem::LossConstants(double* likelihood_ratio_scale, double* lambda) const {
+BearingProblem::LossConstants BearingProblem::BearingLossConstants() const {
   LossCorrectionSums sums;
   for (const BearingTermInfo& info : BearingTerms()) {
     sums.Add(info.residual * info.residual, LossDerivatives{info.rho1, info.rho2});
   }
-  *likelihood_ratio_scale = sums.bread > 0.0 && sums.meat > 0.0
-                                ? sums.meat / sums.bread / bearing_redundancy_fraction_
-                                : 1.0;
-  *lambda = sums.weight > 0.0 && sums.bread > 0.0 ? sums.bread / sums.weight : 1.0;
+  LossConstants out;
+  const std::optional<double> scale = LikelihoodRatioScale(sums);
+  if (scale) out.likelihood_ratio_scale = *scale / bearing_redundancy_fraction_;
+  out.lambda = CurvatureRatio(sums).value_or(1.0);
+  return out;
 }
 
 StatusOr<BearingProblem::TimeOffsetCovariance> BearingProblem::CovarianceWithTimeOffset() {
@@ -93,12 +95,6 @@ StatusOr<CorrectedCovariance<BearingParamMatrix>> BearingProblem::CalibrationCov
   return CorrectedCovariance<BearingParamMatrix>{BearingParamMatrix(cov * kappa), kappa};
 }
 
-StatusOr<BearingParamMatrix> BearingProblem::Covariance(bool loss_correction) const {
-  CALIB_ASSIGN_OR_RETURN(const CorrectedCovariance<BearingParamMatrix> cov,
-                         CalibrationCovariance(loss_correction));
-  return cov.covariance;
-}
-
 double BearingProblem::StartDistance(size_t run_index) const {
   const double* p = Node(run_index, 0);
   return std::hypot(p[0], p[1]);
@@ -119,13 +115,6 @@ BearingProblem::CalibrationCovarianceWithStartDistance(size_t run_index,
   g(kNumBearingParams, kNumBearingParams + 1) = p[1] / d;
   return CorrectedCovariance<BearingScaledWithDistanceMatrix>{
       BearingScaledWithDistanceMatrix(g * cov * g.transpose() * kappa), kappa};
-}
-
-StatusOr<BearingScaledWithDistanceMatrix> BearingProblem::CovarianceWithStartDistance(
-    size_t run_index, bool loss_correction) const {
-  CALIB_ASSIGN_OR_RETURN(const CorrectedCovariance<BearingScaledWithDistanceMatrix> cov,
-                         CalibrationCovarianceWithStartDistance(run_index, loss_correction));
-  return cov.covariance;
 }
 
 // Every block pair the leverages need: (c, c), (c, τ), (τ, τ), and per node (pose, pose),

@@ -9,6 +9,16 @@ LossDerivatives EvaluateLoss(const ceres::LossFunction* loss, double s) {
   return {rho[1], rho[2]};
 }
 
+std::optional<double> LikelihoodRatioScale(const LossCorrectionSums& sums) {
+  if (!(sums.bread > 0.0 && sums.meat > 0.0)) return std::nullopt;
+  return sums.meat / sums.bread;
+}
+
+std::optional<double> CurvatureRatio(const LossCorrectionSums& sums) {
+  if (!(sums.weight > 0.0 && sums.bread > 0.0)) return std::nullopt;
+  return sums.bread / sums.weight;
+}
+
 StatusOr<double> LossCorrection(const LossCorrectionSums& sums, double components,
                                 double redundancy) {
   if (sums.blocks == 0 || !(redundancy > 0.0)) {

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Dense>
+#include <optional>
 
 // The covariance of an M-estimator (a least-squares fit under a robust loss ρ), once for every
 // refinement. Two forms:
@@ -52,25 +53,44 @@ struct LossCorrectionSums {
   }
 };
 
+// The scale of likelihood-ratio statistics mean(ρ'²s/d)/mean(ρ' + 2ρ''s/d) (2·Δcost/scale is χ²
+// under the null; 1 for Gaussian residuals without a loss); empty when either sum is not positive.
+std::optional<double> LikelihoodRatioScale(const LossCorrectionSums& sums);
+
+// λ = mean(ρ' + 2ρ''s/d)/mean(ρ'), Newton over Gauss–Newton curvature; empty when either sum is not
+// positive.
+std::optional<double> CurvatureRatio(const LossCorrectionSums& sums);
+
 // κ = mean(ρ')·mean(ρ'²s/d)/mean(ρ' + 2ρ''s/d)² · n/r (n residual components, r > 0 their
 // redundancy). NotObservable when r ≤ 0 or the bread is not positive (no curvature left).
 StatusOr<double> LossCorrection(const LossCorrectionSums& sums, double components,
                                 double redundancy);
 
-// H and B of the sandwich, accumulated one residual block at a time.
+// H and B of the sandwich, accumulated one residual block at a time (P may be Eigen::Dynamic: then
+// construct with the size).
 template <int P>
 struct SandwichSums {
   using Matrix = Eigen::Matrix<double, P, P>;
-  Matrix bread = Matrix::Zero();  // H.
-  Matrix meat = Matrix::Zero();   // B.
+  using Vector = Eigen::Matrix<double, P, 1>;
+  explicit SandwichSums(Eigen::Index size = P)
+      : bread(Matrix::Zero(size, size)), meat(Matrix::Zero(size, size)) {}
+  Matrix bread;  // H.
+  Matrix meat;   // B.
 
   // A block with Jacobian j (d × P) and whitened residual r.
-  template <int D>
-  void Add(const Eigen::Matrix<double, D, P>& j, const Eigen::Matrix<double, D, 1>& r,
+  template <typename JDerived, typename RDerived>
+  void Add(const Eigen::MatrixBase<JDerived>& j, const Eigen::MatrixBase<RDerived>& r,
            const LossDerivatives& rho) {
-    const Eigen::Matrix<double, P, 1> g = j.transpose() * r;
-    bread += rho.rho1 * j.transpose() * j + 2.0 * rho.rho2 * g * g.transpose();
+    const Vector g = AddBread(j, r, rho);
     meat += rho.rho1 * rho.rho1 * g * g.transpose();
+  }
+  // H alone (for a meat computed otherwise, e.g. a long-run covariance); returns g = jᵀr.
+  template <typename JDerived, typename RDerived>
+  Vector AddBread(const Eigen::MatrixBase<JDerived>& j, const Eigen::MatrixBase<RDerived>& r,
+                  const LossDerivatives& rho) {
+    const Vector g = j.transpose() * r;
+    bread += rho.rho1 * j.transpose() * j + 2.0 * rho.rho2 * g * g.transpose();
+    return g;
   }
   SandwichSums& operator+=(const SandwichSums& other) {
     bread += other.bread;
@@ -80,20 +100,23 @@ struct SandwichSums {
 };
 
 // H⁻¹·B·H⁻¹·n/r (κ = 1). NotObservable when H is singular or r ≤ 0.
-template <int P>
-StatusOr<CorrectedCovariance<Eigen::Matrix<double, P, P>>> SandwichCovariance(
-    const SandwichSums<P>& sums, double components, double redundancy) {
-  using Matrix = Eigen::Matrix<double, P, P>;
+template <typename Matrix>
+StatusOr<CorrectedCovariance<Matrix>> SandwichCovariance(const Matrix& bread, const Matrix& meat,
+                                                         double components, double redundancy) {
   if (!(redundancy > 0.0)) {
     return Status::NotObservable("too few residuals for a covariance");
   }
-  const Eigen::LDLT<Matrix> ldlt(sums.bread);
+  const Eigen::LDLT<Matrix> ldlt(bread);
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
     return Status::NotObservable("the information matrix is singular");
   }
-  const Matrix inverse = ldlt.solve(Matrix::Identity());
-  return CorrectedCovariance<Matrix>{inverse * sums.meat * inverse * (components / redundancy),
-                                     1.0};
+  const Matrix inverse = ldlt.solve(Matrix::Identity(bread.rows(), bread.cols()));
+  return CorrectedCovariance<Matrix>{inverse * meat * inverse * (components / redundancy), 1.0};
+}
+template <int P>
+StatusOr<CorrectedCovariance<Eigen::Matrix<double, P, P>>> SandwichCovariance(
+    const SandwichSums<P>& sums, double components, double redundancy) {
+  return SandwichCovariance(sums.bread, sums.meat, components, redundancy);
 }
 
 }  // namespace calib

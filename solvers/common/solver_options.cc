@@ -45,6 +45,17 @@ SolverSettings LaserRefinementSettings(size_t residual_blocks, int max_iteration
   return s;
 }
 
+SolverSettings LaserEffectFitSettings(size_t residual_blocks, int max_iterations, int num_threads) {
+  SolverSettings s;
+  s.linear_solver = ceres::DENSE_NORMAL_CHOLESKY;
+  s.max_iterations = max_iterations;
+  s.num_threads = num_threads;
+  s.function_tolerance = std::min(1e-8, 1e-3 / static_cast<double>(residual_blocks));
+  s.gradient_tolerance = 1e-14;
+  s.parameter_tolerance = 1e-12;
+  return s;
+}
+
 SolverSettings BearingAdjustmentSettings(int max_iterations, int num_threads,
                                          double initial_trust_region_radius) {
   SolverSettings s;

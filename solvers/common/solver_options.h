@@ -36,6 +36,10 @@ ceres::Covariance::Options MakeCovarianceOptions(int num_threads);
 // hence the relative tolerance.
 SolverSettings LaserRefinementSettings(size_t residual_blocks, int max_iterations, int num_threads);
 
+// The laser refits with candidate effects: their costs are compared between models (likelihood
+// ratios of a few units), so they stop when an iteration gains less than ~1e-3 in total.
+SolverSettings LaserEffectFitSettings(size_t residual_blocks, int max_iterations, int num_threads);
+
 // The bearing bundle adjustment. The stiff odometry chains make the normal equations badly
 // conditioned: a small initial radius would damp the soft modes (the runs' shapes) for a dozen
 // iterations, so it starts near Gauss–Newton (LM still backs off when a step fails). The cost is

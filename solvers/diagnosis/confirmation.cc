@@ -1,3 +1,4 @@
+#include <calib/solvers/common/robust_covariance.h>
 #include <calib/solvers/diagnosis/confirmation.h>
 #include <calib/solvers/stats/change_point.h>
 
@@ -13,14 +14,11 @@ double HeldOutScore::rms() const {
 
 double LikelihoodRatioScale(const Eigen::VectorXd& squared_norms, const Eigen::VectorXd& rho1,
                             const Eigen::VectorXd& rho2, int components) {
-  double meat = 0.0, bread = 0.0;
-  const double d = components;
+  LossCorrectionSums sums;
   for (Eigen::Index k = 0; k < squared_norms.size(); ++k) {
-    const double s = squared_norms(k);
-    meat += rho1(k) * rho1(k) * s / d;
-    bread += rho1(k) + 2.0 * rho2(k) * s / d;
+    sums.Add(squared_norms(k), LossDerivatives{rho1(k), rho2(k)}, components);
   }
-  return bread > 0.0 && meat > 0.0 ? meat / bread : 1.0;
+  return LikelihoodRatioScale(sums).value_or(1.0);
 }
 
 LikelihoodRatio TestLikelihoodRatio(double cost_without, double cost_with, double kappa, int dof,

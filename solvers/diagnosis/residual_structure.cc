@@ -1,16 +1,9 @@
+#include <calib/core/text_format.h>
 #include <calib/solvers/diagnosis/multiple_testing.h>
 #include <calib/solvers/diagnosis/residual_structure.h>
 
-#include <cstdio>
-
 namespace calib {
 namespace {
-
-std::string Format(const char* format, double value) {
-  char text[128];
-  std::snprintf(text, sizeof(text), format, value);
-  return text;
-}
 
 std::string Statement(const ResidualStructure& s, size_t covariate, double smallest_p, double alpha,
                       const StructureWords& words) {

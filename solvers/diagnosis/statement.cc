@@ -1,18 +1,12 @@
+#include <calib/core/text_format.h>
 #include <calib/solvers/diagnosis/statement.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <numeric>
 
 namespace calib {
 namespace {
-
-std::string Format(const char* format, double a, double b = 0.0, double c = 0.0) {
-  char text[256];
-  std::snprintf(text, sizeof(text), format, a, b, c);
-  return text;
-}
 
 // "score test 12.3, p = 1e-05, 40 % of it absorbable by the base parameters".
 std::string Tested(const Finding& f, const std::string& verb, double share,

@@ -1,9 +1,9 @@
+#include <calib/core/text_format.h>
 #include <calib/solvers/diagnosis/statement.h>
 #include <calib/solvers/laser/laser_diagnosis_internal.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 namespace calib {
 namespace laser_diagnosis {
@@ -11,12 +11,6 @@ namespace {
 
 // A parameter counts as part of a confounding combination above this share of the effect.
 constexpr double kConfoundingShare = 1e-3;
-
-std::string Format(const char* format, double a, double b = 0.0) {
-  char text[128];
-  std::snprintf(text, sizeof(text), format, a, b);
-  return text;
-}
 
 std::string EffectPhrase(const LaserFinding& f, double log_speed) {
   const double ms = 1000.0;
@@ -38,13 +32,11 @@ std::string EffectPhrase(const LaserFinding& f, double log_speed) {
           "v − γ·dv/dt with γ = %.1f ± %.1f ms",
           f.value * ms, f.stddev * ms);
     case LaserEffect::kWheelRadiusChange: {
-      char text[256];
-      std::snprintf(text, sizeof(text),
-                    "The wheel radii change at t = %.1f ± %.1f s from the start of the log, to "
-                    "r_l %.4f ± %.4f mm and r_r %.4f ± %.4f mm",
-                    f.value, f.stddev, f.r_l_after * 1e3, f.r_l_after_stddev * 1e3,
-                    f.r_r_after * 1e3, f.r_r_after_stddev * 1e3);
-      return text;
+      return Format(
+          "The wheel radii change at t = %.1f ± %.1f s from the start of the log, to "
+          "r_l %.4f ± %.4f mm and r_r %.4f ± %.4f mm",
+          f.value, f.stddev, f.r_l_after * 1e3, f.r_l_after_stddev * 1e3, f.r_r_after * 1e3,
+          f.r_r_after_stddev * 1e3);
     }
     case LaserEffect::kSpeedDependentRadius:
       return Format(
@@ -52,7 +44,7 @@ std::string EffectPhrase(const LaserFinding& f, double log_speed) {
                  "rad/s))",
                  log_speed) +
              Format(" with γ = %.3g ± %.2g s/rad", f.value, f.stddev) +
-             Format(" (%+.2f %% per 0.1 rad/s)", 10.0 * f.value, 0.0);
+             Format(" (%+.2f %% per 0.1 rad/s)", 10.0 * f.value);
     case LaserEffect::kIcrOffset:
       return Format("The instantaneous centre of rotation sits %.1f ± %.1f mm ahead of the axle",
                     f.value * 1e3, f.stddev * 1e3);
@@ -84,8 +76,8 @@ std::string ConfoundedSentence(const LaserFinding& f) {
 std::vector<ParamWords> LaserParamWords() {
   std::vector<ParamWords> words;
   for (const ParamInfo& info : kLaserParams) {
-    words.push_back(
-        {info.name, info.is_angle ? 180.0 / M_PI : 1000.0, info.is_angle ? " °" : " mm"});
+    words.push_back({info.name, info.display_scale,
+                     info.is_angle ? std::string(" °") : std::string(" ") + info.display_unit});
   }
   return words;
 }

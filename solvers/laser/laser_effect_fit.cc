@@ -1,4 +1,6 @@
 #include <calib/problems/positive_manifold.h>
+#include <calib/solvers/common/robust_covariance.h>
+#include <calib/solvers/common/solver_options.h>
 #include <calib/solvers/laser/laser_effect_fit.h>
 #include <calib/solvers/stats/score_test.h>
 #include <ceres/ceres.h>
@@ -93,23 +95,10 @@ StatusOr<LaserEffectFit> FitLaserEffects(const LaserEffectData& data, const Lase
   }
   if (residuals == 0) return Status::InvalidInput("no intervals to fit");
 
-  ceres::Solver::Options options;
-  options.minimizer_type = ceres::TRUST_REGION;
-  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  options.max_num_iterations = data.options().max_iterations;
-  options.num_threads = data.options().num_threads;
-  // Costs are compared between models (likelihood ratios of a few units): stop when an
-  // iteration gains less than ~1e-3 in total.
-  options.function_tolerance = std::min(1e-8, 1e-3 / static_cast<double>(residuals));
-  options.gradient_tolerance = 1e-14;
-  options.parameter_tolerance = 1e-12;
-  options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  if (summary.termination_type == ceres::FAILURE || !std::isfinite(summary.final_cost)) {
-    return Status::NotConverged("the refit with effects failed: " + summary.message);
-  }
+  CALIB_RETURN_IF_ERROR(Solve(
+      LaserEffectFitSettings(residuals, data.options().max_iterations, data.options().num_threads),
+      "the refit with effects", &problem, &summary));
   if (!(odometry[0] > 0.0 && odometry[1] > 0.0 && odometry[2] > 0.0)) {
     return Status::NotConverged(
         "the refit with effects drove a radius or the wheelbase non-positive");
@@ -186,26 +175,23 @@ StatusOr<Eigen::MatrixXd> LaserEffectCovariance(const LaserEffectEvaluation& eva
   const Eigen::Index p = static_cast<Eigen::Index>(columns.size());
   if (3 * n <= p) return Status::NotObservable("too few intervals for a covariance");
   const Eigen::MatrixXd j = SelectColumns(evaluation.jacobian, columns);
-  Eigen::MatrixXd bread = Eigen::MatrixXd::Zero(p, p);
+  SandwichSums<Eigen::Dynamic> sums(p);
   Eigen::MatrixXd scores(n, p);
   for (Eigen::Index k = 0; k < n; ++k) {
-    const auto jk = j.middleRows(3 * k, 3);
     const Eigen::Vector3d r = evaluation.residual.row(k).transpose();
-    const Eigen::VectorXd jr = jk.transpose() * r;
-    bread +=
-        evaluation.rho1(k) * jk.transpose() * jk + 2.0 * evaluation.rho2(k) * jr * jr.transpose();
+    const Eigen::VectorXd jr = sums.AddBread(
+        j.middleRows(3 * k, 3), r, LossDerivatives{evaluation.rho1(k), evaluation.rho2(k)});
     scores.row(k) = evaluation.rho1(k) * jr.transpose();
   }
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(bread);
-  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
+  const double components = 3.0 * n;
+  const StatusOr<CorrectedCovariance<Eigen::MatrixXd>> covariance = SandwichCovariance(
+      sums.bread, LongRunCovariance(scores, hac_lag), components, components - p);
+  if (!covariance.ok()) {
     return Status::NotObservable(
         "the information matrix is singular: the log does not determine the "
         "parameters with these effects");
   }
-  const Eigen::MatrixXd inverse = ldlt.solve(Eigen::MatrixXd::Identity(p, p));
-  const double components = 3.0 * n;
-  return Eigen::MatrixXd(inverse * LongRunCovariance(scores, hac_lag) * inverse *
-                         (components / (components - p)));
+  return covariance->covariance;
 }
 
 }  // namespace calib

@@ -1,9 +1,9 @@
+#include <calib/core/text_format.h>
 #include <calib/solvers/laser/laser_observability.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <numeric>
 
 namespace calib {
@@ -13,12 +13,6 @@ namespace {
 constexpr double kPoorRelativeSigma = 0.05;
 // Share of turning (or translating) intervals below which the log is called thin.
 constexpr double kThinShare = 0.05;
-
-std::string Format(const char* format, double value) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), format, value);
-  return buffer;
-}
 
 }  // namespace
 
@@ -65,7 +59,11 @@ LaserObservability AnalyzeLaserObservability(const LaserParamMatrix& covariance,
 
   for (int i = 0; i < kNumLaserParams; ++i) {
     if (report.relative_sigma(i) > kPoorRelativeSigma || !std::isfinite(report.relative_sigma(i))) {
-      const std::string unit = i == 5 ? " rad" : i >= 3 ? " of b" : " relative";
+      // Angles in their unit; radii and b relative to themselves, the sensor position to b.
+      const ParamInfo& info = kLaserParams[i];
+      const std::string unit = info.is_angle  ? std::string(" ") + info.unit
+                               : i >= kLaserX ? " of b"
+                                              : " relative";
       report.warnings.push_back(kLaserParamNames[i] + " is poorly determined (σ " +
                                 Format("%.2g", report.relative_sigma(i)) + unit + ")");
     }

@@ -1,3 +1,4 @@
+#include <calib/solvers/common/robust_covariance.h>
 #include <calib/solvers/stats/score_test.h>
 
 #include <Eigen/Eigenvalues>
@@ -142,15 +143,15 @@ ScoreTester::ScoreTester(RobustFitBlocks blocks_in, int hac_lag)
   const size_t n = blocks.size();
   const Eigen::Index p = blocks.jacobian.cols();
   const Eigen::Index d = blocks.dimension();
-  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(p, p);
+  SandwichSums<Eigen::Dynamic> sums(p);  // Its bread H alone: the meat is a long-run covariance.
   gradients_.resize(n, p);
   for (size_t k = 0; k < n; ++k) {
-    const auto j = blocks.jacobian.middleRows(d * k, d);
     const Eigen::VectorXd r = blocks.residual.row(k).transpose();
-    const Eigen::VectorXd jr = j.transpose() * r;
-    a += blocks.rho1(k) * j.transpose() * j + 2.0 * blocks.rho2(k) * jr * jr.transpose();
+    const Eigen::VectorXd jr = sums.AddBread(blocks.jacobian.middleRows(d * k, d), r,
+                                             LossDerivatives{blocks.rho1(k), blocks.rho2(k)});
     gradients_.row(k) = blocks.rho1(k) * jr.transpose();
   }
+  const Eigen::MatrixXd& a = sums.bread;
   gradient_sum_ = gradients_.colwise().sum().transpose();
   gradient_outer_ = gradients_.transpose() * gradients_;
   a_nuisance_.compute(a);

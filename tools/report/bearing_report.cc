@@ -6,13 +6,23 @@
 #include <filesystem>
 
 namespace calib {
+namespace {
+
+// "phi [deg]", "delta" (no unit): a parameter's row label in the summary.
+std::string Label(const ParamInfo& param) {
+  const std::string unit = param.display_unit;
+  return unit.empty() ? std::string(param.name) : param.name + (" [" + unit + "]");
+}
+
+}  // namespace
 
 nlohmann::ordered_json BearingParamObject(const BearingParamVector& v,
                                           const BearingMetricVector* metric) {
   nlohmann::ordered_json object;
   for (int i = 0; i < kNumBearingParams; ++i) object[kBearingParamNames[i]] = v(i);
   if (metric != nullptr) {
-    for (int i = 2; i < kNumBearingMetricParams; ++i) object[kBearingMetricNames[i]] = (*metric)(i);
+    for (int i = kBearingMetricRho; i < kNumBearingMetricParams; ++i)
+      object[kBearingMetricNames[i]] = (*metric)(i);
   }
   return object;
 }
@@ -109,8 +119,9 @@ std::string BearingResultSummary(const BearingCalibrationResult& result, const s
                 "%s: bearing-only calibration, %zu runs, %d bearings (%d inliers), loss %s\n",
                 input.c_str(), result.runs.size(), result.samples, result.inliers, loss.c_str());
   text += line;
-  std::snprintf(line, sizeof(line), "  %-14s %14s   %-12s %14s\n", "parameter", "estimate", "± σ",
-                result.seed_method == BearingSeedMethod::kClosedForm ? "closed form" : "search seed");
+  std::snprintf(
+      line, sizeof(line), "  %-14s %14s   %-12s %14s\n", "parameter", "estimate", "± σ",
+      result.seed_method == BearingSeedMethod::kClosedForm ? "closed form" : "search seed");
   text += line;
   const auto row = [&](const std::string& name, double value, double sigma, double seed,
                        double scale) {
@@ -118,24 +129,22 @@ std::string BearingResultSummary(const BearingCalibrationResult& result, const s
                   value * scale, sigma * scale, seed * scale);
     text += line;
   };
-  const double deg = 180.0 / M_PI;
   const BearingParamVector e = ToVector(result.estimate), s = ToVector(result.seed);
-  row("phi [deg]", e(0), result.stddev(0), s(0), deg);
-  row("psi [deg]", e(1), result.stddev(1), s(1), deg);
-  row("eta [1/m]", e(2), result.stddev(2), s(2), 1.0);
-  row("delta", e(3), result.stddev(3), s(3), 1.0);
-  row("xi [1/m]", e(4), result.stddev(4), s(4), 1.0);
+  for (int i = 0; i < kNumBearingParams; ++i) {
+    row(Label(kBearingParams[i]), e(i), result.stddev(i), s(i), kBearingParams[i].display_scale);
+  }
   if (result.has_metric) {
     const BearingMetricVector m = ToVector(result.metric), sm = ToVector(result.seed_metric);
-    row("rho [m]", m(2), result.metric_stddev(2), sm(2), 1.0);
-    row("delta_r", m(3), result.metric_stddev(3), sm(3), 1.0);
-    row("delta_l", m(4), result.metric_stddev(4), sm(4), 1.0);
-    row("delta_b", m(5), result.metric_stddev(5), sm(5), 1.0);
+    for (int i = kBearingMetricRho; i < kNumBearingMetricParams; ++i) {
+      row(Label(kBearingMetricParams[i]), m(i), result.metric_stddev(i), sm(i),
+          kBearingMetricParams[i].display_scale);
+    }
   } else {
     text +=
         "  no initial distance in meta.json: the metric scale (rho, delta_r, delta_l, "
         "delta_b) is not observable\n";
   }
+  const double deg = 180.0 / M_PI;  // σβ in degrees.
   std::snprintf(line, sizeof(line),
                 "  noise: σβ %.3f deg (%s), encoder K %.2e m^½ (%s; the data alone say %.2e "
                 "from %.1f degrees of freedom)\n",

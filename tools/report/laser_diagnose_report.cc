@@ -2,7 +2,7 @@
 #include <calib/tools/report/bearing_diagnose_report.h>
 #include <calib/tools/report/bearing_report.h>
 #include <calib/tools/report/laser_diagnose_report.h>
-#include <calib/tools/report/text_format.h>
+#include <calib/core/text_format.h>
 
 #include <algorithm>
 #include <cmath>

@@ -14,8 +14,6 @@ nlohmann::ordered_json ParamObject(const LaserParamVector& v) {
 }
 
 // Display units: mm for lengths, degrees for the angle.
-double DisplayScale(int param) { return param == 5 ? 180.0 / M_PI : 1000.0; }
-const char* DisplayUnit(int param) { return param == 5 ? "deg" : "mm"; }
 
 }  // namespace
 
@@ -86,8 +84,9 @@ std::string LaserResultSummary(const LaserCalibrationResult& result, const std::
   const LaserParamVector estimate = result.estimate.ToVector();
   const LaserParamVector closed = result.closed_form.calibration.ToVector();
   for (int i = 0; i < kNumLaserParams; ++i) {
-    const double k = DisplayScale(i);
-    const std::string name = kLaserParamNames[i] + " [" + DisplayUnit(i) + "]";
+    const double k = kLaserParams[i].display_scale;
+    const std::string name =
+        kLaserParams[i].name + std::string(" [") + kLaserParams[i].display_unit + "]";
     std::snprintf(line, sizeof(line), "  %-18s %12.4f ± %-10.4f %12.4f\n", name.c_str(),
                   estimate(i) * k, result.stddev(i) * k, closed(i) * k);
     text += line;

@@ -94,5 +94,35 @@ TEST(RobustCovarianceTest, NoRedundancyIsNotObservable) {
   EXPECT_EQ(SandwichCovariance(singular, 4.0, 2.0).code(), StatusCode::kNotObservable);
 }
 
+// Without a loss: the likelihood-ratio scale is mean(s/d) and Newton equals Gauss–Newton.
+TEST(RobustCovarianceTest, LikelihoodRatioScaleAndCurvatureRatioOfTheSquaredLoss) {
+  LossCorrectionSums sums;
+  sums.Add(3.0, nullptr, 3);
+  sums.Add(6.0, nullptr, 3);
+  EXPECT_DOUBLE_EQ(*LikelihoodRatioScale(sums), 1.5);
+  EXPECT_DOUBLE_EQ(*CurvatureRatio(sums), 1.0);
+  EXPECT_FALSE(LikelihoodRatioScale(LossCorrectionSums{}).has_value());
+  EXPECT_FALSE(CurvatureRatio(LossCorrectionSums{}).has_value());
+}
+
+// The dynamic-size sums give what the fixed-size ones give.
+TEST(RobustCovarianceTest, DynamicSandwichMatchesFixed) {
+  SandwichSums<2> fixed;
+  SandwichSums<Eigen::Dynamic> dynamic(2);
+  const LossDerivatives rho{0.8, -0.1};
+  const Eigen::Matrix2d j = (Eigen::Matrix2d() << 1.0, 0.5, -0.2, 2.0).finished();
+  const Eigen::Vector2d r(0.3, -0.7);
+  fixed.Add(j, r, rho);
+  dynamic.Add(Eigen::MatrixXd(j), Eigen::VectorXd(r), rho);
+  EXPECT_LT((dynamic.bread - fixed.bread).norm(), 1e-15);
+  EXPECT_LT((dynamic.meat - fixed.meat).norm(), 1e-15);
+  const Eigen::VectorXd g = SandwichSums<Eigen::Dynamic>(2).AddBread(j, r, rho);
+  EXPECT_LT((g - j.transpose() * r).norm(), 1e-15);
+  const auto a = SandwichCovariance(fixed, 4.0, 2.0);
+  const auto b = SandwichCovariance(dynamic.bread, dynamic.meat, 4.0, 2.0);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_LT((a->covariance - b->covariance).norm(), 1e-12);
+}
+
 }  // namespace
 }  // namespace calib

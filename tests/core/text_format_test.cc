@@ -1,4 +1,4 @@
-#include <calib/tools/report/text_format.h>
+#include <calib/core/text_format.h>
 #include <gtest/gtest.h>
 
 #include <string>
