@@ -52,6 +52,8 @@ nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
           : "coarse search (the closed form does not apply: " + result.closed_form_message + ")";
   out["samples"] = result.samples;
   out["inliers"] = result.inliers;
+  out["converged"] = result.converged;
+  out["warnings"] = result.warnings;
   out["loss"] = loss;
   out["gauge"] =
       result.has_metric
@@ -164,6 +166,7 @@ std::string BearingResultSummary(const BearingCalibrationResult& result, const s
                   run.bearings, kind, run.rms_residual_rad * deg);
     text += line;
   }
+  for (const std::string& warning : result.warnings) text += "  warning: " + warning + "\n";
   return text;
 }
 

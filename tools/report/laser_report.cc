@@ -52,6 +52,7 @@ nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
                                {"J22", result.closed_form.j22},
                                {"J_condition_number", result.closed_form.j_condition_number}};
   out["iterations"] = result.iterations;
+  out["converged"] = result.converged;
   out["seconds"] = {{"closed_form", result.closed_form_seconds},
                     {"refinement", result.refinement_seconds},
                     {"covariance", result.covariance_seconds}};

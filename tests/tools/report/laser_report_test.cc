@@ -25,5 +25,23 @@ TEST(LaserReportTest, SimulationTruthHasTheResultsParameterNames) {
   EXPECT_EQ(i, kNumLaserParams);
 }
 
+// A refinement that stopped before converging says so in the JSON and in the summary.
+TEST(LaserReportTest, ConvergenceAndWarningsReachTheJson) {
+  LaserSimOptions options;
+  options.num_intervals = 500;
+  options.seed = 41;
+  const LaserLog log = SimulateLaserLog(options, nullptr);
+  LaserCalibrationOptions calibration;
+  calibration.noise_rounds = 1;  // One solve from the closed form, one step long.
+  calibration.refinement.max_iterations = 1;
+  const StatusOr<LaserCalibrationResult> cut = CalibrateLaser(log.intervals, calibration);
+  ASSERT_TRUE(cut.ok()) << cut.message();
+  ASSERT_FALSE(cut->converged);
+  const nlohmann::ordered_json json = LaserResultJson(*cut, "sim", "cauchy");
+  EXPECT_EQ(json["converged"], false);
+  const std::string text = LaserResultSummary(*cut, "sim", "cauchy");
+  EXPECT_NE(text.find("warning: "), std::string::npos) << text;
+}
+
 }  // namespace
 }  // namespace calib
