@@ -133,6 +133,31 @@ void ClassifyInliers(const LaserProblem& problem, double inlier_chi2,
   }
 }
 
+// Refines on an evenly spread subset first (every `stride`-th interval): its optimum lies within a
+// few full-data sigmas of the final one, so the full problem then converges in a few iterations.
+// Updates `initial`, and gives each log's noise level and the iterations spent.
+Status WarmStart(const std::vector<const std::vector<LaserInterval>*>& logs, size_t stride,
+                 const LaserCalibrationOptions& options,
+                 const std::function<void(const std::string&)>& report, LaserCalibration* initial,
+                 std::vector<Eigen::Vector3d>* initial_sigma, int* iterations) {
+  const std::vector<std::vector<LaserInterval>> subsets = EvenSubsets(logs, stride);
+  std::vector<LaserDataset> subset_datasets;
+  size_t total = 0;
+  for (const auto& subset : subsets) {
+    subset_datasets.push_back(LaserDataset{&subset, Eigen::Matrix3d::Identity()});
+  }
+  for (const auto* log : logs) total += log->size();
+  LaserProblem warm(subset_datasets, *initial, options.refinement);
+  CALIB_ASSIGN_OR_RETURN(const SolveOutcome warm_outcome, RefineWithNoise(options, &warm, report));
+  *iterations += warm_outcome.iterations;
+  *initial = warm.calibration();
+  for (size_t d = 0; d < logs.size(); ++d) {
+    initial_sigma->push_back(warm.sqrt_information(d).diagonal().cwiseInverse());
+  }
+  report("warm start on " + std::to_string(total / stride) + " intervals done");
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status ValidateLaserIntervals(const std::vector<LaserInterval>& intervals) {
@@ -197,22 +222,8 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   LaserCalibration initial = result.closed_form_trimmed.calibration;
   std::vector<Eigen::Vector3d> initial_sigma;
   if (total > kWarmStartAbove) {
-    // Refine on an evenly spread subset first: its optimum lies within a few full-data sigmas of
-    // the final one, so the full problem then converges in a few iterations.
-    const std::vector<std::vector<LaserInterval>> subsets = EvenSubsets(logs, stride);
-    std::vector<LaserDataset> subset_datasets;
-    for (const auto& subset : subsets) {
-      subset_datasets.push_back(LaserDataset{&subset, Eigen::Matrix3d::Identity()});
-    }
-    LaserProblem warm(subset_datasets, initial, options.refinement);
-    CALIB_ASSIGN_OR_RETURN(const SolveOutcome warm_outcome,
-                           RefineWithNoise(options, &warm, report));
-    result.iterations += warm_outcome.iterations;
-    initial = warm.calibration();
-    for (size_t d = 0; d < logs.size(); ++d) {
-      initial_sigma.push_back(warm.sqrt_information(d).diagonal().cwiseInverse());
-    }
-    report("warm start on " + std::to_string(total / stride) + " intervals done");
+    CALIB_RETURN_IF_ERROR(
+        WarmStart(logs, stride, options, report, &initial, &initial_sigma, &result.iterations));
   }
   std::vector<LaserDataset> datasets;
   for (size_t d = 0; d < logs.size(); ++d) {
