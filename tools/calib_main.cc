@@ -2,6 +2,7 @@
 // commands in tools/commands/; the flags are parsed once, in tools/commands/flags.cc.
 #include <calib/tools/commands/commands.h>
 #include <calib/tools/commands/flags.h>
+#include <calib/tools/commands/help.h>
 
 #include <cstdio>
 #include <string>
@@ -17,6 +18,8 @@ constexpr char kUsage[] =
 }  // namespace
 
 int main(int argc, char** argv) {
+  int exit_code = 0;
+  if (calib::cli::HandleHelpOrVersion(argc, argv, kUsage, &exit_code)) return exit_code;
   calib::cli::ParseFlags(kUsage, &argc, &argv);
   if (argc != 2) {
     std::fputs(kUsage, stderr);
