@@ -61,6 +61,15 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
     CALIB_RETURN_IF_ERROR(problem.Solve(&summary));
     result->iterations += static_cast<int>(summary.iterations.size());
     result->converged = Converged(summary);
+    // The increments' noise also attenuates the radii and wheelbase (errors in the regressors):
+    // one corrected-score step removes that bias; σ_j is then re-estimated at the corrected point.
+    std::vector<std::vector<Eigen::Matrix2d>> increment_covariance(logs.size());
+    for (size_t d = 0; d < logs.size(); ++d) {
+      increment_covariance[d] = JitterIncrementCovariances(*logs[d], UsedJitter(jitter[d]));
+    }
+    CALIB_ASSIGN_OR_RETURN(const LaserParamVector step,
+                           problem.IncrementNoiseCorrection(increment_covariance));
+    problem.set_calibration(LaserCalibration::FromVector(problem.calibration().ToVector() + step));
     const LaserCalibration estimate = problem.calibration();
     double change = 0.0;
     for (size_t d = 0; d < logs.size(); ++d) {

@@ -227,6 +227,68 @@ StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::CorrelatedSandwich
   return sandwich;
 }
 
+namespace {
+
+// The interval with `increment` (rad) added to its wheel rotations, spread evenly over its steps.
+LaserInterval ShiftIncrements(LaserInterval interval, const Eigen::Vector2d& increment) {
+  interval.left_speed += increment(0) / interval.duration_s;
+  interval.right_speed += increment(1) / interval.duration_s;
+  for (WheelStep& step : interval.steps) {
+    step.left_rad += increment(0) * step.duration_s / interval.duration_s;
+    step.right_rad += increment(1) * step.duration_s / interval.duration_s;
+  }
+  return interval;
+}
+
+// ψ = ρ'·Jᵀr of one interval (ρ' given), and its Gauss–Newton Hessian ρ'·JᵀJ when asked.
+LaserParamVector Score(const LaserInterval& interval, const Eigen::Matrix3d& root,
+                       const double* const* parameters, double weight,
+                       LaserParamMatrix* hessian = nullptr) {
+  const LaserResidual residual(interval, &root);
+  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> j_odometry, j_sensor;
+  double* jacobians[2] = {j_odometry.data(), j_sensor.data()};
+  Eigen::Vector3d r;
+  ceres::AutoDiffCostFunction<LaserResidual, 3, 3, 3> cost(new LaserResidual(residual));
+  cost.Evaluate(parameters, r.data(), jacobians);
+  Eigen::Matrix<double, 3, kNumLaserParams> j;
+  j << j_odometry, j_sensor;
+  if (hessian) *hessian += weight * j.transpose() * j;
+  return weight * j.transpose() * r;
+}
+
+}  // namespace
+
+StatusOr<LaserParamVector> LaserProblem::IncrementNoiseCorrection(
+    const std::vector<std::vector<Eigen::Matrix2d>>& increment_covariance) const {
+  const double* parameters[2] = {odometry_, base_T_sensor_};
+  LaserParamMatrix hessian = LaserParamMatrix::Zero();
+  LaserParamVector correction = LaserParamVector::Zero();
+  for (size_t d = 0; d < datasets_.size(); ++d) {
+    const std::vector<LaserInterval>& intervals = *datasets_[d].intervals;
+    const std::vector<double> s = WhitenedSquaredNorms(d);
+    for (size_t k = 0; k < intervals.size(); ++k) {
+      const Eigen::Matrix3d& root = IntervalSqrtInformation(d, k);
+      const double weight = LossWeight(s[k]);
+      const LaserParamVector center = Score(intervals[k], root, parameters, weight, &hessian);
+      if (d >= increment_covariance.size() || k >= increment_covariance[d].size()) continue;
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(increment_covariance[d][k]);
+      for (int i = 0; i < 2; ++i) {
+        const double variance = eigen.eigenvalues()(i);
+        if (!(variance > 0.0)) continue;
+        const Eigen::Vector2d u = std::sqrt(variance) * eigen.eigenvectors().col(i);
+        correction += 0.5 * (Score(ShiftIncrements(intervals[k], u), root, parameters, weight) +
+                             Score(ShiftIncrements(intervals[k], -u), root, parameters, weight) -
+                             2.0 * center);
+      }
+    }
+  }
+  const Eigen::LDLT<LaserParamMatrix> ldlt(hessian);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
+    return Status::NotObservable(kSingular);
+  }
+  return LaserParamVector(ldlt.solve(correction));
+}
+
 Eigen::Vector3d RobustNoiseSigma(const std::vector<Eigen::Vector3d>& errors) {
   Eigen::Vector3d sigma = Eigen::Vector3d::Zero();
   if (errors.empty()) return Eigen::Vector3d::Ones();

@@ -89,6 +89,16 @@ class LaserProblem {
   StatusOr<CorrectedCovariance<LaserParamMatrix>> CorrelatedSandwichCovariance(
       const std::vector<std::vector<Eigen::Matrix3d>>& lag_one) const;
 
+  // The errors-in-variables correction of the estimate when each interval's wheel increments
+  // (Δφ_l, Δφ_r) carry a zero-mean error of covariance increment_covariance[d][k]: the score
+  // ψ_k = ρ'_k·J_kᵀr_k is not linear in Δφ, so E[ψ_k] picks up ½·tr(∂²ψ_k/∂Δφ²·C_k) — the
+  // attenuation bias of a noisy regressor. Returns Δp = H⁻¹·Σ_k c_k (H = Σρ'JᵀJ), with c_k that
+  // term from second differences along the columns u of C_k's square root:
+  // c_k = ½Σ_u [ψ_k(Δφ + u) + ψ_k(Δφ − u) − 2ψ_k(Δφ)]; p + Δp solves the corrected score to
+  // first order.
+  StatusOr<LaserParamVector> IncrementNoiseCorrection(
+      const std::vector<std::vector<Eigen::Matrix2d>>& increment_covariance) const;
+
   // The loss's weight ρ'(s) for a squared whitened norm s (1 without a robust loss).
   double LossWeight(double s) const;
 

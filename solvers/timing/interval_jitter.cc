@@ -172,6 +172,18 @@ std::vector<Eigen::Matrix3d> JitterCrossCovariances(
   return cross;
 }
 
+std::vector<Eigen::Matrix2d> JitterIncrementCovariances(const std::vector<LaserInterval>& intervals,
+                                                        double jitter_s) {
+  std::vector<Eigen::Matrix2d> covariances;
+  covariances.reserve(intervals.size());
+  for (const IntervalBoundarySpeeds& speeds : BoundaryWheelSpeeds(intervals)) {
+    covariances.push_back(
+        jitter_s * jitter_s *
+        (speeds.start * speeds.start.transpose() + speeds.end * speeds.end.transpose()));
+  }
+  return covariances;
+}
+
 std::vector<Eigen::Matrix3d> JitterSqrtInformation(
     const std::vector<IntervalTimeSensitivity>& sensitivities, const Eigen::Vector3d& noise_sigma,
     double jitter_s) {

@@ -56,6 +56,12 @@ std::vector<Eigen::Matrix3d> JitterCrossCovariances(
     const std::vector<LaserInterval>& intervals,
     const std::vector<IntervalTimeSensitivity>& sensitivities, double jitter_s);
 
+// Per interval, the covariance σ_j²·(φ_s φ_sᵀ + φ_e φ_eᵀ) of the error of its wheel increments
+// (Δφ_l, Δφ_r): the regressor noise whose attenuation bias LaserProblem::IncrementNoiseCorrection
+// removes.
+std::vector<Eigen::Matrix2d> JitterIncrementCovariances(const std::vector<LaserInterval>& intervals,
+                                                        double jitter_s);
+
 // Per interval, the upper-triangular L with LᵀL = Σ_k⁻¹, Σ_k = diag(σ_n²) + the jitter's part.
 std::vector<Eigen::Matrix3d> JitterSqrtInformation(
     const std::vector<IntervalTimeSensitivity>& sensitivities, const Eigen::Vector3d& noise_sigma,
