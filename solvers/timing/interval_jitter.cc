@@ -201,8 +201,15 @@ IntervalJitterEstimate EstimateIntervalJitter(
     const std::vector<IntervalTimeSensitivity>& sensitivities, const Eigen::Vector3d& noise_sigma,
     const std::vector<bool>& is_inlier, const IntervalJitterOptions& options) {
   JitterData data;
-  for (size_t k = 0; k < errors.size() && k < sensitivities.size(); ++k) {
+  const size_t n = std::min(errors.size(), sensitivities.size());
+  size_t inliers = 0;
+  for (size_t k = 0; k < n; ++k) inliers += k >= is_inlier.size() || is_inlier[k];
+  const size_t limit = static_cast<size_t>(std::max(options.max_intervals, 100));
+  const size_t stride = (inliers + limit - 1) / limit;
+  size_t seen = 0;
+  for (size_t k = 0; k < n; ++k) {
     if (k < is_inlier.size() && !is_inlier[k]) continue;
+    if (seen++ % std::max<size_t>(stride, 1) != 0) continue;
     const IntervalTimeSensitivity& g = sensitivities[k];
     data.errors.push_back(errors[k]);
     data.gram.push_back(g.start * g.start.transpose() + g.end * g.end.transpose());

@@ -73,6 +73,9 @@ struct IntervalJitterOptions {
   // Re-estimate the scan noise jointly with σ_j (profile likelihood); false keeps it fixed.
   bool estimate_noise = true;
   int grid_points = 41;
+  // Above this many inliers the likelihood runs on an evenly spread subset of this size (σ_j is
+  // then known to a few per cent; the profile costs ~10³ 3×3 factorizations per interval).
+  int max_intervals = 20000;
 };
 
 struct IntervalJitterEstimate {
@@ -83,7 +86,7 @@ struct IntervalJitterEstimate {
   Eigen::Vector3d noise_sigma = Eigen::Vector3d::Zero();
   Eigen::Vector3d noise_sigma_without_jitter = Eigen::Vector3d::Zero();
   double log_likelihood = 0, log_likelihood_without_jitter = 0;
-  int intervals_used = 0;  // The inliers the likelihood was evaluated on.
+  int intervals_used = 0;  // The inliers the likelihood was evaluated on (after any subsetting).
 };
 
 // σ_j by profile likelihood over the inliers' errors e_k: ℓ(σ_j) = max over σ_n of
