@@ -1,11 +1,11 @@
 #ifndef CALIB_SOLVERS_LASER_CENSI_CLOSED_FORM_H_
 #define CALIB_SOLVERS_LASER_CENSI_CLOSED_FORM_H_
 
-#include <vector>
-
-#include <calib/core/laser/laser_params.h>
 #include <calib/core/laser/laser_log.h>
+#include <calib/core/laser/laser_params.h>
 #include <calib/core/status.h>
+
+#include <vector>
 
 // The closed-form estimator of Censi, Marchionni, Oriolo (ICRA 2008), §II-B, C, D, E.
 namespace calib {

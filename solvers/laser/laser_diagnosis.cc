@@ -268,9 +268,12 @@ StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& interva
     return Status::InvalidInput("diagnosis needs at least 50 intervals (the log has " +
                                 std::to_string(intervals.size()) + ")");
   }
-  // 1. The robust base fit, whitened by its robust noise level.
+  // 1. The robust base fit, whitened by its robust noise level (the stamp jitter is a candidate
+  // of the diagnosis, not part of its base fit).
+  LaserCalibrationOptions base_options = options.calibration;
+  base_options.interval_jitter = false;
   CALIB_ASSIGN_OR_RETURN(const LaserCalibrationResult base,
-                         CalibrateLaser(intervals, options.calibration));
+                         CalibrateLaser(intervals, base_options));
   const LaserEffectData data(intervals, SqrtInformation(intervals, base.estimate, options),
                              options.calibration.refinement);
   Context context{intervals, options, data, intervals.front().start_s, {}, {}};

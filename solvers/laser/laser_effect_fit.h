@@ -1,18 +1,17 @@
 #ifndef CALIB_SOLVERS_LASER_LASER_EFFECT_FIT_H_
 #define CALIB_SOLVERS_LASER_LASER_EFFECT_FIT_H_
 
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/laser/laser_params.h>
+#include <calib/core/status.h>
+#include <calib/problems/laser/laser_effect_residual.h>
+#include <calib/solvers/laser/laser_refinement.h>
 #include <ceres/loss_function.h>
 
 #include <Eigen/Core>
 #include <limits>
 #include <memory>
 #include <vector>
-
-#include <calib/core/laser/laser_params.h>
-#include <calib/core/laser/laser_log.h>
-#include <calib/core/status.h>
-#include <calib/problems/laser/laser_effect_residual.h>
-#include <calib/solvers/laser/laser_refinement.h>
 
 // Robust Ceres fits of the laser calibration with candidate effects modelled
 // (problems/laser_effect_residual.h), and the per-interval quantities the diagnosis tests on.

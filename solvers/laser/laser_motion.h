@@ -1,10 +1,10 @@
 #ifndef CALIB_SOLVERS_LASER_LASER_MOTION_H_
 #define CALIB_SOLVERS_LASER_LASER_MOTION_H_
 
+#include <calib/core/laser/laser_log.h>
+
 #include <string>
 #include <vector>
-
-#include <calib/core/laser/laser_log.h>
 
 namespace calib {
 

@@ -1,11 +1,11 @@
 #ifndef CALIB_SOLVERS_LASER_LASER_OBSERVABILITY_H_
 #define CALIB_SOLVERS_LASER_LASER_OBSERVABILITY_H_
 
-#include <string>
-#include <vector>
-
 #include <calib/core/laser/laser_params.h>
 #include <calib/solvers/laser/laser_motion.h>
+
+#include <string>
+#include <vector>
 
 namespace calib {
 

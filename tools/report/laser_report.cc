@@ -15,6 +15,26 @@ nlohmann::ordered_json ParamObject(const LaserParamVector& v) {
 
 // Display units: mm for lengths, degrees for the angle.
 
+// timing.interval_jitter: the boundary-stamp jitter of each log (tuple/CSV logs).
+nlohmann::ordered_json IntervalJitterJson(const LaserCalibrationResult& result) {
+  nlohmann::ordered_json logs = nlohmann::ordered_json::array();
+  std::vector<std::string> statements;
+  for (const IntervalJitterEstimate& jitter : result.interval_jitter) {
+    logs.push_back({{"jitter_s", jitter.jitter_s},
+                    {"jitter_stddev_s", jitter.jitter_stddev_s},
+                    {"lr_statistic", jitter.lr_statistic},
+                    {"p_value", jitter.p_value},
+                    {"significant", jitter.significant},
+                    {"scan_noise_sigma",
+                     {{"x", jitter.noise_sigma(0)},
+                      {"y", jitter.noise_sigma(1)},
+                      {"theta", jitter.noise_sigma(2)}}},
+                    {"intervals", jitter.intervals_used}});
+    if (jitter.significant) statements.push_back(IntervalJitterStatement(jitter));
+  }
+  return {{"refit", result.jitter_refit}, {"logs", logs}, {"statements", statements}};
+}
+
 }  // namespace
 
 nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
@@ -51,6 +71,10 @@ nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
   out["closed_form_detail"] = {{"J21", result.closed_form.j21},
                                {"J22", result.closed_form.j22},
                                {"J_condition_number", result.closed_form.j_condition_number}};
+  if (!result.interval_jitter.empty()) {
+    out["timing"]["treatment"] = "interval_jitter";
+    out["timing"]["interval_jitter"] = IntervalJitterJson(result);
+  }
   out["iterations"] = result.iterations;
   out["converged"] = result.converged;
   out["seconds"] = {{"closed_form", result.closed_form_seconds},
@@ -98,6 +122,14 @@ std::string LaserResultSummary(const LaserCalibrationResult& result, const std::
     std::snprintf(line, sizeof(line),
                   "  scan noise of the inliers: σx %.3f mm, σy %.3f mm, σθ %.4f deg\n",
                   sigma(0) * 1e3, sigma(1) * 1e3, sigma(2) * 180.0 / M_PI);
+    text += line;
+  }
+  for (const IntervalJitterEstimate& jitter : result.interval_jitter) {
+    std::snprintf(line, sizeof(line),
+                  "  timing: boundary-stamp jitter σ = %.1f ± %.1f ms (p = %.2g): %s\n",
+                  jitter.jitter_s * 1e3, jitter.jitter_stddev_s * 1e3, jitter.p_value,
+                  jitter.significant ? "modelled in each interval's covariance"
+                                     : "not significant, not modelled");
     text += line;
   }
   text += "  observability: " + result.observability.weakest_description + "\n";
