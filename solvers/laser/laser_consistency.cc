@@ -1,9 +1,7 @@
 #include <calib/core/text_format.h>
-#include <calib/problems/laser/laser_residual.h>
 #include <calib/solvers/diagnosis/multiple_testing.h>
 #include <calib/solvers/laser/laser_consistency.h>
-#include <calib/solvers/laser/laser_motion.h>
-#include <ceres/jet.h>
+#include <calib/solvers/laser/laser_consistency_terms.h>
 
 #include <Eigen/Cholesky>
 #include <algorithm>
@@ -12,111 +10,13 @@
 namespace calib {
 namespace {
 
-using Vector6 = Eigen::Matrix<double, kNumLaserParams, 1>;
-
-// The robot's forward travel over an interval from the sensor displacement: o = ℓ ∘ sm ∘ ℓ⁻¹,
-// and the component of its chord along the mid-interval heading over sinc(Δθ/2). For an arc of
-// length d turning by Δθ this is d exactly (the chord is d·sinc(Δθ/2) along the mid heading); on
-// noisy near-still intervals it stays linear in the noise, where a signed |chord| would rectify it.
-template <typename T>
-T ForwardTravel(const Pose2d& sensor_motion, const Pose2<T>& base_T_sensor) {
-  using std::cos;
-  using std::sin;
-  const Pose2<T> o =
-      Compose(Compose(base_T_sensor, Pose2<T>(sensor_motion.cast<T>())), Inverse(base_T_sensor));
-  const T half = o(2) / T(2);
-  const T sinc = ceres::abs(half) < T(1e-4) ? T(1) - half * half / T(6) : sin(half) / half;
-  return (o(0) * cos(half) + o(1) * sin(half)) / sinc;
-}
-
-// What each interval adds to the totals and to the fit.
-struct IntervalTerms {
-  bool counted = false;  // An inlier: enters the sums.
-  bool still = false;    // The robot rests (wheel model and noise agree on no motion).
-  double duration_s = 0.0;
-  Eigen::Vector2d wheel = Eigen::Vector2d::Zero();  // Δφ_l, Δφ_r.
-  double rotation_predicted = 0.0, rotation_measured = 0.0;
-  double travel_predicted = 0.0, travel_measured = 0.0;
-  Eigen::Vector3d travel_gradient = Eigen::Vector3d::Zero();  // ∂travel_measured/∂ℓ.
-  Vector6 influence = Vector6::Zero();  // JᵀWe, then ψ = H⁻¹JᵀWe after the fit's Hessian is known.
-  double rotation_difference() const { return rotation_measured - rotation_predicted; }
-  double travel_difference() const { return travel_measured - travel_predicted; }
-};
-
-struct LogTerms {
-  const std::vector<LaserInterval>* intervals = nullptr;
-  std::vector<IntervalTerms> terms;
-};
-
-// Fills every term but the influence's H⁻¹; adds this log's JᵀWJ to `hessian`.
-LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCalibration& c,
-                      const Eigen::Vector3d& noise_sigma, const std::vector<bool>& is_inlier,
-                      LaserParamMatrix* hessian) {
-  using Jet6 = ceres::Jet<double, kNumLaserParams>;
-  using Jet3 = ceres::Jet<double, 3>;
-  const OdometryParams& odo = c.odometry;
-  const Eigen::Vector3d weight = noise_sigma.cwiseMax(1e-12).cwiseAbs2().cwiseInverse();
-  const double still_travel_m = 0.5 * std::min(noise_sigma(0), noise_sigma(1));
-  const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
-  Jet6 odometry[3], mounting[3];
-  const LaserParamVector v = c.ToVector();
-  for (int i = 0; i < 3; ++i) {
-    odometry[i] = Jet6(v(i), i);
-    mounting[i] = Jet6(v(3 + i), 3 + i);
-  }
-  const Pose2<Jet3> base_T_sensor(Jet3(v(3), 0), Jet3(v(4), 1), Jet3(v(5), 2));
-
-  LogTerms log{&intervals, std::vector<IntervalTerms>(intervals.size())};
-  for (size_t k = 0; k < intervals.size(); ++k) {
-    const LaserInterval& in = intervals[k];
-    IntervalTerms& t = log.terms[k];
-    t.counted = is_inlier.empty() || is_inlier[k];
-    t.duration_s = in.duration_s;
-    t.wheel = IntervalWheelRotation(in);
-    t.rotation_predicted =
-        (odo.right_radius_m * t.wheel(1) - odo.left_radius_m * t.wheel(0)) / odo.wheelbase_m;
-    t.travel_predicted = (odo.left_radius_m * t.wheel(0) + odo.right_radius_m * t.wheel(1)) / 2.0;
-    t.rotation_measured = in.sensor_motion(2);
-    const Jet3 travel = ForwardTravel(in.sensor_motion, base_T_sensor);
-    t.travel_measured = travel.a;
-    t.travel_gradient = travel.v;
-    t.still = t.wheel.cwiseAbs().sum() < 1e-6 ||
-              (std::abs(t.rotation_predicted) <= 0.5 * noise_sigma(2) &&
-               std::abs(t.travel_predicted) <= still_travel_m);
-    if (!t.counted) continue;
-    Jet6 error[3];
-    LaserResidual(in, &identity)(odometry, mounting, error);
-    Eigen::Matrix<double, 3, kNumLaserParams> jacobian;
-    Eigen::Vector3d e;
-    for (int r = 0; r < 3; ++r) {
-      e(r) = error[r].a;
-      jacobian.row(r) = error[r].v.transpose();
-    }
-    t.influence = jacobian.transpose() * weight.asDiagonal() * e;
-    *hessian += jacobian.transpose() * weight.asDiagonal() * jacobian;
-  }
-  return log;
-}
-
-// Bartlett weight of lag j.
-double Bartlett(int j, int lag) { return 1.0 - static_cast<double>(j) / (lag + 1); }
-
-// The long-run (HAC) covariance of Σψ_k over every log: the sandwich of the estimate with its
-// serial correlation.
-LaserParamMatrix InfluenceLongRun(const std::vector<LogTerms>& logs, int lag) {
-  LaserParamMatrix s = LaserParamMatrix::Zero();
-  for (const LogTerms& log : logs) {
-    const std::vector<IntervalTerms>& t = log.terms;
-    for (size_t k = 0; k < t.size(); ++k) {
-      s += t[k].influence * t[k].influence.transpose();
-      for (int j = 1; j <= lag && k + j < t.size(); ++j) {
-        const LaserParamMatrix cross = t[k].influence * t[k + j].influence.transpose();
-        s += Bartlett(j, lag) * (cross + cross.transpose());
-      }
-    }
-  }
-  return s;
-}
+using consistency_internal::AutomaticLag;
+using consistency_internal::Bartlett;
+using consistency_internal::ComputeTerms;
+using consistency_internal::InfluenceLongRun;
+using consistency_internal::IntervalTerms;
+using consistency_internal::LogTerms;
+using consistency_internal::Vector6;
 
 struct Window {
   int log = 0;
@@ -205,8 +105,8 @@ std::vector<Window> FindWindows(const std::vector<LogTerms>& logs, int min_inter
 struct Context {
   const LaserConsistencyOptions* options = nullptr;
   const LaserParamMatrix* covariance = nullptr;
-  const LaserParamMatrix* influence_long_run = nullptr;
-  Vector6 free = Vector6::Ones();  // 0 for parameters held fixed.
+  const LaserParamMatrix* influence_long_run = nullptr;  // At `lag`.
+  Vector6 free = Vector6::Ones();                        // 0 for parameters held fixed.
   int lag = 1;
 };
 
@@ -251,7 +151,8 @@ LaserConsistencyTotal Total(const Context& c, const LogTerms& log, const Window&
   return total;
 }
 
-LaserConsistencyWindow CheckWindow(const Context& c, const LogTerms& log, const Window& w,
+LaserConsistencyWindow CheckWindow(const Context& rotation_context, const Context& travel_context,
+                                   const LogTerms& log, const Window& w,
                                    const LaserCalibration& estimate) {
   const OdometryParams& odo = estimate.odometry;
   LaserConsistencyWindow out;
@@ -280,10 +181,10 @@ LaserConsistencyWindow CheckWindow(const Context& c, const LogTerms& log, const 
   g_travel << wheel(0) / 2.0, wheel(1) / 2.0, 0.0, 0.0, 0.0, 0.0;
   g_travel_measured << 0.0, 0.0, 0.0, travel_gradient;
   out.rotation = Total(
-      c, log, w, [](const IntervalTerms& t) { return t.rotation_difference(); },
+      rotation_context, log, w, [](const IntervalTerms& t) { return t.rotation_difference(); },
       [](const IntervalTerms& t) { return t.rotation_predicted; }, g_rotation, Vector6::Zero());
   out.translation = Total(
-      c, log, w, [](const IntervalTerms& t) { return t.travel_difference(); },
+      travel_context, log, w, [](const IntervalTerms& t) { return t.travel_difference(); },
       [](const IntervalTerms& t) { return t.travel_predicted; }, g_travel, g_travel_measured);
   return out;
 }
@@ -362,16 +263,11 @@ LaserConsistency CheckLaserConsistencyJoint(
   }
   LaserParamMatrix hessian = LaserParamMatrix::Zero();
   std::vector<LogTerms> terms;
-  size_t longest = 0;
   for (size_t d = 0; d < logs.size(); ++d) {
     static const std::vector<bool> kAll;
     terms.push_back(ComputeTerms(*logs[d], estimate, noise_sigma[d],
                                  is_inlier.empty() ? kAll : is_inlier[d], &hessian));
-    longest = std::max(longest, logs[d]->size());
   }
-  // Newey–West (1994) lag rule for the Bartlett kernel.
-  c.lag = std::max(1, static_cast<int>(4.0 * std::pow(longest / 100.0, 2.0 / 9.0)));
-  out.lag = c.lag;
   // Parameters held fixed do not move with the data: their rows of H become the identity.
   for (int i = 0; i < kNumLaserParams; ++i) {
     if (c.free(i) > 0.0) continue;
@@ -389,10 +285,19 @@ LaserConsistency CheckLaserConsistencyJoint(
       t.influence = -ldlt.solve(t.influence.cwiseProduct(c.free));  // ψ_k: θ̂ − θ ≈ Σψ_k.
     }
   }
-  const LaserParamMatrix influence_long_run = InfluenceLongRun(terms, c.lag);
-  c.influence_long_run = &influence_long_run;
+  // Each quantity with its own lag (Andrews) and the estimate's long-run covariance at it.
+  Context rotation = c, travel = c;
+  rotation.lag =
+      AutomaticLag(terms, [](const IntervalTerms& t) { return t.rotation_difference(); });
+  travel.lag = AutomaticLag(terms, [](const IntervalTerms& t) { return t.travel_difference(); });
+  const LaserParamMatrix rotation_long_run = InfluenceLongRun(terms, rotation.lag);
+  const LaserParamMatrix travel_long_run = InfluenceLongRun(terms, travel.lag);
+  rotation.influence_long_run = &rotation_long_run;
+  travel.influence_long_run = &travel_long_run;
+  out.rotation_lag = rotation.lag;
+  out.translation_lag = travel.lag;
   for (const Window& w : FindWindows(terms, options.min_window_intervals)) {
-    out.windows.push_back(CheckWindow(c, terms[w.log], w, estimate));
+    out.windows.push_back(CheckWindow(rotation, travel, terms[w.log], w, estimate));
   }
   if (out.windows.empty()) {
     out.note =

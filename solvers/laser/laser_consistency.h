@@ -19,9 +19,10 @@
 // (errors in the regressors); these totals are not, so a disagreement exposes it, as it exposes a
 // wheel slip or wheel rotation in the wrong units.
 //
-// Only inlier intervals enter the sums (outliers are scan-match failures or slips). The σ of the
+// Only inlier intervals enter the sums (outliers are scan-match failures or slips), and the fit's
+// outliers whose sum with a neighbour agrees (a misplaced stamp, not a failure). The σ of the
 // difference accounts for the serial correlation of the per-interval differences (a Bartlett
-// long-run variance, Newey–West lag rule: poses from a scan matcher telescope) and for the
+// long-run variance with Andrews' automatic lag: poses from a scan matcher telescope) and for the
 // estimate having been fitted to the same data (its influence function, so the σ is not the
 // quadrature sum of the two sides' σ), plus the timing at the window ends (rate × period/√12).
 // The tests are Holm-corrected together at the family-wise level of one two-sided 3σ test.
@@ -67,8 +68,9 @@ struct LaserConsistencyWindow {
 struct LaserConsistency {
   bool checked = false;  // False: not enough data or no covariance (`note` says why).
   std::string note;
-  int tests = 0;  // Hypotheses in the family (two per window).
-  int lag = 0;    // Bartlett lag of the long-run variances.
+  int tests = 0;         // Hypotheses in the family (two per window).
+  int rotation_lag = 0;  // Bartlett lags of the long-run variances (Andrews' AR(1) rule).
+  int translation_lag = 0;
   std::vector<LaserConsistencyWindow> windows;
   std::vector<std::string> warnings;  // One sentence each for a person.
 };
