@@ -202,8 +202,8 @@ std::string Warning(const LaserConsistencyWindow& w, bool rotation, bool several
           Format(" (difference %.1fσ, σ ", t.z) +
           Format(rotation ? "%.1f°" : "%.3f m", t.sigma * k) +
           "): these totals do not depend on the timing of the samples, so the calibration is "
-          "biased: the stamps may not be the sample times (timing), the wheels may slip, or the "
-          "wheel rotation may be in the wrong units";
+          "likely biased; causes: the stamps may not be the sample times (timing), the wheels may "
+          "slip, or the wheel rotation may be in the wrong units";
   return text;
 }
 

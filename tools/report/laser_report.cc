@@ -1,3 +1,4 @@
+#include <calib/tools/report/consistency_report.h>
 #include <calib/tools/report/json_output.h>
 #include <calib/tools/report/laser_report.h>
 
@@ -51,6 +52,7 @@ nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
   out["closed_form_detail"] = {{"J21", result.closed_form.j21},
                                {"J22", result.closed_form.j22},
                                {"J_condition_number", result.closed_form.j_condition_number}};
+  out["consistency"] = LaserConsistencyJson(result.consistency);
   out["iterations"] = result.iterations;
   out["converged"] = result.converged;
   out["seconds"] = {{"closed_form", result.closed_form_seconds},
@@ -101,6 +103,7 @@ std::string LaserResultSummary(const LaserCalibrationResult& result, const std::
     text += line;
   }
   text += "  observability: " + result.observability.weakest_description + "\n";
+  text += LaserConsistencySummary(result.consistency);
   for (const std::string& warning : result.observability.warnings) {
     text += "  warning: " + warning + "\n";
   }
