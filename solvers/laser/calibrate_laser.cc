@@ -262,6 +262,10 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
         " intervals agree with the model: check the wheel-speed signs, units and the scan "
         "matcher");
   }
+  result.consistency = CheckLaserConsistencyJoint(logs, result.estimate, result.covariance,
+                                                  result.noise_sigma, result.is_inlier);
+  result.warnings.insert(result.warnings.end(), result.consistency.warnings.begin(),
+                         result.consistency.warnings.end());
   // The solver's warnings join the observability's, which the report prints.
   result.observability.warnings.insert(result.observability.warnings.end(), result.warnings.begin(),
                                        result.warnings.end());

@@ -5,6 +5,7 @@
 #include <calib/core/laser/laser_params.h>
 #include <calib/core/status.h>
 #include <calib/solvers/laser/censi_closed_form.h>
+#include <calib/solvers/laser/laser_consistency.h>
 #include <calib/solvers/laser/laser_motion.h>
 #include <calib/solvers/laser/laser_observability.h>
 #include <calib/solvers/laser/laser_refinement.h>
@@ -56,6 +57,8 @@ struct LaserCalibrationResult {
   std::vector<Eigen::Vector3d> noise_sigma;  // Per log: the scan noise of its inliers.
   LaserMotionCensus census;
   LaserObservability observability;
+  // Timing-free totals over long windows, wheel model against sensor (warnings also in `warnings`).
+  LaserConsistency consistency;
   double covariance_scale = 1.0;  // The loss correction κ applied to Ceres' covariance.
   int iterations = 0;
   bool converged = true;  // The final refinement stopped by a convergence test.

@@ -1,3 +1,4 @@
+#include <calib/tools/report/consistency_report.h>
 #include <calib/tools/report/json_output.h>
 #include <calib/tools/report/laser_report.h>
 
@@ -75,6 +76,7 @@ nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
     out["timing"]["treatment"] = "interval_jitter";
     out["timing"]["interval_jitter"] = IntervalJitterJson(result);
   }
+  out["consistency"] = LaserConsistencyJson(result.consistency);
   out["iterations"] = result.iterations;
   out["converged"] = result.converged;
   out["seconds"] = {{"closed_form", result.closed_form_seconds},
@@ -133,6 +135,7 @@ std::string LaserResultSummary(const LaserCalibrationResult& result, const std::
     text += line;
   }
   text += "  observability: " + result.observability.weakest_description + "\n";
+  text += LaserConsistencySummary(result.consistency);
   for (const std::string& warning : result.observability.warnings) {
     text += "  warning: " + warning + "\n";
   }

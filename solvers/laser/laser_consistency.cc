@@ -1,0 +1,324 @@
+#include <calib/core/text_format.h>
+#include <calib/solvers/diagnosis/multiple_testing.h>
+#include <calib/solvers/laser/laser_consistency.h>
+#include <calib/solvers/laser/laser_consistency_terms.h>
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+
+namespace calib {
+namespace {
+
+using consistency_internal::AutomaticLag;
+using consistency_internal::Bartlett;
+using consistency_internal::ComputeTerms;
+using consistency_internal::InfluenceLongRun;
+using consistency_internal::IntervalTerms;
+using consistency_internal::LogTerms;
+using consistency_internal::Vector6;
+
+struct Window {
+  int log = 0;
+  std::string kind;
+  int first = 0, last = 0;
+};
+
+// Intervals k of `log` within [w.first, w.last] that count, and their difference h_k.
+template <typename Difference>
+double Term(const std::vector<IntervalTerms>& t, const Window& w, long k, Difference difference) {
+  if (k < w.first || k > w.last || !t[k].counted) return 0.0;
+  return difference(t[k]);
+}
+
+// σ² of the timing at the cuts of the window: where a counted interval borders one that is not
+// (window ends, excluded intervals), the wheel rotation of a misplaced stamp, rate × f·period,
+// the rate the smaller of the two sides' (a rest on either side makes it vanish).
+template <typename Predicted>
+double EndsVariance(const LaserConsistencyOptions& options, const LogTerms& log, const Window& w,
+                    Predicted predicted) {
+  const std::vector<IntervalTerms>& t = log.terms;
+  const std::vector<LaserInterval>& in = *log.intervals;
+  const auto counted = [&](long k) { return k >= w.first && k <= w.last && t[k].counted; };
+  double variance = 0.0;
+  for (long k = w.first; k <= w.last + 1; ++k) {
+    if (counted(k - 1) == counted(k)) continue;
+    // The counted side always exists; the other one unless beyond the log or across a gap.
+    const long inside = counted(k) ? k : k - 1;
+    const long outside = counted(k) ? k - 1 : k;
+    const bool continuous =
+        outside >= 0 && outside < static_cast<long>(t.size()) && !in[std::max(k, 0L)].gap_before;
+    const auto rate = [&](long i) { return std::abs(predicted(t[i])) / t[i].duration_s; };
+    double period = t[inside].duration_s;
+    double speed = rate(inside);
+    if (continuous) {
+      speed = std::min(speed, rate(outside));
+      period = (period + t[outside].duration_s) / 2.0;
+    }
+    const double sigma = options.end_timing_fraction * speed * period;
+    variance += sigma * sigma;
+  }
+  return variance;
+}
+
+}  // namespace
+namespace {
+
+// Whole runs (between gaps), then the stretches of motion between two rests of a run that hold
+// at least the minimum of inliers and not nearly all of the run's motion (else the run says it).
+std::vector<Window> FindWindows(const std::vector<LogTerms>& logs, int min_intervals) {
+  std::vector<Window> windows, between_rests;
+  for (size_t d = 0; d < logs.size(); ++d) {
+    const std::vector<IntervalTerms>& t = logs[d].terms;
+    const std::vector<LaserInterval>& in = *logs[d].intervals;
+    const auto count = [&](int a, int b, bool moving_only) {
+      int n = 0;
+      for (int k = a; k <= b; ++k) n += t[k].counted && !(moving_only && t[k].still);
+      return n;
+    };
+    for (int a = 0; a < static_cast<int>(t.size());) {
+      int b = a;
+      while (b + 1 < static_cast<int>(t.size()) && !in[b + 1].gap_before) ++b;
+      if (count(a, b, false) >= min_intervals) {
+        windows.push_back(Window{static_cast<int>(d), "run", a, b});
+      }
+      const int moving = count(a, b, true);
+      for (int s = a + 1; s < b; ++s) {
+        if (!t[s - 1].still || t[s].still) continue;
+        int e = s;
+        while (e + 1 <= b && !t[e + 1].still) ++e;
+        const int n = count(s, e, false);
+        if (e < b && n >= min_intervals && n < 0.9 * moving) {
+          between_rests.push_back(Window{static_cast<int>(d), "between rests", s, e});
+        }
+        s = e;
+      }
+      a = b + 1;
+    }
+  }
+  windows.insert(windows.end(), between_rests.begin(), between_rests.end());
+  return windows;
+}
+
+// What every total needs beyond its window: the covariance given, the long-run covariance of the
+// estimate's influence, the parameters that moved, the Bartlett lag.
+struct Context {
+  const LaserConsistencyOptions* options = nullptr;
+  const LaserParamMatrix* covariance = nullptr;
+  const LaserParamMatrix* influence_long_run = nullptr;  // At `lag`.
+  Vector6 free = Vector6::Ones();                        // 0 for parameters held fixed.
+  int lag = 1;
+};
+
+// One quantity over one window. `difference` and `predicted` read an interval's terms; `g_pred` and
+// `g_meas` are the gradients of the window's predicted and measured totals.
+template <typename Difference, typename Predicted>
+LaserConsistencyTotal Total(const Context& c, const LogTerms& log, const Window& w,
+                            Difference difference, Predicted predicted, const Vector6& g_pred,
+                            const Vector6& g_meas) {
+  const std::vector<IntervalTerms>& t = log.terms;
+  const long n = static_cast<long>(t.size());
+  LaserConsistencyTotal total;
+  double v_hh = 0.0;
+  Vector6 v_psi_h = Vector6::Zero();
+  for (long k = w.first; k <= w.last; ++k) {
+    const double h = Term(t, w, k, difference);
+    if (!t[k].counted) continue;
+    total.predicted += predicted(t[k]);
+    total.measured += predicted(t[k]) + h;
+    v_hh += h * h;
+    v_psi_h += h * t[k].influence;
+    for (int j = 1; j <= c.lag; ++j) {
+      const double weight = Bartlett(j, c.lag);
+      v_hh += 2.0 * weight * h * Term(t, w, k + j, difference);
+      if (k + j < n) v_psi_h += weight * h * t[k + j].influence;
+      if (k - j >= 0) v_psi_h += weight * h * t[k - j].influence;
+    }
+  }
+  // d_k = 1[k∈w]·h_k + Gᵀψ_k sums to the difference; its long-run variance is the difference's.
+  const Vector6 g = (g_meas - g_pred).cwiseProduct(c.free);
+  const double fitted = g.dot(*c.covariance * g);
+  double variance = v_hh + 2.0 * g.dot(v_psi_h) + g.dot(*c.influence_long_run * g);
+  variance = std::max(variance, 0.01 * (v_hh + fitted));  // Never below a tenth of the σ sum.
+  const double ends = EndsVariance(*c.options, log, w, predicted);
+  total.sigma_measured = std::sqrt(std::max(v_hh, 0.0));
+  total.sigma_predicted = std::sqrt(std::max(g_pred.dot(*c.covariance * g_pred), 0.0));
+  total.sigma_ends = std::sqrt(ends);
+  total.sigma = std::sqrt(variance + ends);
+  const double d = total.measured - total.predicted;
+  total.z = total.sigma > 0.0 ? d / total.sigma : 0.0;
+  total.p_value = std::erfc(std::abs(total.z) / std::sqrt(2.0));
+  return total;
+}
+
+LaserConsistencyWindow CheckWindow(const Context& rotation_context, const Context& travel_context,
+                                   const LogTerms& log, const Window& w,
+                                   const LaserCalibration& estimate) {
+  const OdometryParams& odo = estimate.odometry;
+  LaserConsistencyWindow out;
+  out.log = w.log;
+  out.kind = w.kind;
+  out.first = w.first;
+  out.last = w.last;
+  const std::vector<LaserInterval>& in = *log.intervals;
+  out.start_s = in[w.first].start_s;
+  out.end_s = in[w.last].start_s + in[w.last].duration_s;
+  Eigen::Vector2d wheel = Eigen::Vector2d::Zero();
+  Eigen::Vector3d travel_gradient = Eigen::Vector3d::Zero();
+  double rotation = 0.0;
+  for (int k = w.first; k <= w.last; ++k) {
+    const IntervalTerms& t = log.terms[k];
+    if (!t.counted) continue;
+    ++out.intervals;
+    wheel += t.wheel;
+    travel_gradient += t.travel_gradient;
+    rotation += t.rotation_predicted;
+  }
+  // Gradients of the totals in (r_l, r_r, b, x, y, θ).
+  Vector6 g_rotation, g_travel, g_travel_measured;
+  g_rotation << -wheel(0) / odo.wheelbase_m, wheel(1) / odo.wheelbase_m,
+      -rotation / odo.wheelbase_m, 0.0, 0.0, 0.0;
+  g_travel << wheel(0) / 2.0, wheel(1) / 2.0, 0.0, 0.0, 0.0, 0.0;
+  g_travel_measured << 0.0, 0.0, 0.0, travel_gradient;
+  out.rotation = Total(
+      rotation_context, log, w, [](const IntervalTerms& t) { return t.rotation_difference(); },
+      [](const IntervalTerms& t) { return t.rotation_predicted; }, g_rotation, Vector6::Zero());
+  out.translation = Total(
+      travel_context, log, w, [](const IntervalTerms& t) { return t.travel_difference(); },
+      [](const IntervalTerms& t) { return t.travel_predicted; }, g_travel, g_travel_measured);
+  return out;
+}
+
+std::string Warning(const LaserConsistencyWindow& w, bool rotation, bool several_logs) {
+  const LaserConsistencyTotal& t = rotation ? w.rotation : w.translation;
+  const double k = rotation ? 180.0 / M_PI : 1.0;
+  const char* f = rotation ? "%.1f° ± %.1f°" : "%.3f m ± %.3f m";
+  std::string text = several_logs ? Format("log %d: ", w.log + 1) : std::string();
+  text += "the wheel model predicts " + Format(f, t.predicted * k, t.sigma_predicted * k) +
+          (rotation ? " of rotation" : " of travel") +
+          Format(" over t = %.1f–%.1f s (%s, intervals %d–%d, %d inliers)", w.start_s, w.end_s,
+                 w.kind.c_str(), w.first + 1, w.last + 1, w.intervals) +
+          " where the sensor measured " + Format(f, t.measured * k, t.sigma_measured * k) +
+          Format(" (difference %.1fσ, σ ", t.z) +
+          Format(rotation ? "%.1f°" : "%.3f m", t.sigma * k) +
+          "): these totals do not depend on the timing of the samples, so the calibration is "
+          "likely biased; causes: the stamps may not be the sample times (timing), the wheels may "
+          "slip, or the wheel rotation may be in the wrong units";
+  return text;
+}
+
+// Holm over every test; warnings for the most significant rejected ones.
+void Decide(const LaserConsistencyOptions& options, bool several_logs, LaserConsistency* out) {
+  std::vector<double> p_values;
+  for (const LaserConsistencyWindow& w : out->windows) {
+    p_values.push_back(w.rotation.p_value);
+    p_values.push_back(w.translation.p_value);
+  }
+  out->tests = static_cast<int>(p_values.size());
+  std::vector<std::pair<double, std::string>> flagged;
+  for (const HolmStep& step : Holm(p_values, options.family_alpha)) {
+    if (!step.rejected) continue;
+    LaserConsistencyWindow& w = out->windows[step.index / 2];
+    const bool rotation = step.index % 2 == 0;
+    (rotation ? w.rotation : w.translation).significant = true;
+    flagged.emplace_back(step.p_value, Warning(w, rotation, several_logs));
+  }
+  for (size_t i = 0; i < flagged.size(); ++i) {
+    if (static_cast<int>(i) == options.max_warnings) {
+      out->warnings.push_back(Format("%d more windows disagree the same way (see the JSON)",
+                                     static_cast<int>(flagged.size() - i)));
+      break;
+    }
+    out->warnings.push_back(flagged[i].second);
+  }
+}
+
+}  // namespace
+
+LaserConsistency CheckLaserConsistencyJoint(
+    const std::vector<const std::vector<LaserInterval>*>& logs, const LaserCalibration& estimate,
+    const LaserParamMatrix& covariance, const std::vector<Eigen::Vector3d>& noise_sigma,
+    const std::vector<std::vector<bool>>& is_inlier, const LaserConsistencyOptions& options) {
+  LaserConsistency out;
+  if (logs.empty() || noise_sigma.size() != logs.size() ||
+      (!is_inlier.empty() && is_inlier.size() != logs.size())) {
+    out.note = "not checked: one noise level and one inlier vector per log are needed";
+    return out;
+  }
+  for (size_t d = 0; d < is_inlier.size(); ++d) {
+    if (is_inlier[d].size() != logs[d]->size()) {
+      out.note = "not checked: the inlier flags do not match the intervals";
+      return out;
+    }
+  }
+  Context c;
+  c.options = &options;
+  c.covariance = &covariance;
+  for (int i = 0; i < kNumLaserParams; ++i) {
+    c.free(i) = covariance(i, i) > 0.0 && std::isfinite(covariance(i, i)) ? 1.0 : 0.0;
+  }
+  if (c.free.sum() == 0.0 || !covariance.allFinite()) {
+    out.note = "not checked: the calibration has no covariance";
+    return out;
+  }
+  LaserParamMatrix hessian = LaserParamMatrix::Zero();
+  std::vector<LogTerms> terms;
+  for (size_t d = 0; d < logs.size(); ++d) {
+    static const std::vector<bool> kAll;
+    terms.push_back(ComputeTerms(*logs[d], estimate, noise_sigma[d],
+                                 is_inlier.empty() ? kAll : is_inlier[d], &hessian));
+  }
+  // Parameters held fixed do not move with the data: their rows of H become the identity.
+  for (int i = 0; i < kNumLaserParams; ++i) {
+    if (c.free(i) > 0.0) continue;
+    hessian.row(i).setZero();
+    hessian.col(i).setZero();
+    hessian(i, i) = 1.0;
+  }
+  const Eigen::LDLT<LaserParamMatrix> ldlt(hessian);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
+    out.note = "not checked: the inliers do not determine the parameters";
+    return out;
+  }
+  for (LogTerms& log : terms) {
+    for (IntervalTerms& t : log.terms) {
+      t.influence = -ldlt.solve(t.influence.cwiseProduct(c.free));  // ψ_k: θ̂ − θ ≈ Σψ_k.
+    }
+  }
+  // Each quantity with its own lag (Andrews) and the estimate's long-run covariance at it.
+  Context rotation = c, travel = c;
+  rotation.lag =
+      AutomaticLag(terms, [](const IntervalTerms& t) { return t.rotation_difference(); });
+  travel.lag = AutomaticLag(terms, [](const IntervalTerms& t) { return t.travel_difference(); });
+  const LaserParamMatrix rotation_long_run = InfluenceLongRun(terms, rotation.lag);
+  const LaserParamMatrix travel_long_run = InfluenceLongRun(terms, travel.lag);
+  rotation.influence_long_run = &rotation_long_run;
+  travel.influence_long_run = &travel_long_run;
+  out.rotation_lag = rotation.lag;
+  out.translation_lag = travel.lag;
+  for (const Window& w : FindWindows(terms, options.min_window_intervals)) {
+    out.windows.push_back(CheckWindow(rotation, travel, terms[w.log], w, estimate));
+  }
+  if (out.windows.empty()) {
+    out.note =
+        Format("not checked: no run holds %d inlier intervals", options.min_window_intervals);
+    return out;
+  }
+  out.checked = true;
+  Decide(options, logs.size() > 1, &out);
+  return out;
+}
+
+LaserConsistency CheckLaserConsistency(const std::vector<LaserInterval>& intervals,
+                                       const LaserCalibration& estimate,
+                                       const LaserParamMatrix& covariance,
+                                       const Eigen::Vector3d& noise_sigma,
+                                       const std::vector<bool>& is_inlier,
+                                       const LaserConsistencyOptions& options) {
+  return CheckLaserConsistencyJoint({&intervals}, estimate, covariance, {noise_sigma},
+                                    is_inlier.empty() ? std::vector<std::vector<bool>>{}
+                                                      : std::vector<std::vector<bool>>{is_inlier},
+                                    options);
+}
+
+}  // namespace calib

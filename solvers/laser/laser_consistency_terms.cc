@@ -1,0 +1,115 @@
+#include <calib/problems/laser/laser_residual.h>
+#include <calib/solvers/laser/laser_consistency_terms.h>
+#include <calib/solvers/laser/laser_motion.h>
+#include <ceres/jet.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace calib::consistency_internal {
+namespace {
+
+template <typename T>
+T Travel(const Pose2d& sensor_motion, const Pose2<T>& base_T_sensor) {
+  using std::cos;
+  using std::sin;
+  const Pose2<T> o =
+      Compose(Compose(base_T_sensor, Pose2<T>(sensor_motion.cast<T>())), Inverse(base_T_sensor));
+  const T half = o(2) / T(2);
+  const T sinc = ceres::abs(half) < T(1e-4) ? T(1) - half * half / T(6) : sin(half) / half;
+  return (o(0) * cos(half) + o(1) * sin(half)) / sinc;
+}
+
+// Rescues the fit's outliers that are timing artefacts (see ComputeTerms).
+void RescueTimingOutliers(const std::vector<LaserInterval>& intervals,
+                          const Eigen::Vector3d& noise_sigma, std::vector<IntervalTerms>* terms) {
+  std::vector<IntervalTerms>& t = *terms;
+  const double rotation_limit = 4.0 * std::sqrt(2.0) * noise_sigma(2);
+  const double travel_limit = 4.0 * std::sqrt(2.0) * noise_sigma.head<2>().maxCoeff();
+  const auto agrees = [&](size_t a, size_t b) {
+    return !intervals[b].gap_before &&
+           std::abs(t[a].rotation_difference() + t[b].rotation_difference()) <= rotation_limit &&
+           std::abs(t[a].travel_difference() + t[b].travel_difference()) <= travel_limit;
+  };
+  std::vector<bool> rescued(t.size(), false);
+  for (size_t k = 0; k < t.size(); ++k) {
+    if (t[k].counted) continue;
+    rescued[k] = (k > 0 && agrees(k - 1, k)) || (k + 1 < t.size() && agrees(k, k + 1));
+  }
+  for (size_t k = 0; k < t.size(); ++k) t[k].counted = t[k].counted || rescued[k];
+}
+
+}  // namespace
+
+double ForwardTravel(const Pose2d& sensor_motion, const Pose2d& base_T_sensor,
+                     Eigen::Vector3d* gradient) {
+  using Jet3 = ceres::Jet<double, 3>;
+  const Pose2<Jet3> mounting(Jet3(base_T_sensor(0), 0), Jet3(base_T_sensor(1), 1),
+                             Jet3(base_T_sensor(2), 2));
+  const Jet3 travel = Travel(sensor_motion, mounting);
+  if (gradient != nullptr) *gradient = travel.v;
+  return travel.a;
+}
+
+LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCalibration& c,
+                      const Eigen::Vector3d& noise_sigma, const std::vector<bool>& is_inlier,
+                      LaserParamMatrix* hessian) {
+  using Jet6 = ceres::Jet<double, kNumLaserParams>;
+  const OdometryParams& odo = c.odometry;
+  const Eigen::Vector3d weight = noise_sigma.cwiseMax(1e-12).cwiseAbs2().cwiseInverse();
+  const double still_travel_m = 0.5 * std::min(noise_sigma(0), noise_sigma(1));
+  const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+  Jet6 odometry[3], mounting[3];
+  const LaserParamVector v = c.ToVector();
+  for (int i = 0; i < 3; ++i) {
+    odometry[i] = Jet6(v(i), i);
+    mounting[i] = Jet6(v(3 + i), 3 + i);
+  }
+  LogTerms log{&intervals, std::vector<IntervalTerms>(intervals.size())};
+  for (size_t k = 0; k < intervals.size(); ++k) {
+    const LaserInterval& in = intervals[k];
+    IntervalTerms& t = log.terms[k];
+    t.counted = is_inlier.empty() || is_inlier[k];
+    t.duration_s = in.duration_s;
+    t.wheel = IntervalWheelRotation(in);
+    // r·Δφ summed over the steps is r·(total Δφ): the totals need no integration.
+    t.rotation_predicted =
+        (odo.right_radius_m * t.wheel(1) - odo.left_radius_m * t.wheel(0)) / odo.wheelbase_m;
+    t.travel_predicted = (odo.left_radius_m * t.wheel(0) + odo.right_radius_m * t.wheel(1)) / 2.0;
+    t.rotation_measured = in.sensor_motion(2);
+    t.travel_measured = ForwardTravel(in.sensor_motion, c.base_T_sensor, &t.travel_gradient);
+    t.still = t.wheel.cwiseAbs().sum() < 1e-6 ||
+              (std::abs(t.rotation_predicted) <= 0.5 * noise_sigma(2) &&
+               std::abs(t.travel_predicted) <= still_travel_m);
+    if (!t.counted) continue;
+    Jet6 error[3];
+    LaserResidual(in, &identity)(odometry, mounting, error);
+    Eigen::Matrix<double, 3, kNumLaserParams> jacobian;
+    Eigen::Vector3d e;
+    for (int r = 0; r < 3; ++r) {
+      e(r) = error[r].a;
+      jacobian.row(r) = error[r].v.transpose();
+    }
+    t.influence = jacobian.transpose() * weight.asDiagonal() * e;
+    *hessian += jacobian.transpose() * weight.asDiagonal() * jacobian;
+  }
+  RescueTimingOutliers(intervals, noise_sigma, &log.terms);
+  return log;
+}
+
+LaserParamMatrix InfluenceLongRun(const std::vector<LogTerms>& logs, int lag) {
+  LaserParamMatrix s = LaserParamMatrix::Zero();
+  for (const LogTerms& log : logs) {
+    const std::vector<IntervalTerms>& t = log.terms;
+    for (size_t k = 0; k < t.size(); ++k) {
+      s += t[k].influence * t[k].influence.transpose();
+      for (int j = 1; j <= lag && k + j < t.size(); ++j) {
+        const LaserParamMatrix cross = t[k].influence * t[k + j].influence.transpose();
+        s += Bartlett(j, lag) * (cross + cross.transpose());
+      }
+    }
+  }
+  return s;
+}
+
+}  // namespace calib::consistency_internal

@@ -1,0 +1,91 @@
+#ifndef CALIB_SOLVERS_LASER_LASER_CONSISTENCY_TERMS_H_
+#define CALIB_SOLVERS_LASER_LASER_CONSISTENCY_TERMS_H_
+
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/laser/laser_params.h>
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+// The per-interval pieces of the consistency check (laser_consistency.h) and the long-run
+// variances it sums them with. Internal to the check; exposed for its tests.
+namespace calib::consistency_internal {
+
+using Vector6 = Eigen::Matrix<double, kNumLaserParams, 1>;
+
+// The robot's forward travel over an interval from the sensor displacement: o = ℓ ∘ sm ∘ ℓ⁻¹,
+// and the component of its chord along the mid-interval heading over sinc(Δθ/2). For an arc of
+// length d turning by Δθ this is d exactly (the chord is d·sinc(Δθ/2) along the mid heading); on
+// noisy near-still intervals it stays linear in the noise, where a signed |chord| would rectify
+// it. Also gives ∂travel/∂ℓ.
+double ForwardTravel(const Pose2d& sensor_motion, const Pose2d& base_T_sensor,
+                     Eigen::Vector3d* gradient = nullptr);
+
+// What each interval adds to the totals and to the fit.
+struct IntervalTerms {
+  bool counted = false;  // Enters the sums: an inlier, or an outlier rescued as a timing artefact.
+  bool still = false;    // The robot rests (wheel model and noise agree on no motion).
+  double duration_s = 0.0;
+  Eigen::Vector2d wheel = Eigen::Vector2d::Zero();  // Δφ_l, Δφ_r.
+  double rotation_predicted = 0.0, rotation_measured = 0.0;
+  double travel_predicted = 0.0, travel_measured = 0.0;
+  Eigen::Vector3d travel_gradient = Eigen::Vector3d::Zero();  // ∂travel_measured/∂ℓ.
+  // JᵀWe of the fit's inliers (0 otherwise); the check turns it into the influence
+  // ψ = −H⁻¹JᵀWe, the interval's share of θ̂ − θ.
+  Vector6 influence = Vector6::Zero();
+  double rotation_difference() const { return rotation_measured - rotation_predicted; }
+  double travel_difference() const { return travel_measured - travel_predicted; }
+};
+
+struct LogTerms {
+  const std::vector<LaserInterval>* intervals = nullptr;
+  std::vector<IntervalTerms> terms;
+};
+
+// Every term of a log at the estimate; adds the fit's JᵀWJ (its inliers, W = diag(1/σ²)) to
+// `hessian`. An outlier of the fit is counted all the same when its differences summed with a
+// neighbour's agree within 4σ√2 in rotation and travel: its wheel rotation belongs partly to the
+// neighbour (a misplaced stamp), the sensor did not fail; dropping it would leave the shifted
+// rotation of its boundaries in the totals.
+LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCalibration& c,
+                      const Eigen::Vector3d& noise_sigma, const std::vector<bool>& is_inlier,
+                      LaserParamMatrix* hessian);
+
+// Bartlett weight of lag j.
+inline double Bartlett(int j, int lag) { return 1.0 - static_cast<double>(j) / (lag + 1); }
+
+// Andrews (1991) automatic Bartlett lag from an AR(1) fit to the counted series of every log:
+// 1.1447·(α·n)^{1/3}, α = 4ρ²/((1 − ρ)²(1 + ρ)²); at least 1, at most n/4. Negative correlation
+// (telescoping poses, misplaced stamps) and positive (model errors) both lengthen it.
+template <typename Series>
+int AutomaticLag(const std::vector<LogTerms>& logs, Series series);
+
+// The long-run (HAC) covariance of Σψ_k over every log: the estimate's sandwich with its serial
+// correlation.
+LaserParamMatrix InfluenceLongRun(const std::vector<LogTerms>& logs, int lag);
+
+template <typename Series>
+int AutomaticLag(const std::vector<LogTerms>& logs, Series series) {
+  double lag0 = 0.0, lag1 = 0.0;
+  long n = 0;
+  for (const LogTerms& log : logs) {
+    const std::vector<IntervalTerms>& t = log.terms;
+    for (size_t k = 0; k < t.size(); ++k) {
+      if (!t[k].counted) continue;
+      ++n;
+      lag0 += series(t[k]) * series(t[k]);
+      if (k + 1 < t.size() && t[k + 1].counted) lag1 += series(t[k]) * series(t[k + 1]);
+    }
+  }
+  if (n < 8 || !(lag0 > 0.0)) return 1;
+  const double rho = std::clamp(lag1 / lag0, -0.97, 0.97);
+  const double alpha = 4.0 * rho * rho / ((1 - rho) * (1 - rho) * (1 + rho) * (1 + rho));
+  const double lag = std::ceil(1.1447 * std::cbrt(alpha * static_cast<double>(n)));
+  return static_cast<int>(std::clamp(lag, 1.0, static_cast<double>(n / 4)));
+}
+
+}  // namespace calib::consistency_internal
+
+#endif  // CALIB_SOLVERS_LASER_LASER_CONSISTENCY_TERMS_H_
