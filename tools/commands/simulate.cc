@@ -1,6 +1,7 @@
 // `calib simulate`: writes a simulated laser log and, with --truth, the truth it was made from.
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/core/laser/laser_simulator.h>
+#include <calib/core/text_number.h>
 #include <calib/core/timing/logging_model.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
@@ -48,8 +49,7 @@ StatusOr<LaserSimOptions> SimulatorOptions(const SimulateOptions& flags) {
   if (!(flags.mean_interval > 0.0) || !(flags.interval_jitter >= 0.0) ||
       !std::isfinite(flags.mean_interval) || !std::isfinite(flags.interval_jitter)) {
     return Status::InvalidInput("--mean_interval must be > 0 and --interval_jitter >= 0, got " +
-                                std::to_string(flags.mean_interval) + " and " +
-                                std::to_string(flags.interval_jitter));
+                                Num(flags.mean_interval) + " and " + Num(flags.interval_jitter));
   }
   options.mean_interval_s = flags.mean_interval;
   options.interval_jitter_s = flags.interval_jitter;
@@ -75,8 +75,7 @@ StatusOr<LoggingModel> LoggingModelFromFlags(const SimulateOptions& flags) {
     const bool may_be_negative = std::string(name) == "sensor_drift";
     if (!std::isfinite(value) || (!may_be_negative && value < 0.0)) {
       return Status::InvalidInput(std::string("--") + name + " must be a finite number" +
-                                  (may_be_negative ? "" : " >= 0") + ", got " +
-                                  std::to_string(value));
+                                  (may_be_negative ? "" : " >= 0") + ", got " + Num(value));
     }
   }
   LoggingModel model;
@@ -90,9 +89,13 @@ StatusOr<LoggingModel> LoggingModelFromFlags(const SimulateOptions& flags) {
   model.encoder_poll_jitter_s = flags.encoder_poll_jitter;
   model.encoder_stamp_jitter_s = flags.encoder_stamp_jitter;
   model.repeat_fraction = flags.repeat_fraction;
-  // The library's message names the field: --NAME is the field without its unit suffix.
+  // The library's message names the field: --NAME sets NAME_s (--sensor_drift:
+  // sensor_clock_drift).
   const Status valid = ValidateLoggingModel(model);
-  if (!valid.ok()) return Status::InvalidInput("bad logging flags: " + valid.message());
+  if (!valid.ok()) {
+    return Status::InvalidInput("bad logging flags (--NAME sets the field NAME_s): " +
+                                valid.message());
+  }
   return model;
 }
 
