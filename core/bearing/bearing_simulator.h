@@ -1,13 +1,14 @@
 #ifndef CALIB_CORE_BEARING_BEARING_SIMULATOR_H_
 #define CALIB_CORE_BEARING_BEARING_SIMULATOR_H_
 
-#include <cstdint>
-#include <functional>
-#include <vector>
-
 #include <calib/core/bearing/bearing_log.h>
 #include <calib/core/bearing/bearing_model.h>
 #include <calib/core/se2.h>
+#include <calib/core/timing/logging_model.h>
+
+#include <cstdint>
+#include <functional>
+#include <vector>
 
 // Simulated bearing logs with known truth (Martinelli 2009, §8.1): the robot follows eqs. 1–2
 // exactly (wheel speeds constant within each integration step, so circles are exact circles),
@@ -49,6 +50,12 @@ struct BearingSimOptions {
   std::vector<BearingRunSpec> runs;  // Empty: Martinelli's q = 0.9, 0, −1, one loop each.
   int initial_distance_run = 0;      // A run id: meta.initial_distance gets its true D0; 0: none.
   uint64_t seed = 1;
+  // Bearings and encoders as a real robot logs them, per run from its start: a free-running
+  // sensor (its sample grid replaces bearing_rate_hz), a logger stamping the latest bearing at
+  // its pick-up, encoder polls every encoder_period_s (replacing encoder_rate_hz) at scattered
+  // true times with scattered stamps, repeated rows. All zero: the plain log, unchanged. Its
+  // random draws come from streams of their own, so the motion and the noise stay the same.
+  LoggingModel logging;
 };
 
 struct BearingRunTruth {
@@ -64,7 +71,8 @@ struct BearingRunTruth {
   CircularState<double> state0{0.0, 0.0, 0.0};    // A0, V0, L (eq. 15) at the start.
   double k_per_m = 0.0;                           // Eq. 17.
   double c_rad = 0.0;                             // Eq. 21.
-  std::vector<Pose2d> world_T_robot_at_bearings;  // True poses at the bearing times.
+  std::vector<Pose2d> world_T_robot_at_bearings;  // True poses at the bearing times (per row).
+  LoggedTimingTruth timing;  // Per written row, the true time (from the run's start, + offset).
 };
 
 struct BearingSimTruth {

@@ -32,11 +32,16 @@ struct DiagnoseOptions : CalibrateOptions {
 };
 int RunDiagnose(const DiagnoseOptions& options);
 
-// `calib simulate`: a laser log with known truth (.csv when `output` ends so, else tuples).
+// `calib simulate`: a laser log with known truth. Format `auto`: a CSV when `output` ends in
+// .csv, a raw stream directory (odometry.csv, sensor_poses.csv) when its last component has no
+// extension, else tuples. The logging fields (core/timing/logging_model.h) need a stream output.
 struct SimulateOptions {
   std::string output;
-  std::string truth;  // Where to write the truth as JSON; empty: not written.
+  std::string truth;            // Where to write the truth as JSON; empty: not written.
+  std::string format = "auto";  // auto, tuples, csv or stream.
   int intervals = 2000;
+  double mean_interval = 0.8;     // Mean scan interval (s), without a free-running sensor.
+  double interval_jitter = 0.02;  // Uniform ± jitter on each scan interval (s).
   std::uint64_t seed = 1;
   std::string trajectory = "rich";   // rich, straight, rotation or arc.
   double noise_xy = 0.001;           // Scan-matching noise σ on x and y (m).
@@ -51,6 +56,17 @@ struct SimulateOptions {
   double radius_change_time = -1.0;  // Time of a wheel-radius change (s); < 0: none.
   double r_l_after = 0.0;            // Radii after the change (m).
   double r_r_after = 0.0;
+  // The logging model (0: off), stream output only.
+  double sensor_period = 0.0;   // A sensor free-running at this period (s).
+  double sensor_phase = 0.0;    // Its first sample (s).
+  double sensor_drift = 0.0;    // Its clock's relative rate error.
+  double logger_period = 0.0;   // A logger picking up the latest sample at this period (s).
+  double logger_jitter = 0.0;   // σ of the pick-up times (of the stamps, without a logger) (s).
+  double pickup_latency = 0.0;  // Fixed delay before a sample can be picked up (s).
+  double encoder_period = 0.0;  // Encoder polls at this period (s); 0: at the scans.
+  double encoder_poll_jitter = 0.0;   // σ of the true poll times (s).
+  double encoder_stamp_jitter = 0.0;  // σ of the encoder stamps about the true polls (s).
+  double repeat_fraction = 0.0;       // Share of records written twice.
 };
 int RunSimulate(const SimulateOptions& options);
 

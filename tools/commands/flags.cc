@@ -62,6 +62,41 @@ DEFINE_double(radius_change_time, kSimulate.radius_change_time,
               "simulate: time of a wheel-radius change (s), < 0: none");
 DEFINE_double(r_l_after, kSimulate.r_l_after, "simulate: left radius after the change (m)");
 DEFINE_double(r_r_after, kSimulate.r_r_after, "simulate: right radius after the change (m)");
+// `calib simulate`: scan timing and the logging model (core/timing/logging_model.h). Output
+// format (--format auto): OUTPUT ending in .csv is a CSV log, OUTPUT without an extension a raw
+// stream directory (odometry.csv, sensor_poses.csv), anything else tuples.
+DEFINE_double(mean_interval, kSimulate.mean_interval,
+              "simulate: mean scan interval (s), when the sensor does not free-run");
+DEFINE_double(interval_jitter, kSimulate.interval_jitter,
+              "simulate: uniform +/- jitter on each scan interval (s)");
+DEFINE_double(sensor_period, kSimulate.sensor_period,
+              "simulate (streams; the logging flags need --format stream or an OUTPUT without "
+              "extension): the sensor free-runs at this period (s) for --intervals periods; "
+              "0: it samples at the simulated scan times");
+DEFINE_double(sensor_phase, kSimulate.sensor_phase,
+              "simulate (streams): time of the free-running sensor's first sample (s)");
+DEFINE_double(sensor_drift, kSimulate.sensor_drift,
+              "simulate (streams): relative rate error of the sensor clock (e.g. 2e-4); its "
+              "true period is sensor_period * (1 + drift)");
+DEFINE_double(logger_period, kSimulate.logger_period,
+              "simulate (streams): a logger picks up the latest sensor sample at this period "
+              "(s) and stamps it with the pick-up time; 0: every sample written once");
+DEFINE_double(logger_jitter, kSimulate.logger_jitter,
+              "simulate (streams): sigma of the pick-up times (s), at most 0.15 logger_period; "
+              "without a logger, sigma of the sensor stamps");
+DEFINE_double(pickup_latency, kSimulate.pickup_latency,
+              "simulate (streams): fixed delay before a sample can be picked up (s)");
+DEFINE_double(encoder_period, kSimulate.encoder_period,
+              "simulate (streams): the encoders are polled at this period (s); 0: at the sensor "
+              "sample times");
+DEFINE_double(encoder_poll_jitter, kSimulate.encoder_poll_jitter,
+              "simulate (streams): sigma of the true encoder poll times (s), at most 0.08 "
+              "encoder_period");
+DEFINE_double(encoder_stamp_jitter, kSimulate.encoder_stamp_jitter,
+              "simulate (streams): sigma of the encoder stamps about the true poll times (s), at "
+              "most 0.08 encoder_period");
+DEFINE_double(repeat_fraction, kSimulate.repeat_fraction,
+              "simulate (streams): share of records written twice (exact duplicate rows), < 0.5");
 
 namespace calib::cli {
 
@@ -112,6 +147,19 @@ SimulateOptions SimulateOptionsFromFlags() {
   options.radius_change_time = FLAGS_radius_change_time;
   options.r_l_after = FLAGS_r_l_after;
   options.r_r_after = FLAGS_r_r_after;
+  options.format = FLAGS_format;
+  options.mean_interval = FLAGS_mean_interval;
+  options.interval_jitter = FLAGS_interval_jitter;
+  options.sensor_period = FLAGS_sensor_period;
+  options.sensor_phase = FLAGS_sensor_phase;
+  options.sensor_drift = FLAGS_sensor_drift;
+  options.logger_period = FLAGS_logger_period;
+  options.logger_jitter = FLAGS_logger_jitter;
+  options.pickup_latency = FLAGS_pickup_latency;
+  options.encoder_period = FLAGS_encoder_period;
+  options.encoder_poll_jitter = FLAGS_encoder_poll_jitter;
+  options.encoder_stamp_jitter = FLAGS_encoder_stamp_jitter;
+  options.repeat_fraction = FLAGS_repeat_fraction;
   return options;
 }
 
