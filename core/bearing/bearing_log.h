@@ -2,6 +2,7 @@
 #define CALIB_CORE_BEARING_BEARING_LOG_H_
 
 #include <calib/core/encoder_sample.h>
+#include <calib/core/timing/stamp_timing.h>
 
 #include <optional>
 #include <string>
@@ -41,6 +42,10 @@ struct BearingLog {
   std::string source;  // Directory (or other origin), for messages.
   BearingLogMeta meta;
   std::vector<BearingRun> runs;  // Sorted by id.
+  // Timing diagnostics filled by ReadBearingLog: "odometry" then "bearings", each pooled over
+  // the runs (every run analysed on its own clock; see PoolStreamTiming). Empty when built in
+  // memory.
+  std::vector<StreamTiming> stream_timing;
 };
 
 }  // namespace calib

@@ -2,6 +2,7 @@
 #include <calib/core/csv.h>
 #include <calib/core/text_file.h>
 #include <calib/core/text_number.h>
+#include <calib/core/timing/stamp_timing.h>
 
 #include <algorithm>
 #include <cctype>
@@ -155,65 +156,95 @@ Status CheckMeta(const BearingLogMeta& meta, const std::vector<BearingRun>& runs
 }  // namespace
 
 StatusOr<std::vector<BearingRun>> ParseBearingOdometryCsv(const std::string& text,
-                                                          const std::string& source) {
+                                                          const std::string& source,
+                                                          StreamTiming* timing) {
   CALIB_ASSIGN_OR_RETURN(CsvReader csv,
                          CsvReader::Open(text, source, {{"run"}, {"t"}, {"left"}, {"right"}}));
-  std::map<int, BearingRun> runs;
+  std::map<int, StreamRecords> records;  // Per run, in file order.
   while (true) {
     CALIB_ASSIGN_OR_RETURN(const bool more, csv.Next());
     if (!more) break;
     int id = 0;
-    EncoderSample e;
-    e.line = csv.line();
+    double t = 0.0, left = 0.0, right = 0.0;
     CALIB_RETURN_IF_ERROR(csv.Integer(0, &id, "an integer run id"));
-    CALIB_RETURN_IF_ERROR(csv.Number(1, &e.t_s));
-    CALIB_RETURN_IF_ERROR(csv.Number(2, &e.left_rad));
-    CALIB_RETURN_IF_ERROR(csv.Number(3, &e.right_rad));
-    BearingRun& run = runs[id];
-    run.id = id;
-    run.odometry.push_back(e);
+    CALIB_RETURN_IF_ERROR(csv.Number(1, &t));
+    CALIB_RETURN_IF_ERROR(csv.Number(2, &left));
+    CALIB_RETURN_IF_ERROR(csv.Number(3, &right));
+    StreamRecords& run = records[id];
+    run.stamps_s.push_back(t);
+    run.values.insert(run.values.end(), {left, right});
+    run.lines.push_back(csv.line());
   }
-  if (runs.empty()) return NoSamples(csv);
+  if (records.empty()) return NoSamples(csv);
   std::vector<BearingRun> out;
-  for (auto& [id, run] : runs) {
+  std::vector<StreamTiming> timings;
+  for (auto& [id, given] : records) {
+    if (timing != nullptr) {
+      timings.push_back(AnalyzeStreamTiming(given.stamps_s, given.values, "odometry",
+                                            source + " run " + std::to_string(id)));
+    }
+    StreamRecords kept = std::move(given);
+    kept.value_names = {"left", "right"};
+    CALIB_RETURN_IF_ERROR(DropExactDuplicates(source, &kept));
+    BearingRun run;
+    run.id = id;
+    for (size_t k = 0; k < kept.stamps_s.size(); ++k) {
+      run.odometry.push_back(EncoderSample{kept.stamps_s[k], kept.values[2 * k],
+                                           kept.values[2 * k + 1], kept.lines[k]});
+    }
     CALIB_RETURN_IF_ERROR(CheckRunOdometry(run, source));
     out.push_back(std::move(run));
   }
+  if (timing != nullptr) *timing = PoolStreamTiming(timings, "odometry", source);
   return out;
 }
 
 Status ParseBearingsCsv(const std::string& text, const std::string& source,
-                        std::vector<BearingRun>* runs) {
+                        std::vector<BearingRun>* runs, StreamTiming* timing) {
   CALIB_ASSIGN_OR_RETURN(CsvReader csv,
                          CsvReader::Open(text, source, {{"run"}, {"t"}, {"bearing"}}));
-  bool any = false;
+  std::map<int, StreamRecords> records;  // Per run, in file order.
   while (true) {
     CALIB_ASSIGN_OR_RETURN(const bool more, csv.Next());
     if (!more) break;
-    any = true;
-    const std::string where = At(source, csv.line());
     int id = 0;
-    BearingSample b;
-    b.line = csv.line();
+    double t = 0.0, bearing = 0.0;
     CALIB_RETURN_IF_ERROR(csv.Integer(0, &id, "an integer run id"));
-    CALIB_RETURN_IF_ERROR(csv.Number(1, &b.t_s));
-    CALIB_RETURN_IF_ERROR(csv.Number(2, &b.bearing_rad));
-    const auto run =
-        std::find_if(runs->begin(), runs->end(), [&](const BearingRun& r) { return r.id == id; });
-    if (run == runs->end()) {
-      return Status::InvalidInput(where + "run " + std::to_string(id) + " has no encoder samples");
+    CALIB_RETURN_IF_ERROR(csv.Number(1, &t));
+    CALIB_RETURN_IF_ERROR(csv.Number(2, &bearing));
+    const bool known =
+        std::any_of(runs->begin(), runs->end(), [&](const BearingRun& r) { return r.id == id; });
+    if (!known) {
+      return Status::InvalidInput(At(source, csv.line()) + "run " + std::to_string(id) +
+                                  " has no encoder samples");
     }
-    run->bearings.push_back(b);
-    CALIB_RETURN_IF_ERROR(CheckBearing(*run, run->bearings.size() - 1, source));
+    StreamRecords& run = records[id];
+    run.stamps_s.push_back(t);
+    run.values.push_back(bearing);
+    run.lines.push_back(csv.line());
   }
-  if (!any) return NoSamples(csv);
-  for (const BearingRun& run : *runs) {
-    if (run.bearings.empty()) {
+  if (records.empty()) return NoSamples(csv);
+  std::vector<StreamTiming> timings;
+  for (BearingRun& run : *runs) {
+    const auto found = records.find(run.id);
+    if (found == records.end()) {
       return Status::InvalidInput(source + ": run " + std::to_string(run.id) + " has no bearings" +
                                   OdometryLines(run) +
                                   "; every run needs bearings of the landmark");
     }
+    StreamRecords& kept = found->second;
+    if (timing != nullptr) {
+      timings.push_back(AnalyzeStreamTiming(kept.stamps_s, kept.values, "bearings",
+                                            source + " run " + std::to_string(run.id)));
+    }
+    kept.value_names = {"bearing"};
+    CALIB_RETURN_IF_ERROR(DropExactDuplicates(source, &kept));
+    for (size_t k = 0; k < kept.stamps_s.size(); ++k) {
+      run.bearings.push_back(BearingSample{kept.stamps_s[k], kept.values[k], kept.lines[k]});
+      CALIB_RETURN_IF_ERROR(CheckBearing(run, k, source));
+    }
   }
+  if (timing != nullptr) *timing = PoolStreamTiming(timings, "bearings", source);
   return Status::Ok();
 }
 
@@ -303,10 +334,11 @@ StatusOr<BearingLog> ReadBearingLog(const std::string& directory) {
   const std::string meta_path = (fs::path(directory) / "meta.json").string();
   std::string text;
   CALIB_RETURN_IF_ERROR(ReadWholeFile(odometry_path, &text));
+  std::vector<StreamTiming> timing(2);
   CALIB_ASSIGN_OR_RETURN(std::vector<BearingRun> runs,
-                         ParseBearingOdometryCsv(text, odometry_path));
+                         ParseBearingOdometryCsv(text, odometry_path, &timing[0]));
   CALIB_RETURN_IF_ERROR(ReadWholeFile(bearings_path, &text));
-  CALIB_RETURN_IF_ERROR(ParseBearingsCsv(text, bearings_path, &runs));
+  CALIB_RETURN_IF_ERROR(ParseBearingsCsv(text, bearings_path, &runs, &timing[1]));
   CALIB_RETURN_IF_ERROR(ReadWholeFile(meta_path, &text));
   CALIB_ASSIGN_OR_RETURN(const BearingLogMeta meta, ParseBearingMeta(text, meta_path));
   CALIB_RETURN_IF_ERROR(CheckMeta(meta, runs, meta_path));
@@ -314,6 +346,7 @@ StatusOr<BearingLog> ReadBearingLog(const std::string& directory) {
   log.source = directory;
   log.meta = meta;
   log.runs = std::move(runs);
+  log.stream_timing = std::move(timing);
   return log;
 }
 

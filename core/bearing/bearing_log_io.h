@@ -1,28 +1,34 @@
 #ifndef CALIB_CORE_BEARING_BEARING_LOG_IO_H_
 #define CALIB_CORE_BEARING_BEARING_LOG_IO_H_
 
-#include <string>
-#include <vector>
-
 #include <calib/core/bearing/bearing_log.h>
 #include <calib/core/status.h>
+
+#include <string>
+#include <vector>
 
 // Reader and writer for bearing logs (CONTRACT.md): a directory with odometry.csv
 // (run,t,left,right), bearings.csv (run,t,bearing) and meta.json. Every error message names the
 // file, the line where there is one, and what is wrong.
 namespace calib {
 
-// Reads and validates a log directory: ReadBearingLog = the three parsers + ValidateBearingLog.
+// Reads and validates a log directory: ReadBearingLog = the three parsers + ValidateBearingLog;
+// the log's stream_timing holds {odometry, bearings}.
 StatusOr<BearingLog> ReadBearingLog(const std::string& directory);
 
 // Parsers over in-memory text; `source` is the file name used in messages. CSV: a header naming
 // the columns (any order, extra columns ignored), then one sample per line; blank lines and lines
-// starting with '#' are skipped. Runs come back sorted by id, samples in file order.
+// starting with '#' are skipped. Runs come back sorted by id, samples in file order. Within a
+// run, exact duplicate records (same t, same values) are dropped; a repeated t with different
+// values is an error naming both lines. `timing` (may be null) receives the stream's timing
+// diagnostics, each run analysed on its own and pooled (PoolStreamTiming).
 StatusOr<std::vector<BearingRun>> ParseBearingOdometryCsv(const std::string& text,
-                                                          const std::string& source);
-// Adds the bearings to `runs` (from ParseBearingOdometryCsv), checking each against its run.
+                                                          const std::string& source,
+                                                          StreamTiming* timing = nullptr);
+// Adds the bearings to `runs` (from ParseBearingOdometryCsv), checking each against its run;
+// duplicates and `timing` as above.
 Status ParseBearingsCsv(const std::string& text, const std::string& source,
-                        std::vector<BearingRun>* runs);
+                        std::vector<BearingRun>* runs, StreamTiming* timing = nullptr);
 StatusOr<BearingLogMeta> ParseBearingMeta(const std::string& text, const std::string& source);
 
 // The invariants every consumer may rely on, for logs built in memory: positive finite nominal

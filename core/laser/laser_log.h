@@ -1,12 +1,14 @@
 #ifndef CALIB_CORE_LASER_LASER_LOG_H_
 #define CALIB_CORE_LASER_LASER_LOG_H_
 
+#include <calib/core/diff_drive.h>
+#include <calib/core/encoder_sample.h>
+#include <calib/core/se2.h>
+#include <calib/core/timing/stamp_timing.h>
+
 #include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <calib/core/diff_drive.h>
-#include <calib/core/se2.h>
 
 namespace calib {
 
@@ -27,10 +29,30 @@ struct LaserInterval {
   int record = 0;           // 1-based record number in the source.
 };
 
+// Raw streams: cumulative wheel rotations (rad, positive forward) on the odometry clock, and
+// sensor poses in any fixed world frame from a scan matcher or lidar odometry.
+struct StampedPose {
+  double t_s = 0.0;
+  Pose2d world_T_sensor = Pose2d::Zero();
+  int line = 0;  // 1-based line in sensor_poses.csv (0: not from a file).
+};
+
+// The raw samples of a stream directory (declared with its reader in laser_log_io.h; defined
+// here because LaserLog carries them).
+struct LaserStreams {
+  std::vector<EncoderSample> odometry;
+  std::vector<StampedPose> sensor_poses;
+};
+
 struct LaserLog {
   std::string source;           // File name, for messages.
   bool has_timestamps = false;  // True when start_s came from the input, not from summing T.
   std::vector<LaserInterval> intervals;
+  // From raw streams only (empty for tuples and CSV): the deduplicated, validated samples the
+  // intervals were built from, and the timing diagnostics of each stream ("odometry",
+  // "sensor_poses").
+  LaserStreams streams;
+  std::vector<StreamTiming> stream_timing;
 };
 
 // The robot displacement over an interval for the given odometry parameters.

@@ -29,12 +29,7 @@ StatusOr<LaserLog> ReadLaserLog(const std::string& path, LaserFormat format = La
 StatusOr<LaserLog> ParseLaserTuples(const std::string& text, const std::string& source);
 StatusOr<LaserLog> ParseLaserCsv(const std::string& text, const std::string& source);
 
-// Raw streams: cumulative wheel rotations (rad, positive forward) on the odometry clock, and
-// sensor poses in any fixed world frame from a scan matcher or lidar odometry.
-struct StampedPose {
-  double t_s = 0.0;
-  Pose2d world_T_sensor = Pose2d::Zero();
-};
+// Raw streams: StampedPose and LaserStreams {odometry, sensor_poses} are in laser_log.h.
 
 // One interval per pair of consecutive sensor poses: sm = pose_k⁻¹ ∘ pose_{k+1}; the wheel
 // rotations over the interval are integrated from the encoder samples inside it (linear
@@ -42,9 +37,18 @@ struct StampedPose {
 // Intervals that contain an encoder gap (a sample period longer than 5x the median period) are
 // dropped and the next kept one is marked gap_before. Poses outside the encoder time span are
 // dropped. `steps` is filled only when encoder samples fall strictly inside the interval.
+// Exact duplicate samples are dropped (counted in the timing); the log carries the samples in
+// `streams` and their timing diagnostics in `stream_timing`.
 StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometry,
                                        const std::vector<StampedPose>& sensor_poses,
                                        const std::string& source);
+// Reads odometry.csv and sensor_poses.csv: exact duplicate records (same stamp, same values) are
+// dropped and counted; a repeated stamp with different values is an error naming both lines;
+// stamps must otherwise increase strictly and values be finite. `timing` (may be null) receives
+// one StreamTiming per stream ("odometry", "sensor_poses"). Samples keep their source lines.
+StatusOr<LaserStreams> ReadLaserStreamSamples(const std::string& directory,
+                                              std::vector<StreamTiming>* timing);
+// ReadLaserStreamSamples + LaserLogFromStreams; the log carries the streams and their timing.
 StatusOr<LaserLog> ReadLaserStream(const std::string& directory);
 
 // Writers emit the shortest decimal form that reads back bit-exact. They write the interval

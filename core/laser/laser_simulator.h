@@ -73,11 +73,8 @@ std::vector<LaserInterval> DropBackwardIntervals(const std::vector<LaserInterval
                                                  const OdometryParams& odometry);
 
 // The same motion as raw streams: encoder samples at `encoder_rate_hz` and scan-matcher poses
-// (world_T_sensor, noisy, one per interval end), for the stream reader.
-struct LaserStreams {
-  std::vector<EncoderSample> odometry;
-  std::vector<StampedPose> sensor_poses;
-};
+// (world_T_sensor, noisy, one per interval end), for the stream reader (LaserStreams is in
+// laser_log.h).
 LaserStreams SimulateLaserStreams(const LaserSimOptions& options, double encoder_rate_hz,
                                   LaserSimTruth* truth = nullptr);
 

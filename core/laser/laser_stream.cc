@@ -3,6 +3,7 @@
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/core/text_file.h>
 #include <calib/core/text_number.h>
+#include <calib/core/timing/stamp_timing.h>
 
 #include <algorithm>
 #include <cmath>
@@ -24,26 +25,27 @@ namespace fs = std::filesystem;
 // ---------------------------------------------------------------------------------------------
 // The stream files: every column a required number.
 
-struct NumberTable {
-  std::vector<double> values;  // Row-major.
-  std::vector<int> lines;      // 1-based source line of each row.
-};
-
-StatusOr<NumberTable> ReadNumberTable(std::string_view text, const std::string& source,
-                                      std::vector<CsvColumn> columns) {
-  const size_t width = columns.size();
+// Reads a stream file into records (stamp, values, line) in file order.
+StatusOr<StreamRecords> ReadRecords(std::string_view text, const std::string& source,
+                                    std::vector<std::string> value_names) {
+  std::vector<CsvColumn> columns = {{"t"}};
+  for (const std::string& name : value_names) columns.push_back({name.c_str()});
+  const size_t width = value_names.size();
   CALIB_ASSIGN_OR_RETURN(CsvReader csv, CsvReader::Open(text, source, std::move(columns)));
-  NumberTable table;
+  StreamRecords records;
   while (true) {
     CALIB_ASSIGN_OR_RETURN(const bool more, csv.Next());
     if (!more) break;
+    records.stamps_s.push_back(0.0);
+    CALIB_RETURN_IF_ERROR(csv.Number(0, &records.stamps_s.back()));
     for (size_t c = 0; c < width; ++c) {
-      table.values.push_back(0.0);
-      CALIB_RETURN_IF_ERROR(csv.Number(c, &table.values.back()));
+      records.values.push_back(0.0);
+      CALIB_RETURN_IF_ERROR(csv.Number(c + 1, &records.values.back()));
     }
-    table.lines.push_back(csv.line());
+    records.lines.push_back(csv.line());
   }
-  return table;
+  records.value_names = std::move(value_names);
+  return records;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -53,14 +55,40 @@ struct StreamNames {
   std::string source;
   std::string odometry;
   std::string poses;
-  const std::vector<int>* odometry_lines = nullptr;  // Source lines, when read from files.
-  const std::vector<int>* pose_lines = nullptr;
 };
 
-std::string SampleWhere(const std::string& name, const std::vector<int>* lines, size_t k,
-                        const char* noun) {
-  if (lines != nullptr) return Where(name, (*lines)[k], 0);
+// "file:line: " for a sample read from a file, else "name: sample k: ".
+std::string SampleWhere(const std::string& name, int line, size_t k, const char* noun) {
+  if (line > 0) return Where(name, line, 0);
   return name + ": " + noun + " " + std::to_string(k + 1) + ": ";
+}
+
+StreamRecords OdometryRecords(const std::vector<EncoderSample>& odometry) {
+  StreamRecords records;
+  records.value_names = {"left", "right"};
+  for (const EncoderSample& s : odometry) {
+    records.stamps_s.push_back(s.t_s);
+    records.values.insert(records.values.end(), {s.left_rad, s.right_rad});
+    records.lines.push_back(s.line);
+  }
+  return records;
+}
+
+StreamRecords PoseRecords(const std::vector<StampedPose>& poses) {
+  StreamRecords records;
+  records.value_names = {"x", "y", "theta"};
+  for (const StampedPose& p : poses) {
+    records.stamps_s.push_back(p.t_s);
+    const Pose2d& v = p.world_T_sensor;
+    records.values.insert(records.values.end(), {v(0), v(1), v(2)});
+    records.lines.push_back(p.line);
+  }
+  return records;
+}
+
+// Lines are named in messages only when every record has one.
+void DropUnknownLines(StreamRecords* records) {
+  if (std::count(records->lines.begin(), records->lines.end(), 0) > 0) records->lines.clear();
 }
 
 // Cumulative wheel angles at time t inside segment [s, s + 1] (or exactly at sample s).
@@ -78,6 +106,11 @@ void Interpolate(const std::vector<EncoderSample>& odometry, size_t s, double t,
   *right = a.right_rad + (b.right_rad - a.right_rad) * fraction;
 }
 
+// " (line 12)" when the line is known.
+std::string LineNote(int line) {
+  return line > 0 ? " (line " + std::to_string(line) + ")" : std::string();
+}
+
 Status ValidateOdometry(const std::vector<EncoderSample>& odometry, const StreamNames& names) {
   if (odometry.size() < 2) {
     return Status::InvalidInput(names.odometry + ": needs at least 2 odometry samples, got " +
@@ -85,15 +118,14 @@ Status ValidateOdometry(const std::vector<EncoderSample>& odometry, const Stream
   }
   for (size_t k = 0; k < odometry.size(); ++k) {
     const EncoderSample& s = odometry[k];
-    const auto where = [&] {
-      return SampleWhere(names.odometry, names.odometry_lines, k, "sample");
-    };
+    const auto where = [&] { return SampleWhere(names.odometry, s.line, k, "sample"); };
     if (!std::isfinite(s.t_s) || !std::isfinite(s.left_rad) || !std::isfinite(s.right_rad)) {
       return Status::InvalidInput(where() + "values must be finite (NaN or inf found)");
     }
     if (k > 0 && !(s.t_s > odometry[k - 1].t_s)) {
-      return Status::InvalidInput(where() + "timestamps must be strictly increasing, got t=" +
-                                  Num(s.t_s) + " after " + Num(odometry[k - 1].t_s));
+      return Status::InvalidInput(
+          where() + "timestamps must be strictly increasing, got t=" + Num(s.t_s) + " after " +
+          Num(odometry[k - 1].t_s) + LineNote(odometry[k - 1].line));
     }
   }
   return Status::Ok();
@@ -106,13 +138,14 @@ Status ValidatePoses(const std::vector<StampedPose>& poses, const StreamNames& n
   }
   for (size_t k = 0; k < poses.size(); ++k) {
     const StampedPose& p = poses[k];
-    const auto where = [&] { return SampleWhere(names.poses, names.pose_lines, k, "pose"); };
+    const auto where = [&] { return SampleWhere(names.poses, p.line, k, "pose"); };
     if (!std::isfinite(p.t_s) || !p.world_T_sensor.allFinite()) {
       return Status::InvalidInput(where() + "values must be finite (NaN or inf found)");
     }
     if (k > 0 && !(p.t_s > poses[k - 1].t_s)) {
-      return Status::InvalidInput(where() + "timestamps must be strictly increasing, got t=" +
-                                  Num(p.t_s) + " after " + Num(poses[k - 1].t_s));
+      return Status::InvalidInput(where() +
+                                  "timestamps must be strictly increasing, got t=" + Num(p.t_s) +
+                                  " after " + Num(poses[k - 1].t_s) + LineNote(poses[k - 1].line));
     }
   }
   return Status::Ok();
@@ -176,11 +209,46 @@ void SetWheelMotion(const std::vector<EncoderSample>& odometry, size_t j, size_t
   }
 }
 
+// Drops exact duplicates (an error for a repeated stamp with other values), validates, and
+// appends the timing of each stream as given to `timing` (may be null).
+StatusOr<LaserStreams> PrepareStreams(const std::vector<EncoderSample>& odometry,
+                                      const std::vector<StampedPose>& poses,
+                                      const StreamNames& names, std::vector<StreamTiming>* timing) {
+  StreamRecords odometry_records = OdometryRecords(odometry);
+  StreamRecords pose_records = PoseRecords(poses);
+  DropUnknownLines(&odometry_records);
+  DropUnknownLines(&pose_records);
+  CALIB_RETURN_IF_ERROR(DropExactDuplicates(names.odometry, &odometry_records));
+  CALIB_RETURN_IF_ERROR(DropExactDuplicates(names.poses, &pose_records));
+  LaserStreams streams;
+  for (size_t k = 0; k < odometry_records.stamps_s.size(); ++k) {
+    const double* v = &odometry_records.values[2 * k];
+    const int line = odometry_records.lines.empty() ? 0 : odometry_records.lines[k];
+    streams.odometry.push_back(EncoderSample{odometry_records.stamps_s[k], v[0], v[1], line});
+  }
+  for (size_t k = 0; k < pose_records.stamps_s.size(); ++k) {
+    const double* v = &pose_records.values[3 * k];
+    const int line = pose_records.lines.empty() ? 0 : pose_records.lines[k];
+    streams.sensor_poses.push_back(
+        StampedPose{pose_records.stamps_s[k], Pose2d(v[0], v[1], v[2]), line});
+  }
+  CALIB_RETURN_IF_ERROR(ValidateOdometry(streams.odometry, names));
+  CALIB_RETURN_IF_ERROR(ValidatePoses(streams.sensor_poses, names));
+  if (timing != nullptr) {
+    // The records as given: the analysis counts the duplicates itself.
+    const StreamRecords odometry_given = OdometryRecords(odometry);
+    const StreamRecords poses_given = PoseRecords(poses);
+    timing->push_back(AnalyzeStreamTiming(odometry_given.stamps_s, odometry_given.values,
+                                          "odometry", names.odometry));
+    timing->push_back(
+        AnalyzeStreamTiming(poses_given.stamps_s, poses_given.values, "sensor_poses", names.poses));
+  }
+  return streams;
+}
+
 StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
                                     const std::vector<StampedPose>& poses,
                                     const StreamNames& names) {
-  CALIB_RETURN_IF_ERROR(ValidateOdometry(odometry, names));
-  CALIB_RETURN_IF_ERROR(ValidatePoses(poses, names));
   const double gap_limit = EncoderGapLimit(odometry);
   size_t first = 0;
   size_t last = 0;
@@ -219,7 +287,7 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
     interval.gap_before = pending_gap;
     pending_gap = false;
     interval.record = static_cast<int>(k) + 1;
-    interval.line = names.pose_lines != nullptr ? (*names.pose_lines)[k] : 0;
+    interval.line = poses[k].line;
     SetWheelMotion(odometry, j, m, ta, tb, &interval);
     log.intervals.push_back(std::move(interval));
   }
@@ -253,46 +321,64 @@ StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometr
   names.source = source;
   names.odometry = source + " (odometry)";
   names.poses = source + " (sensor poses)";
-  return BuildFromStreams(odometry, sensor_poses, names);
+  std::vector<StreamTiming> timing;
+  CALIB_ASSIGN_OR_RETURN(LaserStreams streams,
+                         PrepareStreams(odometry, sensor_poses, names, &timing));
+  CALIB_ASSIGN_OR_RETURN(LaserLog log,
+                         BuildFromStreams(streams.odometry, streams.sensor_poses, names));
+  log.streams = std::move(streams);
+  log.stream_timing = std::move(timing);
+  return log;
 }
 
-StatusOr<LaserLog> ReadLaserStream(const std::string& directory) {
+StatusOr<LaserStreams> ReadLaserStreamSamples(const std::string& directory,
+                                              std::vector<StreamTiming>* timing) {
   std::error_code ec;
   if (!fs::is_directory(directory, ec)) {
     return Status::Io(directory +
                       ": not a directory (the stream format reads a directory "
                       "holding odometry.csv and sensor_poses.csv)");
   }
-  const std::string odometry_path = (fs::path(directory) / "odometry.csv").string();
-  const std::string poses_path = (fs::path(directory) / "sensor_poses.csv").string();
-
-  std::string text;
-  CALIB_RETURN_IF_ERROR(ReadWholeFile(odometry_path, &text));
-  CALIB_ASSIGN_OR_RETURN(const NumberTable odometry_table,
-                         ReadNumberTable(text, odometry_path, {{"t"}, {"left"}, {"right"}}));
-  std::vector<EncoderSample> odometry(odometry_table.lines.size());
-  for (size_t k = 0; k < odometry.size(); ++k) {
-    const double* v = &odometry_table.values[3 * k];
-    odometry[k] = EncoderSample{v[0], v[1], v[2], odometry_table.lines[k]};
-  }
-
-  CALIB_RETURN_IF_ERROR(ReadWholeFile(poses_path, &text));
-  CALIB_ASSIGN_OR_RETURN(const NumberTable pose_table,
-                         ReadNumberTable(text, poses_path, {{"t"}, {"x"}, {"y"}, {"theta"}}));
-  std::vector<StampedPose> poses(pose_table.lines.size());
-  for (size_t k = 0; k < poses.size(); ++k) {
-    const double* v = &pose_table.values[4 * k];
-    poses[k].t_s = v[0];
-    poses[k].world_T_sensor = Pose2d(v[1], v[2], v[3]);
-  }
-
   StreamNames names;
   names.source = directory;
-  names.odometry = odometry_path;
-  names.poses = poses_path;
-  names.odometry_lines = &odometry_table.lines;
-  names.pose_lines = &pose_table.lines;
-  return BuildFromStreams(odometry, poses, names);
+  names.odometry = (fs::path(directory) / "odometry.csv").string();
+  names.poses = (fs::path(directory) / "sensor_poses.csv").string();
+
+  std::string text;
+  CALIB_RETURN_IF_ERROR(ReadWholeFile(names.odometry, &text));
+  CALIB_ASSIGN_OR_RETURN(const StreamRecords odometry_records,
+                         ReadRecords(text, names.odometry, {"left", "right"}));
+  std::vector<EncoderSample> odometry(odometry_records.stamps_s.size());
+  for (size_t k = 0; k < odometry.size(); ++k) {
+    const double* v = &odometry_records.values[2 * k];
+    odometry[k] =
+        EncoderSample{odometry_records.stamps_s[k], v[0], v[1], odometry_records.lines[k]};
+  }
+
+  CALIB_RETURN_IF_ERROR(ReadWholeFile(names.poses, &text));
+  CALIB_ASSIGN_OR_RETURN(const StreamRecords pose_records,
+                         ReadRecords(text, names.poses, {"x", "y", "theta"}));
+  std::vector<StampedPose> poses(pose_records.stamps_s.size());
+  for (size_t k = 0; k < poses.size(); ++k) {
+    const double* v = &pose_records.values[3 * k];
+    poses[k] =
+        StampedPose{pose_records.stamps_s[k], Pose2d(v[0], v[1], v[2]), pose_records.lines[k]};
+  }
+  return PrepareStreams(odometry, poses, names, timing);
+}
+
+StatusOr<LaserLog> ReadLaserStream(const std::string& directory) {
+  std::vector<StreamTiming> timing;
+  CALIB_ASSIGN_OR_RETURN(LaserStreams streams, ReadLaserStreamSamples(directory, &timing));
+  StreamNames names;
+  names.source = directory;
+  names.odometry = (fs::path(directory) / "odometry.csv").string();
+  names.poses = (fs::path(directory) / "sensor_poses.csv").string();
+  CALIB_ASSIGN_OR_RETURN(LaserLog log,
+                         BuildFromStreams(streams.odometry, streams.sensor_poses, names));
+  log.streams = std::move(streams);
+  log.stream_timing = std::move(timing);
+  return log;
 }
 
 Status WriteLaserStream(const std::vector<EncoderSample>& odometry,

@@ -36,10 +36,14 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   const StatusOr<LaserCalibrationResult> result = CalibrateLaserJoint(intervals, options);
   if (!result.ok()) return Fail(flags.input + ": " + result.message());
 
-  nlohmann::ordered_json json = LaserResultJson(*result, flags.input, flags.loss);
+  std::vector<StreamTiming> timing;  // Of raw stream logs only.
+  for (const LaserLog& log : logs) {
+    timing.insert(timing.end(), log.stream_timing.begin(), log.stream_timing.end());
+  }
+  nlohmann::ordered_json json = LaserResultJson(*result, flags.input, flags.loss, timing);
   json["seconds"]["total"] = clock.Seconds();
-  return WriteReport(flags.output, json, LaserResultSummary(*result, flags.input, flags.loss),
-                     flags.quiet);
+  return WriteReport(flags.output, json,
+                     LaserResultSummary(*result, flags.input, flags.loss, timing), flags.quiet);
 }
 
 int CalibrateBearingLog(const CalibrateOptions& flags) {
@@ -51,10 +55,11 @@ int CalibrateBearingLog(const CalibrateOptions& flags) {
       CalibrateBearing(input->log, input->calibration);
   if (!result.ok()) return Fail(result.message());
 
-  nlohmann::ordered_json json = BearingResultJson(*result, flags.input, flags.loss);
+  const std::vector<StreamTiming>& timing = input->log.stream_timing;
+  nlohmann::ordered_json json = BearingResultJson(*result, flags.input, flags.loss, timing);
   json["seconds"]["total"] = clock.Seconds();
-  return WriteReport(flags.output, json, BearingResultSummary(*result, flags.input, flags.loss),
-                     flags.quiet);
+  return WriteReport(flags.output, json,
+                     BearingResultSummary(*result, flags.input, flags.loss, timing), flags.quiet);
 }
 
 }  // namespace

@@ -64,7 +64,8 @@ bool IsBearingLogDirectory(const std::string& path) {
 }
 
 nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
-                                         const std::string& input, const std::string& loss) {
+                                         const std::string& input, const std::string& loss,
+                                         const std::vector<StreamTiming>& stream_timing) {
   nlohmann::ordered_json out = ReportHeader("bearing", input, "m, rad; eta and xi in 1/m");
   const BearingMetricVector metric = ToVector(result.metric);
   const BearingMetricVector seed_metric = ToVector(result.seed_metric);
@@ -139,11 +140,13 @@ nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
   out["seconds"] = {{"seed", result.seed_seconds},
                     {"adjustment", result.adjustment_seconds},
                     {"covariance", result.covariance_seconds}};
+  if (!stream_timing.empty()) out["timing"] = {{"streams", StreamTimingJson(stream_timing)}};
   return out;
 }
 
 std::string BearingResultSummary(const BearingCalibrationResult& result, const std::string& input,
-                                 const std::string& loss) {
+                                 const std::string& loss,
+                                 const std::vector<StreamTiming>& stream_timing) {
   std::string text;
   char line[256];
   std::snprintf(line, sizeof(line),
@@ -199,6 +202,7 @@ std::string BearingResultSummary(const BearingCalibrationResult& result, const s
     text += line;
   }
   for (const std::string& warning : result.warnings) text += "  warning: " + warning + "\n";
+  text += StreamTimingSummary(stream_timing);
   return text;
 }
 

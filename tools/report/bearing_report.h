@@ -2,6 +2,7 @@
 #define CALIB_TOOLS_REPORT_BEARING_REPORT_H_
 
 #include <calib/solvers/bearing/calibrate_bearing.h>
+#include <calib/tools/report/stream_timing_report.h>
 
 #include <nlohmann/json.hpp>
 #include <string>
@@ -19,12 +20,15 @@ nlohmann::ordered_json BearingParamObject(const BearingParamVector& v,
 
 // The contract's OUT.json for the bearing problem (SI units, radians), with the detail a user
 // needs to check the result: covariance, noise levels, per-run fit, timings.
+// With stream timing also "timing": {"streams": [...]} (StreamTimingJson).
 nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
-                                         const std::string& input, const std::string& loss);
+                                         const std::string& input, const std::string& loss,
+                                         const std::vector<StreamTiming>& stream_timing = {});
 
 // The short human-readable summary printed on stdout (degrees for the angles).
 std::string BearingResultSummary(const BearingCalibrationResult& result, const std::string& input,
-                                 const std::string& loss);
+                                 const std::string& loss,
+                                 const std::vector<StreamTiming>& stream_timing = {});
 
 }  // namespace calib
 

@@ -18,7 +18,8 @@ nlohmann::ordered_json ParamObject(const LaserParamVector& v) {
 }  // namespace
 
 nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
-                                       const std::string& input, const std::string& loss) {
+                                       const std::string& input, const std::string& loss,
+                                       const std::vector<StreamTiming>& stream_timing) {
   nlohmann::ordered_json out = ReportHeader("laser", input, "m, rad");
   out["estimate"] = ParamObject(result.estimate.ToVector());
   out["stddev"] = ParamObject(result.stddev);
@@ -56,6 +57,7 @@ nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
   out["seconds"] = {{"closed_form", result.closed_form_seconds},
                     {"refinement", result.refinement_seconds},
                     {"covariance", result.covariance_seconds}};
+  if (!stream_timing.empty()) out["timing"] = {{"streams", StreamTimingJson(stream_timing)}};
   return out;
 }
 
@@ -73,7 +75,8 @@ nlohmann::ordered_json LaserSimTruthJson(const LaserSimTruth& truth) {
 }
 
 std::string LaserResultSummary(const LaserCalibrationResult& result, const std::string& input,
-                               const std::string& loss) {
+                               const std::string& loss,
+                               const std::vector<StreamTiming>& stream_timing) {
   std::string text;
   char line[256];
   std::snprintf(line, sizeof(line), "%s: laser–odometry calibration, %d intervals, loss %s\n",
@@ -104,6 +107,7 @@ std::string LaserResultSummary(const LaserCalibrationResult& result, const std::
   for (const std::string& warning : result.observability.warnings) {
     text += "  warning: " + warning + "\n";
   }
+  text += StreamTimingSummary(stream_timing);
   return text;
 }
 

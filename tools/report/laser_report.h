@@ -3,6 +3,7 @@
 
 #include <calib/core/laser/laser_simulator.h>
 #include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/tools/report/stream_timing_report.h>
 
 #include <nlohmann/json.hpp>
 #include <string>
@@ -10,9 +11,11 @@
 namespace calib {
 
 // The contract's OUT.json for the laser problem (SI units), with the extra detail a user needs
-// to check the result: covariance, noise, observability, timings.
+// to check the result: covariance, noise, observability, timings; with raw streams also
+// "timing": {"streams": [...]} (StreamTimingJson).
 nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
-                                       const std::string& input, const std::string& loss);
+                                       const std::string& input, const std::string& loss,
+                                       const std::vector<StreamTiming>& stream_timing = {});
 
 // The truth of a simulated log in the result's layout ({"problem", "estimate"}) plus the
 // simulated effects (`calib simulate --truth`).
@@ -20,7 +23,8 @@ nlohmann::ordered_json LaserSimTruthJson(const LaserSimTruth& truth);
 
 // The short human-readable summary printed on stdout (mm and degrees).
 std::string LaserResultSummary(const LaserCalibrationResult& result, const std::string& input,
-                               const std::string& loss);
+                               const std::string& loss,
+                               const std::vector<StreamTiming>& stream_timing = {});
 
 }  // namespace calib
 

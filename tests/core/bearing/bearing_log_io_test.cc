@@ -99,6 +99,34 @@ TEST_F(BearingLogIoTest, ValidLogReads) {
   EXPECT_EQ(log->meta.initial_distance->meters, 1.5);
 }
 
+// Exact duplicate records are dropped and counted in the pooled timing of each stream.
+TEST_F(BearingLogIoTest, ExactDuplicatesAreDroppedAndTimingIsPooled) {
+  WriteLog("run,t,left,right\n1,0,0,0\n1,1,0.1,0.2\n1,1,0.1,0.2\n1,2,0.2,0.4\n2,5,0,0\n2,6,1,1\n",
+           "run,t,bearing\n1,0.5,0.1\n1,0.5,0.1\n1,1.5,-0.2\n2,5.5,3.0\n", kMeta);
+  const StatusOr<BearingLog> log = ReadBearingLog(dir_.string());
+  ASSERT_TRUE(log.ok()) << log.message();
+  ASSERT_EQ(log->runs[0].odometry.size(), 3u);
+  EXPECT_EQ(log->runs[0].odometry[2].line, 5);
+  ASSERT_EQ(log->runs[0].bearings.size(), 2u);
+  EXPECT_EQ(log->runs[0].bearings[1].line, 4);
+  ASSERT_EQ(log->stream_timing.size(), 2u);
+  const StreamTiming& odometry = log->stream_timing[0];
+  EXPECT_EQ(odometry.stream, "odometry");
+  EXPECT_EQ(odometry.source, (dir_ / "odometry.csv").string());
+  EXPECT_EQ(odometry.records, 6);
+  EXPECT_EQ(odometry.samples, 5);
+  EXPECT_EQ(odometry.duplicates_dropped, 1);
+  EXPECT_NEAR(odometry.period_s, 1.0, 1e-12);
+  const StreamTiming& bearings = log->stream_timing[1];
+  EXPECT_EQ(bearings.stream, "bearings");
+  EXPECT_EQ(bearings.records, 4);
+  EXPECT_EQ(bearings.duplicates_dropped, 1);
+  bool pooled = false;
+  for (const std::string& note : bearings.notes)
+    pooled |= note.find("pooled over 2 run") != std::string::npos;
+  EXPECT_TRUE(pooled);
+}
+
 // Every error names the file, the line where there is one, and the problem.
 struct BadCase {
   const char* what;
@@ -140,10 +168,15 @@ TEST_F(BearingLogIoTest, EveryReaderErrorIsExplained) {
        {"odometry.csv:3", "'t' is empty"}},
       {"run id", "run,t,left,right\n1.5,0,0,0\n", b, m, {"odometry.csv:2", "integer run id"}},
       {"time order",
-       "run,t,left,right\n1,0,0,0\n1,2,0,0\n1,2,0,0\n",
+       "run,t,left,right\n1,0,0,0\n1,2,0,0\n1,1.5,0,0\n",
        b,
        m,
        {"odometry.csv:4", "run 1", "not after", "line 3"}},
+      {"repeated time, other values",
+       "run,t,left,right\n1,0,0,0\n1,2,0,0\n1,2,0.1,0\n",
+       b,
+       m,
+       {"odometry.csv: line 3 and line 4 share t=2 but differ in left"}},
       {"one sample",
        "run,t,left,right\n1,0,0,0\n1,1,0,0\n2,0,0,0\n",
        "run,t,bearing\n1,0.5,0\n",
@@ -172,9 +205,14 @@ TEST_F(BearingLogIoTest, EveryReaderErrorIsExplained) {
        {"bearings.csv:2", "'bearing'", "finite"}},
       {"bearing order",
        o,
-       "run,t,bearing\n1,0.5,0\n1,0.5,0\n2,5.5,0\n",
+       "run,t,bearing\n1,0.5,0\n1,0.4,0\n2,5.5,0\n",
        m,
        {"bearings.csv:3", "not after"}},
+      {"repeated bearing time, other value",
+       o,
+       "run,t,bearing\n1,0.5,0\n1,0.5,0.1\n2,5.5,0\n",
+       m,
+       {"bearings.csv: line 2 and line 3 share t=0.5 but differ in bearing"}},
       {"run without bearings",
        o,
        "run,t,bearing\n1,0.5,0\n",

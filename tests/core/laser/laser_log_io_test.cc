@@ -640,6 +640,10 @@ TEST(LaserStreamTest, Errors) {
   ExpectError(LaserLogFromStreams(odometry, {poses[0]}, "s"), {"s (sensor poses)", "at least 2"});
   std::vector<EncoderSample> bad = odometry;
   bad[4].t_s = bad[3].t_s;
+  ExpectError(LaserLogFromStreams(bad, poses, "s"),
+              {"s (odometry): record 4 and record 5 share t=", "differ in left"});
+  bad = odometry;
+  bad[4].t_s = bad[2].t_s;
   ExpectError(LaserLogFromStreams(bad, poses, "s"), {"sample 5", "strictly increasing"});
   bad = odometry;
   bad[6].right_rad = std::nan("");
@@ -700,10 +704,14 @@ TEST_F(LaserLogIoTest, StreamFileErrorsNameFileAndLine) {
        "t,left,right\n0,0,0\n0.02,0.1,0.1\n0.01,0.2,0.2\n",
        poses_ok,
        {"odometry.csv:4:", "strictly increasing"}},
-      {"pose time repeats",
+      {"pose time repeats with other values",
        odometry_ok,
        "t,x,y,theta\n0.01,0,0,0\n\n0.01,0.1,0,0\n",
-       {"sensor_poses.csv:4:", "strictly increasing"}},
+       {"sensor_poses.csv: line 2 and line 4 share t=0.01 but differ in x"}},
+      {"pose time goes back",
+       odometry_ok,
+       "t,x,y,theta\n0.02,0,0,0\n0.05,0,0,0\n0.01,0.1,0,0\n",
+       {"sensor_poses.csv:4:", "strictly increasing", "(line 3)"}},
       {"NaN pose",
        odometry_ok,
        "t,x,y,theta\n0.01,0,0,0\n0.05,nan,0,0\n",
