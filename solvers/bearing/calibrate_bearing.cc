@@ -382,6 +382,7 @@ StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
   result.covariance_seconds = Seconds(clock);
   CALIB_RETURN_IF_ERROR(CheckDetermined(result, options).Prefixed(source + ": "));
   SummarizeRuns(log, final_problem, *inlier, &result);
+  bearing_calibration::AddStreamTimingWarnings(log, &result);
   return result;
 }
 

@@ -33,6 +33,10 @@ Status ApplyTimingModel(const BearingLog& log, const BearingCalibrationOptions& 
                         ceres::Solver::Summary* summary, BearingMask* inlier,
                         BearingCalibrationResult* result);
 
+// A warning for each stream whose stamp diagnostics (log.stream_timing, from the reader) show that
+// its stamps cannot be the sample times.
+void AddStreamTimingWarnings(const BearingLog& log, BearingCalibrationResult* result);
+
 // After the covariance (result->covariance_scale set): σ of a modelled τ from the final fit.
 Status FinishTiming(BearingProblem* problem, BearingCalibrationResult* result);
 

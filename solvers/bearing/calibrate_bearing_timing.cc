@@ -145,6 +145,27 @@ Status ApplyTimingModel(const BearingLog& log, const BearingCalibrationOptions& 
   return Status::Ok();
 }
 
+void AddStreamTimingWarnings(const BearingLog& log, BearingCalibrationResult* result) {
+  for (const StreamTiming& stream : log.stream_timing) {
+    if (stream.stamps_are_sample_times) continue;
+    std::string why;
+    if (stream.free_running_signature) {
+      AppendReason(&why, "they show a free-running sensor picked up by the logger");
+    }
+    if (stream.jitter_s > 0.0) {
+      AppendReason(&why, "they scatter by " + Num(stream.jitter_s * 1e3, 3) + " ms about a " +
+                             Num(stream.period_s * 1e3, 4) + " ms grid");
+    }
+    for (const std::string& note : stream.notes) AppendReason(&why, note);
+    const std::string source = stream.source.empty() ? stream.stream : stream.source;
+    result->warnings.push_back(
+        source + ": the " + stream.stream + " stamps cannot be the sample times (" + why +
+        "); the calibration models only a clock offset and a white stamp jitter of the bearings "
+        "against the encoders (" +
+        result->timing.treatment + "), so its sigmas may be too small");
+  }
+}
+
 Status FinishTiming(BearingProblem* problem, BearingCalibrationResult* result) {
   BearingTiming& timing = result->timing;
   if (timing.time_offset_modelled) {

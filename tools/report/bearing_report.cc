@@ -107,7 +107,6 @@ nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
                   {"bearing_redundancy", result.bearing_redundancy},
                   {"odometry_redundancy", result.odometry_redundancy}};
   out["covariance_scale"] = result.covariance_scale;
-  AddTimingJson(result.timing, &out);
   nlohmann::ordered_json runs = nlohmann::ordered_json::array();
   for (const BearingRunSummary& run : result.runs) {
     nlohmann::ordered_json r = {{"run", run.run},
@@ -141,6 +140,7 @@ nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
                     {"adjustment", result.adjustment_seconds},
                     {"covariance", result.covariance_seconds}};
   if (!stream_timing.empty()) out["timing"] = {{"streams", StreamTimingJson(stream_timing)}};
+  AddTimingJson(result.timing, &out);  // After the streams' hook: adds keys beside "streams".
   return out;
 }
 

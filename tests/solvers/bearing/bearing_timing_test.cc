@@ -7,6 +7,7 @@
 #include <calib/solvers/bearing/bearing_timing.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -115,7 +116,7 @@ TEST(BearingTimingTest, ProfileLikelihoodRecoversTheJitter) {
   }
 }
 
-// A clean log: both tests run, neither is kept, and the answer is the plain one bit for bit.
+// A clean log: both tests run, neither is kept, and the estimate is the plain one bit for bit.
 TEST(BearingTimingTest, CleanLogKeepsThePlainAnswerBitForBit) {
   const BearingLog log = ReadData("data/diagnose/bearing_clean");
   const StatusOr<BearingCalibrationResult> plain = CalibrateBearing(log, Plain());
@@ -128,9 +129,13 @@ TEST(BearingTimingTest, CleanLogKeepsThePlainAnswerBitForBit) {
   EXPECT_GT(aware->timing.time_offset_stddev_s, 0.0);
   for (int i = 0; i < kNumBearingParams; ++i) {
     EXPECT_EQ(ToVector(aware->estimate)(i), ToVector(plain->estimate)(i)) << kBearingParamNames[i];
-    EXPECT_EQ(aware->stddev(i), plain->stddev(i)) << kBearingParamNames[i];
+    // ceres::Covariance orders blocks by address: equal to round-off even between two runs.
+    EXPECT_NEAR(aware->stddev(i), plain->stddev(i), 1e-12 * plain->stddev(i))
+        << kBearingParamNames[i];
   }
-  EXPECT_EQ(ToVector(aware->metric), ToVector(plain->metric));
+  for (int i = 0; i < kNumBearingMetricParams; ++i) {
+    EXPECT_EQ(ToVector(aware->metric)(i), ToVector(plain->metric)(i)) << kBearingMetricNames[i];
+  }
 }
 
 // The concealed 150 ms offset of data/diagnose/bearing_time_offset: calibrate models it, τ and
@@ -153,7 +158,14 @@ TEST(BearingTimingTest, ClockOffsetIsPartOfTheCalibration) {
 // within 3σ of the truth. (Over 12 seeds, DISABLED_JitterStudy: mean z² 13.7 plain, 1.33 aware.)
 TEST(BearingTimingTest, StampJitterIsModelledAndTheSigmasCover) {
   BearingSimTruth truth;
-  const BearingLog log = JitteredLog(JitterScene(1), 0.1, 1, &truth);
+  // Through the files, so that the reader's stamp diagnostics see the scatter.
+  const fs::path dir =
+      fs::temp_directory_path() / ("bearing_timing_test_" + std::to_string(getpid()));
+  ASSERT_TRUE(WriteBearingLog(JitteredLog(JitterScene(1), 0.1, 1, &truth), dir.string()).ok());
+  const StatusOr<BearingLog> read = ReadBearingLog(dir.string());
+  fs::remove_all(dir);
+  ASSERT_TRUE(read.ok()) << read.message();
+  const BearingLog& log = *read;
   const StatusOr<BearingCalibrationResult> plain = CalibrateBearing(log, Plain());
   const StatusOr<BearingCalibrationResult> aware = CalibrateBearing(log);
   ASSERT_TRUE(plain.ok() && aware.ok());
@@ -163,6 +175,13 @@ TEST(BearingTimingTest, StampJitterIsModelledAndTheSigmasCover) {
             3.0 * aware->timing.jitter.jitter_stddev_s);
   EXPECT_LE(WorstSigmas(*aware, truth), 3.0);
   EXPECT_GT(aware->noise.bearing_jitter_s, 0.0);
+  // The bearing stream's stamps scatter about their grid: the output says they are not the
+  // sample times.
+  bool said = false;
+  for (const std::string& w : aware->warnings) {
+    said |= w.find("bearings stamps cannot be the sample times") != std::string::npos;
+  }
+  EXPECT_TRUE(said) << ::testing::PrintToString(aware->warnings);
 }
 
 // Encoder stamps scattered instead: the pose at a bearing time is interpolated from them, so the
