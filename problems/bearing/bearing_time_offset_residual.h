@@ -1,14 +1,13 @@
 #ifndef CALIB_PROBLEMS_BEARING_BEARING_TIME_OFFSET_RESIDUAL_H_
 #define CALIB_PROBLEMS_BEARING_BEARING_TIME_OFFSET_RESIDUAL_H_
 
-#include <ceres/autodiff_cost_function.h>
-
-#include <vector>
-
 #include <calib/core/bearing/bearing_log.h>
 #include <calib/core/bearing/bearing_model.h>
 #include <calib/core/se2.h>
 #include <calib/problems/bearing/bearing_observation_residual.h>
+#include <ceres/autodiff_cost_function.h>
+
+#include <vector>
 
 namespace calib {
 

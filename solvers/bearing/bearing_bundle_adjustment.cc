@@ -114,6 +114,14 @@ BearingProblem::BearingProblem(const BearingLog& log, const BearingParams& initi
   unit_covariance_.reserve(num_intervals);
   sqrt_information_.assign(num_intervals, Eigen::Matrix3d::Identity());
 
+  size_t num_used = 0;
+  for (size_t i = 0; i < log.runs.size(); ++i) {
+    for (int j : nodes_[i].bearing) {
+      num_used += j >= 0 && (options.use_bearing.empty() || options.use_bearing[i][j]);
+    }
+  }
+  inverse_bearing_sigma_.assign(num_used, 1.0);
+
   time_offset_[0] = options.model_time_offset ? options.time_offset_s : 0.0;
   if (options.model_time_offset) {
     problem_->AddParameterBlock(time_offset_, 1);
@@ -143,10 +151,11 @@ BearingProblem::BearingProblem(const BearingLog& log, const BearingParams& initi
         ceres::CostFunction* cost = nullptr;
         if (options.model_time_offset) {
           cost = BearingTimeOffsetResidual::Create(beta, nodes.t_s[k], &odometry, r, b,
-                                                   &inverse_bearing_sigma_);
+                                                   &inverse_bearing_sigma_[bearings_.size()]);
           problem_->AddResidualBlock(cost, loss_.get(), Node(i, k), calibration_, time_offset_);
         } else {
-          cost = BearingObservationResidual::Create(beta, &inverse_bearing_sigma_);
+          cost =
+              BearingObservationResidual::Create(beta, &inverse_bearing_sigma_[bearings_.size()]);
           problem_->AddResidualBlock(cost, loss_.get(), Node(i, k), calibration_);
         }
         bearings_.push_back(
@@ -162,7 +171,11 @@ BearingProblem::~BearingProblem() = default;
 
 void BearingProblem::SetNoise(const BearingNoise& noise) {
   noise_ = noise;
-  inverse_bearing_sigma_ = 1.0 / noise.bearing_sigma_rad;
+  if (noise.bearing_jitter_s > 0.0 && bearing_rates_.size() != bearings_.size()) {
+    bearing_rates_ = BearingRates();
+  }
+  const std::vector<double> sigmas = BearingSigmas();
+  for (size_t t = 0; t < bearings_.size(); ++t) inverse_bearing_sigma_[t] = 1.0 / sigmas[t];
   const double k2 = noise.encoder_k * noise.encoder_k;
   const double absolute = options_.covariance_floor_absolute * options_.covariance_floor_absolute;
   for (size_t t = 0; t < unit_covariance_.size(); ++t) {
@@ -188,7 +201,39 @@ void BearingProblem::Relinearize() {
     unit_covariance_[t] = UnitCovariance(term.run, nodes.t_s[term.node - 1], nodes.t_s[term.node],
                                          p.delta, p.xi_per_m);
   }
+  if (noise_.bearing_jitter_s > 0.0) bearing_rates_ = BearingRates();
   SetNoise(noise_);
+}
+
+std::vector<double> BearingProblem::BearingRates() const {
+  // r = wrap(β − β̂(t + τ))/σ with σ = 1: ∂r/∂τ = −dβ̂/dt.
+  const double one = 1.0;
+  const double tau = time_offset_[0];
+  std::vector<double> rates;
+  rates.reserve(bearings_.size());
+  for (const BearingTerm& term : bearings_) {
+    const ceres::AutoDiffCostFunction<BearingTimeOffsetResidual, 1, 3, kNumBearingParams, 1> cost(
+        new BearingTimeOffsetResidual(term.bearing_rad, nodes_[term.run].t_s[term.node],
+                                      &log_->runs[term.run].odometry, log_->meta.wheel_radius_m,
+                                      log_->meta.wheelbase_m, &one));
+    const double* blocks[3] = {Node(term.run, term.node), calibration_, &tau};
+    double residual = 0.0, d_tau = 0.0;
+    double* jacobians[3] = {nullptr, nullptr, &d_tau};
+    cost.Evaluate(blocks, &residual, jacobians);
+    rates.push_back(-d_tau);
+  }
+  return rates;
+}
+
+std::vector<double> BearingProblem::BearingSigmas() const {
+  const double sigma = noise_.bearing_sigma_rad;
+  const double jitter = noise_.bearing_jitter_s;
+  std::vector<double> sigmas(bearings_.size(), sigma);
+  if (!(jitter > 0.0)) return sigmas;  // Exactly σβ: the plain model, bit for bit.
+  for (size_t t = 0; t < bearings_.size(); ++t) {
+    sigmas[t] = std::sqrt(sigma * sigma + jitter * jitter * bearing_rates_[t] * bearing_rates_[t]);
+  }
+  return sigmas;
 }
 
 Status BearingProblem::Solve(ceres::Solver::Summary* summary) {
@@ -224,9 +269,9 @@ double BearingProblem::BearingError(int run, int node, int bearing) const {
   if (!options_.model_time_offset) {
     return BearingObservationResidual::Error(beta, Node(run, node), calibration_);
   }
+  const double one = 1.0;
   const BearingTimeOffsetResidual model(beta, nodes_[run].t_s[node], &log_->runs[run].odometry,
-                                        log_->meta.wheel_radius_m, log_->meta.wheelbase_m,
-                                        &inverse_bearing_sigma_);
+                                        log_->meta.wheel_radius_m, log_->meta.wheelbase_m, &one);
   return model.Error(Node(run, node), calibration_, time_offset_);
 }
 

@@ -50,11 +50,14 @@
 // estimated q as if exact overstates it: sigmas too small).
 namespace calib {
 
-// The two noise levels of the model: bearings N(0, σβ²); each encoder increment Δα read with
-// variance K²/r·|Δα| (§8.1).
+// The noise levels of the model: bearings N(0, σβ²); each encoder increment Δα read with
+// variance K²/r·|Δα| (§8.1); and the stamp jitter σ_t of the bearings against the encoder clock:
+// a bearing stamped t was taken at t + τ + ε, ε ~ N(0, σ_t²), so to first order its error has
+// variance σβ² + σ_t²·(dβ̂/dt)², dβ̂/dt the model's bearing rate there (0: no jitter).
 struct BearingNoise {
   double bearing_sigma_rad = 1.0 * M_PI / 180.0;
   double encoder_k = 1e-3;  // K (m^½).
+  double bearing_jitter_s = 0.0;
 };
 
 struct BearingAdjustmentOptions {
@@ -130,8 +133,15 @@ class BearingProblem {
   const BearingNoise& noise() const { return noise_; }
   // New noise levels: re-whitens every term (the problem is not rebuilt).
   void SetNoise(const BearingNoise& noise);
-  // Recomputes the encoder covariances Σ₁ at the current (δ, ξ), then re-whitens.
+  // Recomputes the encoder covariances Σ₁ at the current (δ, ξ) (and, with a stamp jitter, the
+  // bearing rates), then re-whitens.
   void Relinearize();
+  // dβ̂/dt (rad/s) of every bearing term (BearingTerms' order) at the current estimate: the
+  // model's bearing rate at the bearing's time on the encoder clock (t + τ), by autodiff of the
+  // time-offset term (problems/bearing/bearing_time_offset_residual.h).
+  std::vector<double> BearingRates() const;
+  // σ of each bearing term's error (BearingTerms' order): √(σβ² + σ_t²·rate²), σβ without jitter.
+  std::vector<double> BearingSigmas() const;
 
   // wrap(β − β̂) (rad) of every bearing, per run in log order (left-out bearings included).
   std::vector<std::vector<double>> BearingErrors() const;
@@ -236,7 +246,10 @@ class BearingProblem {
   std::vector<std::vector<std::array<double, 3>>> poses_;
   std::vector<Eigen::Matrix3d> unit_covariance_;   // Σ₁ per odometry term.
   std::vector<Eigen::Matrix3d> sqrt_information_;  // Stable addresses (sized once).
-  double inverse_bearing_sigma_ = 1.0;
+  // 1/σ per bearing term (stable addresses: sized once, before the terms hold them), and the
+  // bearing rates the jitter weighs them with (computed while a jitter is set).
+  std::vector<double> inverse_bearing_sigma_;
+  std::vector<double> bearing_rates_;
   std::unique_ptr<ceres::LossFunction> loss_;
   std::unique_ptr<ceres::Problem> problem_;
   std::vector<OdometryTerm> odometry_;

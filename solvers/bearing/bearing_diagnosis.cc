@@ -244,7 +244,12 @@ StatusOr<BearingDiagnosis> DiagnoseBearing(const BearingLog& log,
   const auto clock = std::chrono::steady_clock::now();
   Steps steps{log, options, log.source.empty() ? "bearing log" : log.source, LogStart(log), {}, {},
               {},  {}};
-  CALIB_ASSIGN_OR_RETURN(steps.base, CalibrateBearing(log, options.calibration));
+  // The base model takes the stamps as sample times: τ is the candidate tested here (and the
+  // series, held-out blocks and inlier cuts below weigh every bearing by one σβ).
+  BearingCalibrationOptions base_options = options.calibration;
+  base_options.timing.time_offset = false;
+  base_options.timing.stamp_jitter = false;
+  CALIB_ASSIGN_OR_RETURN(steps.base, CalibrateBearing(log, base_options));
   BearingDiagnosis out;
   CALIB_RETURN_IF_ERROR(FitBase(&steps, &out));
   BearingFinding f;

@@ -19,7 +19,8 @@
 //   StatusOr<BearingDiagnosis> d = DiagnoseBearing(*log);
 //   for (const BearingFinding& f : d->findings) if (f.significant) use(f.statement);
 //
-// 1. Robust base fit (CalibrateBearing): calibration, poses and noise levels.
+// 1. Robust base fit (CalibrateBearing with its timing model off: stamps as sample times):
+//    calibration, poses and noise levels.
 // 2. Score test of τ = 0 on that fit (problems/bearing_time_offset_residual.h): the score
 //    U = Σρ'·r·∂r/∂τ, the efficient information I_eff = 1/C_ττ from ceres::Covariance of the
 //    problem with τ added (the calibration AND every pose projected out), the robust loss's
@@ -74,7 +75,8 @@ struct BearingFinding : Finding {
 };
 
 struct BearingDiagnosis {
-  BearingCalibrationResult base;  // The base calibration as `calib calibrate` reports it.
+  // The base calibration as `calib calibrate` reports it with its timing model off.
+  BearingCalibrationResult base;
   BearingFitReport baseline;
   BearingFitReport final_fit;
   std::vector<BearingFinding> findings;

@@ -62,8 +62,9 @@ double BearingProblem::LossWeight(double s) const { return EvaluateLoss(loss_.ge
 
 double BearingProblem::LossCorrection() const {
   LossCorrectionSums sums;
-  for (const BearingTerm& term : bearings_) {
-    const double e = BearingError(term.run, term.node, term.bearing) * inverse_bearing_sigma_;
+  for (size_t t = 0; t < bearings_.size(); ++t) {
+    const BearingTerm& term = bearings_[t];
+    const double e = BearingError(term.run, term.node, term.bearing) * inverse_bearing_sigma_[t];
     sums.Add(e * e, loss_.get());
   }
   // n/Σ(1 − h) passed as 1/fraction.
@@ -211,14 +212,15 @@ StatusOr<BearingVarianceComponents> BearingProblem::VarianceComponents(
   }
   BearingVarianceComponents out;
   double all_bearing_redundancy = 0.0;
-  for (const BearingTerm& term : bearings_) {
+  for (size_t t = 0; t < bearings_.size(); ++t) {
+    const BearingTerm& term = bearings_[t];
     double residual = 0.0;
     CALIB_ASSIGN_OR_RETURN(const double h,
                            BearingLeverage(covariance, term, with_offset, &residual));
     out.total_leverage += h;
     all_bearing_redundancy += 1.0 - h;
     if (!inlier[term.run][term.bearing]) continue;
-    const double e = residual / inverse_bearing_sigma_;
+    const double e = residual / inverse_bearing_sigma_[t];
     out.bearing_sum_sq_rad2 += e * e;
     out.bearing_redundancy += 1.0 - h;
     ++out.bearing_count;

@@ -2,6 +2,7 @@
 #include <calib/solvers/bearing/bearing_consistency.h>
 #include <calib/solvers/bearing/bearing_text.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
+#include <calib/solvers/bearing/calibrate_bearing_internal.h>
 #include <calib/solvers/common/solver_options.h>
 
 #include <Eigen/Dense>
@@ -24,8 +25,8 @@ double Seconds(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-using Progress = std::function<void(const std::string&)>;
-using BearingMask = std::vector<std::vector<bool>>;
+using bearing_calibration::BearingMask;
+using bearing_calibration::Progress;
 
 // The bearings the seeds use (the closed form and the search are least squares): those within
 // the cut of their neighbours in time, relative to the larger of the log's and the run's scatter
@@ -184,35 +185,6 @@ BearingNoise NextNoise(const BearingVarianceComponents& vc, const BearingNoise& 
   return next;
 }
 
-// Noise levels by variance components, re-solving while they change; returns the final inlier
-// flags. `summary` ends as that of the last solve.
-StatusOr<BearingMask> EstimateNoise(const BearingCalibrationOptions& options,
-                                    const Progress& progress, BearingProblem* problem,
-                                    ceres::Solver::Summary* summary,
-                                    BearingCalibrationResult* result) {
-  const double cut = std::sqrt(options.inlier_chi2);
-  const double kept_variance = TruncatedVariance(cut);
-  for (int round = 0; round < options.noise_rounds; ++round) {
-    CALIB_ASSIGN_OR_RETURN(const BearingVarianceComponents vc,
-                           problem->VarianceComponents(ClassifyInliers(*problem, cut)));
-    result->bearing_redundancy = vc.bearing_redundancy;
-    result->odometry_redundancy = vc.odometry_redundancy;
-    const BearingNoise next = NextNoise(vc, problem->noise(), kept_variance, options, result);
-    const double change =
-        std::max(std::abs(next.bearing_sigma_rad / problem->noise().bearing_sigma_rad - 1.0),
-                 std::abs(next.encoder_k / problem->noise().encoder_k - 1.0));
-    progress("noise round " + std::to_string(round + 1) + ": σβ = " +
-             Num(next.bearing_sigma_rad * 180.0 / M_PI) + "°, K = " + Num(next.encoder_k));
-    if (change < options.noise_tolerance) break;
-    problem->SetNoise(next);
-    problem->Relinearize();
-    CALIB_RETURN_IF_ERROR(problem->Solve(summary));
-    result->iterations += static_cast<int>(summary->iterations.size());
-    ++result->noise_rounds;
-  }
-  return ClassifyInliers(*problem, cut);
-}
-
 // Covariance, and the metric set when a distance is known. When K comes from the data (above its
 // floor), from few degrees of freedom r, the covariance takes K at the upper end of its one-sigma
 // range, K²·(1 + √(2/r)): the uncertainty of K itself must not make sigmas too small.
@@ -300,6 +272,39 @@ BearingNoise InitialNoise(const BearingCalibrationOptions& options, double scatt
 
 }  // namespace
 
+namespace bearing_calibration {
+
+// Noise levels by variance components, re-solving while they change; returns the final inlier
+// flags. `summary` ends as that of the last solve.
+StatusOr<BearingMask> EstimateNoise(const BearingCalibrationOptions& options,
+                                    const Progress& progress, BearingProblem* problem,
+                                    ceres::Solver::Summary* summary,
+                                    BearingCalibrationResult* result) {
+  const double cut = std::sqrt(options.inlier_chi2);
+  const double kept_variance = TruncatedVariance(cut);
+  for (int round = 0; round < options.noise_rounds; ++round) {
+    CALIB_ASSIGN_OR_RETURN(const BearingVarianceComponents vc,
+                           problem->VarianceComponents(ClassifyInliers(*problem, cut)));
+    result->bearing_redundancy = vc.bearing_redundancy;
+    result->odometry_redundancy = vc.odometry_redundancy;
+    const BearingNoise next = NextNoise(vc, problem->noise(), kept_variance, options, result);
+    const double change =
+        std::max(std::abs(next.bearing_sigma_rad / problem->noise().bearing_sigma_rad - 1.0),
+                 std::abs(next.encoder_k / problem->noise().encoder_k - 1.0));
+    progress("noise round " + std::to_string(round + 1) + ": σβ = " +
+             Num(next.bearing_sigma_rad * 180.0 / M_PI) + "°, K = " + Num(next.encoder_k));
+    if (change < options.noise_tolerance) break;
+    problem->SetNoise(next);
+    problem->Relinearize();
+    CALIB_RETURN_IF_ERROR(problem->Solve(summary));
+    result->iterations += static_cast<int>(summary->iterations.size());
+    ++result->noise_rounds;
+  }
+  return ClassifyInliers(*problem, cut);
+}
+
+}  // namespace bearing_calibration
+
 const char* SeedMethodName(BearingSeedMethod method) {
   switch (method) {
     case BearingSeedMethod::kClosedForm:
@@ -350,23 +355,34 @@ StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
   result.seed_seconds = Seconds(clock);
   clock = std::chrono::steady_clock::now();
 
-  StatusOr<BearingMask> inlier = EstimateNoise(options, progress, &problem, &seed.summary, &result);
+  StatusOr<BearingMask> inlier =
+      bearing_calibration::EstimateNoise(options, progress, &problem, &seed.summary, &result);
   if (!inlier.ok()) return inlier.status().Prefixed(source + ": ");
+  // The timing model: τ and the stamp jitter, each kept only when the data ask for it (the
+  // problem is then replaced by the one that models them).
+  CALIB_RETURN_IF_ERROR(bearing_calibration::ApplyTimingModel(log, options, progress, &seed.problem,
+                                                              &seed.summary, &*inlier, &result)
+                            .Prefixed(source + ": "));
+  BearingProblem& final_problem = *seed.problem;
   result.converged = Converged(seed.summary);
   if (!result.converged) {
     result.warnings.push_back(NotConvergedText("the bundle adjustment", seed.summary));
   }
-  result.noise = problem.noise();
-  result.estimate = problem.params();
-  result.poses = problem.poses();
-  result.residuals_rad = problem.BearingErrors();
+  result.noise = final_problem.noise();
+  result.estimate = final_problem.params();
+  result.poses = final_problem.poses();
+  result.residuals_rad = final_problem.BearingErrors();
   result.adjustment_seconds = Seconds(clock);
   clock = std::chrono::steady_clock::now();
 
-  CALIB_RETURN_IF_ERROR(ComputeCovariance(log, options, &problem, &result).Prefixed(source + ": "));
+  CALIB_RETURN_IF_ERROR(
+      ComputeCovariance(log, options, &final_problem, &result).Prefixed(source + ": "));
+  CALIB_RETURN_IF_ERROR(
+      bearing_calibration::FinishTiming(&final_problem, &result).Prefixed(source + ": "));
   result.covariance_seconds = Seconds(clock);
   CALIB_RETURN_IF_ERROR(CheckDetermined(result, options).Prefixed(source + ": "));
-  SummarizeRuns(log, problem, *inlier, &result);
+  SummarizeRuns(log, final_problem, *inlier, &result);
+  bearing_calibration::AddStreamTimingWarnings(log, &result);
   return result;
 }
 

@@ -6,6 +6,7 @@
 #include <calib/core/status.h>
 #include <calib/solvers/bearing/bearing_bundle_adjustment.h>
 #include <calib/solvers/bearing/bearing_seed_search.h>
+#include <calib/solvers/bearing/bearing_timing.h>
 #include <calib/solvers/bearing/martinelli_closed_form.h>
 
 #include <Eigen/Core>
@@ -40,6 +41,14 @@
 // K = max(K_floor, K̂) (BearingCalibrationOptions::encoder_noise_k_floor), and when the data
 // raise it, the covariance takes K at the upper end of its one-sigma range, K̂²·(1 + √(2/r_o)).
 //
+// Timing (solvers/bearing/bearing_timing.h). After the noise levels, the clock offset τ between
+// bearings and encoders is estimated with the adjustment (a likelihood-ratio test against τ = 0,
+// at the level BearingTimingOptions::significance, the loss's scale counted); when it is
+// significant the calibration is the fit with τ, its noise levels re-estimated. Then the stamp
+// jitter σ_t by profile likelihood on the bearing errors and rates (test against σ_t = 0); when it
+// is significant each bearing is whitened by √(σβ² + σ_t²·(dβ̂/dt)²) and the fit re-solved (K kept).
+// When neither test rejects, the result is the plain fit's, bit for bit.
+//
 // Covariance. ceres::Covariance on the calibration block (the poses are nuisance), corrected for
 // the robust loss (BearingProblem::Covariance); with an initial distance, also on D0' and mapped
 // to the metric set by BearingMetricFromScaled.
@@ -50,6 +59,7 @@ struct BearingCalibrationOptions {
   MartinelliOptions closed_form;
   BearingSearchOptions search;
   bool use_closed_form = true;  // Try the closed-form seed first when the runs allow it.
+  BearingTimingOptions timing;  // The clock offset and stamp jitter (both tested by default).
   // Known noise levels; estimated from the data when empty.
   std::optional<double> bearing_sigma_rad;
   std::optional<double> encoder_noise_k;
@@ -130,6 +140,8 @@ struct BearingCalibrationResult {
   double covariance_scale = 1.0;                   // κ.
   int iterations = 0;
   bool converged = true;  // The final adjustment stopped by a convergence test.
+  // What the calibration modelled of the timing (τ with σ, the stamp jitter; see above).
+  BearingTiming timing;
   // What went wrong on the way without stopping the calibration (e.g. no convergence).
   std::vector<std::string> warnings;
   double seed_seconds = 0.0;

@@ -14,6 +14,34 @@ std::string Label(const ParamInfo& param) {
   return unit.empty() ? std::string(param.name) : param.name + (" [" + unit + "]");
 }
 
+// The calibration's timing model (keys as the laser's "timing" object): what was modelled, τ ± σ
+// and the stamp jitter. Set key by key so that other entries of "timing" stay.
+void AddTimingJson(const BearingTiming& timing, nlohmann::ordered_json* out) {
+  nlohmann::ordered_json& t = (*out)["timing"];
+  t["treatment"] = timing.treatment;
+  t["time_offset_s"] = timing.time_offset_s;
+  t["time_offset_stddev_s"] = timing.time_offset_stddev_s;
+  t["time_offset_modelled"] = timing.time_offset_modelled;
+  t["time_offset_test"] = {{"tested", timing.time_offset_tested},
+                           {"free_estimate_s", timing.time_offset_free_s},
+                           {"lr_statistic", timing.time_offset_lr},
+                           {"p_value", timing.time_offset_p_value}};
+  const BearingJitterEstimate& j = timing.jitter;
+  t["jitter_s"] = timing.jitter_modelled ? j.jitter_s : 0.0;
+  t["jitter_stddev_s"] = j.jitter_stddev_s;
+  t["jitter_modelled"] = timing.jitter_modelled;
+  t["jitter_test"] = {{"tested", timing.jitter_tested},
+                      {"estimate_s", j.jitter_s},
+                      {"lr_statistic", j.lr_statistic},
+                      {"p_value", j.p_value},
+                      {"bearings_used", j.bearings_used},
+                      {"bearing_sigma_without_jitter_rad", j.bearing_sigma_without_jitter_rad}};
+  t["jitter_model"] =
+      "bearing variance sigma_beta^2 + jitter^2 * (d beta/dt)^2; the jitter is the scatter of the "
+      "bearing times against the encoder clock (bearing or encoder stamps)";
+  t["statement"] = timing.statement;
+}
+
 }  // namespace
 
 nlohmann::ordered_json BearingParamObject(const BearingParamVector& v,
@@ -112,6 +140,7 @@ nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
                     {"adjustment", result.adjustment_seconds},
                     {"covariance", result.covariance_seconds}};
   if (!stream_timing.empty()) out["timing"] = {{"streams", StreamTimingJson(stream_timing)}};
+  AddTimingJson(result.timing, &out);  // After the streams' hook: adds keys beside "streams".
   return out;
 }
 
@@ -158,6 +187,9 @@ std::string BearingResultSummary(const BearingCalibrationResult& result, const s
                 result.encoder_k_estimated ? "estimated, not below its floor" : "given",
                 result.encoder_k_estimate, result.odometry_redundancy);
   text += line;
+  if (!result.timing.statement.empty()) {
+    text += "  timing (" + result.timing.treatment + "): " + result.timing.statement + "\n";
+  }
   for (const BearingRunSummary& run : result.runs) {
     char kind[64];
     if (run.circular) {
