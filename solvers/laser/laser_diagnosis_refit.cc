@@ -264,6 +264,17 @@ StatusOr<bool> RefitAndConfirm(const Context& context, const LaserEffectEvaluati
   const bool confirmed = Confirm(lr, *search->current_held_out, held, &f);
   if (context.options.progress) context.options.progress(ConfirmationProgress(f, confirmed));
   if (!confirmed) return false;
+  // Confirmed, but of a size the physics does not have: a structure in the residuals, not
+  // adopted as that effect (its refit value is kept for the report).
+  f.implausible_reason =
+      ImplausibleReason(best->model, context.options.plausibility, c->effect, &f.follows);
+  f.implausible = !f.implausible_reason.empty();
+  if (f.implausible) {
+    const LaserEffectInfo& info = EffectInfo(c->effect);
+    f.value = best->model.gamma(info.offset);
+    if (context.options.progress) context.options.progress("  → implausible size: " + f.name);
+    return false;
+  }
   search->adoptions.push_back(Adopt(context, evaluation, *c, search->current, *best));
   if (c->effect == LaserEffect::kWheelRadiusChange) search->change_stddev_s = change_sigma;
   search->current = *best;

@@ -1,18 +1,18 @@
 #ifndef CALIB_SOLVERS_LASER_LASER_EFFECT_FIT_H_
 #define CALIB_SOLVERS_LASER_LASER_EFFECT_FIT_H_
 
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/laser/laser_params.h>
+#include <calib/core/status.h>
+#include <calib/problems/laser/laser_effect_residual.h>
+#include <calib/solvers/laser/laser_refinement.h>
 #include <ceres/loss_function.h>
 
 #include <Eigen/Core>
 #include <limits>
 #include <memory>
+#include <utility>
 #include <vector>
-
-#include <calib/core/laser/laser_params.h>
-#include <calib/core/laser/laser_log.h>
-#include <calib/core/status.h>
-#include <calib/problems/laser/laser_effect_residual.h>
-#include <calib/solvers/laser/laser_refinement.h>
 
 // Robust Ceres fits of the laser calibration with candidate effects modelled
 // (problems/laser_effect_residual.h), and the per-interval quantities the diagnosis tests on.
@@ -46,6 +46,16 @@ class LaserEffectData {
   const std::vector<LaserInterval>& intervals() const { return *intervals_; }
   size_t size() const { return intervals_->size(); }
   const Eigen::Matrix3d& sqrt_information() const { return sqrt_information_; }
+  // Interval k's whitening: its own when set (e.g. the stamp jitter's Σ_k^{-1/2}), else the
+  // shared one.
+  const Eigen::Matrix3d& sqrt_information(size_t k) const {
+    return interval_sqrt_information_.empty() ? sqrt_information_ : interval_sqrt_information_[k];
+  }
+  // One per interval (empty: back to the shared whitening). Fits made before keep their values.
+  void SetIntervalSqrtInformation(std::vector<Eigen::Matrix3d> roots) {
+    interval_sqrt_information_ = std::move(roots);
+  }
+  bool has_interval_sqrt_information() const { return !interval_sqrt_information_.empty(); }
   const LaserRefinementOptions& options() const { return options_; }
   // ρ(s), ρ'(s), ρ''(s) of the loss.
   void Loss(double s, double rho[3]) const;
@@ -56,6 +66,7 @@ class LaserEffectData {
  private:
   const std::vector<LaserInterval>* intervals_;
   Eigen::Matrix3d sqrt_information_;
+  std::vector<Eigen::Matrix3d> interval_sqrt_information_;
   LaserRefinementOptions options_;
   std::unique_ptr<ceres::LossFunction> loss_;
   std::vector<LaserEffectContext> piecewise_;
