@@ -315,7 +315,9 @@ StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& interva
     if (!adopted) break;
     diagnosis.adopted.push_back(search.adoptions.back().effect);
   }
-  diagnosis.notes = Notes(intervals, search.current.model);
+  for (const std::string& note : Notes(intervals, search.current.model)) {
+    diagnosis.notes.push_back(note);
+  }
 
   // 4. The final fit, location and residual structure, then each finding's value and sentence.
   const LaserEffectEvaluation final_evaluation =

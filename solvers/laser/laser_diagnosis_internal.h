@@ -86,6 +86,9 @@ JitterScore JitterScoreTest(const std::vector<LaserInterval>& intervals,
                             const std::vector<IntervalTimeSensitivity>& g,
                             const Eigen::Vector3d& noise, const std::vector<bool>& inlier,
                             int hac_lag);
+// A note when the interval durations cluster at a few values ≥ 5 ms apart (the signature of
+// stamps picked up by a clock), "" otherwise.
+std::string DurationClusterNote(const std::vector<LaserInterval>& intervals);
 // Tests, confirms (profile likelihood ratio and held-out blocks) and, when confirmed, models the
 // stamp jitter: context.data is then whitened per interval and search->current refitted.
 // Appends its finding to diagnosis->timing_findings.

@@ -94,6 +94,50 @@ std::string JitterStatement(const Finding& f) {
 
 }  // namespace
 
+std::string DurationClusterNote(const std::vector<LaserInterval>& intervals) {
+  // Modes of the durations at 1 ms resolution: a mode holds the durations within ±2 ms of a local
+  // maximum. Stamps picked up by a clock of period Q put the durations of equal true length at
+  // multiples of Q apart.
+  std::vector<int> counts;
+  const auto bin = [](double t) { return static_cast<int>(std::lround(t * 1e3)); };
+  int lo = std::numeric_limits<int>::max(), hi = 0;
+  for (const LaserInterval& in : intervals) {
+    lo = std::min(lo, bin(in.duration_s));
+    hi = std::max(hi, bin(in.duration_s));
+  }
+  if (intervals.size() < 50 || hi - lo > 100000) return "";
+  counts.assign(hi - lo + 1, 0);
+  for (const LaserInterval& in : intervals) ++counts[bin(in.duration_s) - lo];
+  std::vector<int> modes;
+  int covered = 0;
+  std::vector<bool> used(counts.size(), false);
+  for (int round = 0; round < 4; ++round) {
+    int best = -1;
+    for (size_t i = 0; i < counts.size(); ++i) {
+      if (!used[i] && (best < 0 || counts[i] > counts[best])) best = static_cast<int>(i);
+    }
+    if (best < 0 || counts[best] < static_cast<int>(intervals.size()) / 50) break;
+    for (int i = std::max(0, best - 2); i <= std::min<int>(counts.size() - 1, best + 2); ++i) {
+      if (!used[i]) covered += counts[i];
+      used[i] = true;
+    }
+    modes.push_back(best + lo);
+  }
+  std::sort(modes.begin(), modes.end());
+  if (modes.size() < 2 || covered < 0.9 * intervals.size()) return "";
+  int spacing = modes[1] - modes[0];
+  for (size_t i = 1; i < modes.size(); ++i) spacing = std::min(spacing, modes[i] - modes[i - 1]);
+  if (spacing < 5) return "";
+  std::string list;
+  for (int m : modes) list += (list.empty() ? "" : ", ") + Format("%.3f", m * 1e-3);
+  return "the interval durations cluster at " + list +
+         Format(" s (at least %d ms apart)", spacing) +
+         ": the stamps look like pick-up times of a clock with a period of about that spacing, "
+         "not sample times; stamp_jitter models that quantisation as a jitter (a uniform "
+         "pick-up delay over " +
+         Format("%d ms has σ = %.1f ms)", spacing, spacing / std::sqrt(12.0));
+}
+
 JitterScore JitterScoreTest(const std::vector<LaserInterval>& intervals,
                             const std::vector<Eigen::Vector3d>& errors,
                             const std::vector<IntervalTimeSensitivity>& g,
@@ -236,6 +280,8 @@ Status TimingStep(const Context& context, Search* search, LaserDiagnosis* diagno
   }
   f.statement = JitterStatement(f);
   diagnosis->timing_findings.push_back(f);
+  const std::string clusters = DurationClusterNote(context.intervals);
+  if (!clusters.empty()) diagnosis->notes.push_back(clusters);
   return Status::Ok();
 }
 
