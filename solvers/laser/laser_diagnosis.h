@@ -52,8 +52,9 @@ enum class BoundaryChoice {
 struct LaserPlausibility {
   double speed_radius_per_rad_s = 0.3;  // |γ| of the speed-dependent radius (3 % per 0.1 rad/s).
   double radius_step = 0.05;            // |γ_l|, |γ_r| of a radius change (5 %).
-  double lateral_slip_s = 0.2;          // |γ| of the lateral slip.
-  double longitudinal_slip_s = 0.5;     // |γ| of the longitudinal slip.
+  // The lateral slip's slip angle γ·ω at the log's 95th-percentile turn rate (rad).
+  double lateral_slip_angle_rad = 0.1;
+  double longitudinal_slip_s = 0.5;  // |γ| of the longitudinal slip.
 };
 
 struct LaserDiagnosisOptions {

@@ -95,9 +95,10 @@ std::string DurationClusterNote(const std::vector<LaserInterval>& intervals);
 Status TimingStep(const Context& context, Search* search, LaserDiagnosis* diagnosis);
 
 // A refit's size a wheel does not have (options.plausibility): the reason in words, "" when
-// plausible; `follows` gets the covariate its signal follows.
+// plausible; `follows` gets the covariate its signal follows. `turn_rate` is the log's
+// 95th-percentile |ω| (rad/s).
 std::string ImplausibleReason(const LaserEffectModel& model, const LaserPlausibility& bounds,
-                              LaserEffect effect, std::string* follows);
+                              LaserEffect effect, double turn_rate, std::string* follows);
 
 // laser_diagnosis_location.cc.
 LaserFitReport MakeReport(const Context& context, const LaserEffectFit& fit,

@@ -101,7 +101,7 @@ std::string ImplausibleSentence(const LaserFinding& f, double log_speed) {
 }  // namespace
 
 std::string ImplausibleReason(const LaserEffectModel& model, const LaserPlausibility& bounds,
-                              LaserEffect effect, std::string* follows) {
+                              LaserEffect effect, double turn_rate, std::string* follows) {
   const LaserEffectInfo& info = EffectInfo(effect);
   const double g = model.gamma(info.offset);
   switch (effect) {
@@ -123,9 +123,11 @@ std::string ImplausibleReason(const LaserEffectModel& model, const LaserPlausibi
     }
     case LaserEffect::kLateralSlip:
       *follows = "v_times_omega";
-      if (std::abs(g) > bounds.lateral_slip_s) {
-        return Format("a lateral slip coefficient of %.0f ms (bound %.0f ms)", 1e3 * g,
-                      1e3 * bounds.lateral_slip_s);
+      if (std::abs(g) * turn_rate > bounds.lateral_slip_angle_rad) {
+        return Format(
+            "a slip angle γ·ω of %.2f rad at the log's turn rates (γ = %.0f ms, ω = "
+            "%.2f rad/s; bound %.2f rad)",
+            std::abs(g) * turn_rate, 1e3 * g, turn_rate, bounds.lateral_slip_angle_rad);
       }
       break;
     case LaserEffect::kLongitudinalSlip:

@@ -66,7 +66,8 @@ TEST(LaserDiagnosisTiming, StampJitterIsNamedAsTiming) {
   constexpr double kSigma = 0.010;
   const LaserLog log = SimulateLaserLog(Simulation(3, 2000));
   const std::vector<LaserInterval> jittered = JitterStamps(log.intervals, kSigma, 11);
-  const StatusOr<LaserDiagnosis> d = DiagnoseLaser(jittered);
+  const LaserDiagnosisOptions options;
+  const StatusOr<LaserDiagnosis> d = DiagnoseLaser(jittered, options);
   ASSERT_TRUE(d.ok()) << d.message();
   ASSERT_EQ(d->adopted_timing, std::vector<std::string>{"stamp_jitter"});
   const Finding& f = d->timing_findings.front();
@@ -117,11 +118,11 @@ TEST(LaserDiagnosisTiming, DISABLED_ProbeWithoutTimingStep) {
 // Clean timing: the timing step's false alarms stay at the level (α = 0.01; ≤ 5 % asked).
 TEST(LaserDiagnosisTiming, CleanLogsAdoptNoTiming) {
   int alarms = 0, logs = 0;
-  for (uint64_t seed = 100; seed < 116; ++seed, ++logs) {
+  for (uint64_t seed = 100; seed < 112; ++seed, ++logs) {
     LaserDiagnosisOptions options;
     options.max_effects = 0;  // Only the timing step refits.
     const StatusOr<LaserDiagnosis> d =
-        DiagnoseLaser(SimulateLaserLog(Simulation(seed, 1000)).intervals, options);
+        DiagnoseLaser(SimulateLaserLog(Simulation(seed, 800)).intervals, options);
     ASSERT_TRUE(d.ok()) << d.message();
     if (!d->adopted_timing.empty()) ++alarms;
   }
