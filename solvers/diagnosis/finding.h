@@ -76,6 +76,11 @@ struct Finding {
   // Adopted: the share of the effect's signal the base fit had hidden by shifting its
   // parameters (NaN where the problem does not compute it).
   double absorbed_share = std::numeric_limits<double>::quiet_NaN();
+  // Confirmed, but of a size the physics does not have: reported as a structure in the
+  // residuals that follows `follows` (a covariate), not adopted. `reason` says why.
+  bool implausible = false;
+  std::string implausible_reason;
+  std::string follows;
   MismatchLocation location;
   CovariateProfile profile;  // Adopted: residuals against location.covariate.
   std::string statement;

@@ -218,6 +218,8 @@ void SetValues(const Context& context, const Search& search, const LaserDiagnosi
       RadiiAfter(search.current.calibration, model.gamma.segment<2>(info.offset),
                  fit.stddev.head<2>(), fit.gamma_stddev.segment<2>(info.offset), &f);
     }
+  } else if (f.implausible && !change) {
+    f.stddev = f.one_step_stddev.size() > 0 ? f.one_step_stddev(0) : 0.0;  // f.value: the refit.
   } else if (f.testable()) {
     const auto entry = [](const Eigen::VectorXd& v, Eigen::Index i) {
       return v.size() > i ? v(i) : 0.0;
@@ -274,8 +276,8 @@ StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& interva
   base_options.interval_jitter = false;
   CALIB_ASSIGN_OR_RETURN(const LaserCalibrationResult base,
                          CalibrateLaser(intervals, base_options));
-  const LaserEffectData data(intervals, SqrtInformation(intervals, base.estimate, options),
-                             options.calibration.refinement);
+  LaserEffectData data(intervals, SqrtInformation(intervals, base.estimate, options),
+                       options.calibration.refinement);
   Context context{intervals, options, data, intervals.front().start_s, {}, {}};
   MakeFolds(&context);
   LaserEffectModel model;
@@ -289,14 +291,23 @@ StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& interva
   LaserDiagnosis diagnosis;
   diagnosis.samples = static_cast<int>(intervals.size());
   diagnosis.baseline = MakeReport(context, search.current, base_evaluation, 0.0);
+  const LaserEffectModel diagnosis_base_model = search.current.model;
+  const LaserCalibration diagnosis_base_calibration = search.current.calibration;
   if (options.progress) {
     char line[64];
     std::snprintf(line, sizeof(line), "base fit: cost %.1f", search.current.cost);
     options.progress(line);
   }
 
-  // 2.–3. Forward steps; with max_effects reached the candidates are still tested (step 1
-  // always), not refitted.
+  // 2.–3. The timing step first: a confirmed stamp jitter is modelled (per-interval
+  // whitening) before any physical candidate is tested. Then the forward steps; with max_effects
+  // reached the candidates are still tested (step 1 always), not refitted.
+  if (options.timing_candidates) CALIB_RETURN_IF_ERROR(TimingStep(context, &search, &diagnosis));
+  // The baseline's residuals in the (possibly) jitter-whitened metric of the later fits.
+  const LaserEffectEvaluation base_evaluation_now =
+      data.has_interval_sqrt_information()
+          ? EvaluateLaserEffects(data, diagnosis_base_model, diagnosis_base_calibration)
+          : base_evaluation;
   std::vector<CandidateState> candidates = MakeCandidates(options);
   for (int step = 1; step <= kNumLaserEffects + 1; ++step) {
     const bool may_adopt = static_cast<int>(search.adoptions.size()) < options.max_effects;
@@ -307,14 +318,19 @@ StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& interva
     if (!adopted) break;
     diagnosis.adopted.push_back(search.adoptions.back().effect);
   }
-  diagnosis.notes = Notes(intervals, search.current.model);
+  for (const std::string& note : Notes(intervals, search.current.model)) {
+    diagnosis.notes.push_back(note);
+  }
 
   // 4. The final fit, location and residual structure, then each finding's value and sentence.
   const LaserEffectEvaluation final_evaluation =
       EvaluateLaserEffects(data, search.current.model, search.current.calibration);
   diagnosis.final_fit =
       MakeReport(context, search.current, final_evaluation, search.change_stddev_s);
-  DescribeResiduals(context, base_evaluation, final_evaluation, search, &candidates, &diagnosis);
+  diagnosis.final_fit.stamp_jitter_s = search.jitter_s;
+  diagnosis.final_fit.stamp_jitter_stddev_s = search.jitter_stddev_s;
+  DescribeResiduals(context, base_evaluation_now, final_evaluation, search, &candidates,
+                    &diagnosis);
   // The speed-dependent radius's reference speed (for its statement).
   const double typical_speed = data.Contexts(search.current.model).front().reference_speed;
   for (CandidateState& c : candidates) {

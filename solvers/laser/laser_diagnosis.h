@@ -47,6 +47,16 @@ enum class BoundaryChoice {
   kSmooth,             // Speeds vary smoothly.
 };
 
+// Sizes a wheel does not have: a refit beyond them is reported as a structure in the residuals
+// that follows the effect's covariate, not adopted as that physics (data/diagnose/README.md).
+struct LaserPlausibility {
+  double speed_radius_per_rad_s = 0.3;  // |γ| of the speed-dependent radius (3 % per 0.1 rad/s).
+  double radius_step = 0.05;            // |γ_l|, |γ_r| of a radius change (5 %).
+  // The lateral slip's slip angle γ·ω at the log's 95th-percentile turn rate (rad).
+  double lateral_slip_angle_rad = 0.1;
+  double longitudinal_slip_s = 0.5;  // |γ| of the longitudinal slip.
+};
+
 struct LaserDiagnosisOptions {
   LaserCalibrationOptions calibration;  // The base fit.
   std::vector<LaserEffect> candidates = AllLaserEffects();
@@ -58,6 +68,10 @@ struct LaserDiagnosisOptions {
   BoundaryChoice boundary = BoundaryChoice::kAuto;
   int covariate_bins = 10;
   int change_profile_steps = 4;  // Sub-steps per interval when locating a change time.
+  // Timing candidates (stamp_jitter) are tested, confirmed and modelled before any physical
+  // candidate, so that the physical ones are tested with the timing model in the base.
+  bool timing_candidates = true;
+  LaserPlausibility plausibility;
   std::function<void(const std::string&)> progress;
 };
 
@@ -74,6 +88,10 @@ struct LaserFitReport {
   Eigen::Vector3d rms = Eigen::Vector3d::Zero();  // Unwhitened inlier error RMS (m, m, rad).
   double robust_cost = 0.0;                       // ½Σρ, whitened.
   int inliers = 0;
+  // σ of the boundary-stamp jitter modelled in this fit (each interval whitened by its own
+  // covariance); 0 when not modelled.
+  double stamp_jitter_s = 0.0;
+  double stamp_jitter_stddev_s = 0.0;
 };
 
 // A finding of the laser problem: the shared Finding (vectors over kLaserParams) with its effect
@@ -89,6 +107,10 @@ struct LaserDiagnosis {
   LaserFitReport final_fit;
   std::vector<LaserFinding> findings;  // One per candidate, adopted ones first (in order).
   std::vector<LaserEffect> adopted;
+  // The timing candidates (stamp_jitter), tested before the physical ones; those adopted are
+  // named in adopted_timing (they come first in the report's `adopted`).
+  std::vector<Finding> timing_findings;
+  std::vector<std::string> adopted_timing;
   std::vector<CovariateProfile> covariates;
   ResidualStructure structure_before;
   ResidualStructure structure_after;

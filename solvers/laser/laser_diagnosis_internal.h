@@ -5,6 +5,7 @@
 #include <calib/solvers/laser/laser_diagnosis.h>
 #include <calib/solvers/laser/laser_effect_fit.h>
 #include <calib/solvers/stats/score_test.h>
+#include <calib/solvers/timing/interval_jitter.h>
 
 #include <Eigen/Core>
 #include <limits>
@@ -25,7 +26,7 @@ inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
 struct Context {
   const std::vector<LaserInterval>& intervals;
   const LaserDiagnosisOptions& options;
-  const LaserEffectData& data;
+  LaserEffectData& data;  // Its whitening changes when the timing step models a jitter.
   double log_start_s = 0.0;
   std::vector<std::vector<bool>> train_masks;  // Per held-out block: the training intervals.
   std::vector<std::vector<bool>> test_masks;
@@ -55,6 +56,8 @@ struct Search {
   std::optional<HeldOutScore> current_held_out;
   std::vector<Adoption> adoptions;
   double change_stddev_s = 0.0;
+  double jitter_s = 0.0;  // The modelled stamp jitter (0: none).
+  double jitter_stddev_s = 0.0;
 };
 
 bool UsesBoundarySpeeds(LaserEffect effect);
@@ -68,6 +71,34 @@ RobustFitBlocks Blocks(const LaserEffectEvaluation& evaluation, const std::vecto
 // Jacobians). Returns whether it was adopted.
 StatusOr<bool> RefitAndConfirm(const Context& context, const LaserEffectEvaluation& evaluation,
                                CandidateState* c, Search* search);
+
+// laser_diagnosis_timing.cc: the score test of a stamp jitter σ_j at 0 (one-sided) over the
+// errors e_k (unwhitened), the time sensitivities and the noise σ_n used to standardise, on the
+// inliers.
+struct JitterScore {
+  double statistic = 0.0;  // z: the slope's t-statistic.
+  double p_value = 1.0;
+  double slope = 0.0;  // σ_j² in units where the noise scales are 1.
+  int boundaries = 0;
+};
+JitterScore JitterScoreTest(const std::vector<LaserInterval>& intervals,
+                            const std::vector<Eigen::Vector3d>& errors,
+                            const std::vector<IntervalTimeSensitivity>& g,
+                            const Eigen::Vector3d& noise, const std::vector<bool>& inlier,
+                            int hac_lag);
+// A note when the interval durations cluster at a few values ≥ 5 ms apart (the signature of
+// stamps picked up by a clock), "" otherwise.
+std::string DurationClusterNote(const std::vector<LaserInterval>& intervals);
+// Tests, confirms (profile likelihood ratio and held-out blocks) and, when confirmed, models the
+// stamp jitter: context.data is then whitened per interval and search->current refitted.
+// Appends its finding to diagnosis->timing_findings.
+Status TimingStep(const Context& context, Search* search, LaserDiagnosis* diagnosis);
+
+// A refit's size a wheel does not have (options.plausibility): the reason in words, "" when
+// plausible; `follows` gets the covariate its signal follows. `turn_rate` is the log's
+// 95th-percentile |ω| (rad/s).
+std::string ImplausibleReason(const LaserEffectModel& model, const LaserPlausibility& bounds,
+                              LaserEffect effect, double turn_rate, std::string* follows);
 
 // laser_diagnosis_location.cc.
 LaserFitReport MakeReport(const Context& context, const LaserEffectFit& fit,

@@ -114,8 +114,15 @@ void LocateAdoption(const Context& context, const Adoption& a,
 }  // namespace
 
 Eigen::MatrixXd Unwhitened(const LaserEffectData& data, const Eigen::MatrixXd& residual) {
-  const Eigen::Matrix3d inverse = data.sqrt_information().inverse();
-  return residual * inverse.transpose();
+  if (!data.has_interval_sqrt_information()) {
+    const Eigen::Matrix3d inverse = data.sqrt_information().inverse();
+    return residual * inverse.transpose();
+  }
+  Eigen::MatrixXd errors(residual.rows(), residual.cols());
+  for (Eigen::Index k = 0; k < residual.rows(); ++k) {
+    errors.row(k) = (data.sqrt_information(k).inverse() * residual.row(k).transpose()).transpose();
+  }
+  return errors;
 }
 
 LaserFitReport MakeReport(const Context& context, const LaserEffectFit& fit,

@@ -238,6 +238,19 @@ Adoption Adopt(const Context& context, const LaserEffectEvaluation& evaluation,
   return adoption;
 }
 
+// The 95th percentile of |ω| over the intervals (rad/s).
+double TurnRate95(const Context& context, const LaserCalibration& calibration) {
+  const OdometryParams& p = calibration.odometry;
+  std::vector<double> rates;
+  for (const LaserInterval& in : context.intervals) {
+    rates.push_back(std::abs(p.right_radius_m * in.right_speed - p.left_radius_m * in.left_speed) /
+                    p.wheelbase_m);
+  }
+  const size_t i = rates.size() * 95 / 100;
+  std::nth_element(rates.begin(), rates.begin() + i, rates.end());
+  return rates[i];
+}
+
 }  // namespace
 
 StatusOr<bool> RefitAndConfirm(const Context& context, const LaserEffectEvaluation& evaluation,
@@ -264,6 +277,17 @@ StatusOr<bool> RefitAndConfirm(const Context& context, const LaserEffectEvaluati
   const bool confirmed = Confirm(lr, *search->current_held_out, held, &f);
   if (context.options.progress) context.options.progress(ConfirmationProgress(f, confirmed));
   if (!confirmed) return false;
+  // Confirmed, but of a size the physics does not have: a structure in the residuals, not
+  // adopted as that effect (its refit value is kept for the report).
+  f.implausible_reason = ImplausibleReason(best->model, context.options.plausibility, c->effect,
+                                           TurnRate95(context, best->calibration), &f.follows);
+  f.implausible = !f.implausible_reason.empty();
+  if (f.implausible) {
+    const LaserEffectInfo& info = EffectInfo(c->effect);
+    f.value = best->model.gamma(info.offset);
+    if (context.options.progress) context.options.progress("  → implausible size: " + f.name);
+    return false;
+  }
   search->adoptions.push_back(Adopt(context, evaluation, *c, search->current, *best));
   if (c->effect == LaserEffect::kWheelRadiusChange) search->change_stddev_s = change_sigma;
   search->current = *best;

@@ -1,6 +1,7 @@
 #include <calib/core/text_format.h>
 #include <calib/solvers/diagnosis/statement.h>
 #include <calib/solvers/laser/laser_diagnosis_internal.h>
+#include <calib/solvers/stats/change_point.h>
 
 #include <algorithm>
 #include <cmath>
@@ -82,7 +83,66 @@ std::vector<ParamWords> LaserParamWords() {
   return words;
 }
 
+// "a structure in the residuals that follows X" for a confirmed refit of implausible size.
+std::string ImplausibleSentence(const LaserFinding& f, double log_speed) {
+  const auto& names = LaserCovariateNames();
+  const auto it = std::find(names.begin(), names.end(), f.follows);
+  const std::string words =
+      it != names.end() ? CovariateWords()[it - names.begin()] : std::string("wheel speed");
+  return "A structure in the residuals that follows " + words + " (" +
+         Format("score test %.1f, ", f.statistic) + PValueText(f.p_value) +
+         Format("; the held-out cost falls by %.1f %%", 100.0 * f.heldout_reduction) +
+         "): modelled as " + f.name + " it would need " + f.implausible_reason +
+         ", a size the physics does not have, so it is not adopted as " + f.name +
+         " — timing, the scan matcher or an effect outside the library may cause it (" +
+         EffectPhrase(f, log_speed) + ").";
+}
+
 }  // namespace
+
+std::string ImplausibleReason(const LaserEffectModel& model, const LaserPlausibility& bounds,
+                              LaserEffect effect, double turn_rate, std::string* follows) {
+  const LaserEffectInfo& info = EffectInfo(effect);
+  const double g = model.gamma(info.offset);
+  switch (effect) {
+    case LaserEffect::kSpeedDependentRadius:
+      *follows = "speed";
+      if (std::abs(g) > bounds.speed_radius_per_rad_s) {
+        return Format("a radius changing by %+.1f %% per 0.1 rad/s of wheel speed (bound ±%.1f %%)",
+                      10.0 * g, 10.0 * bounds.speed_radius_per_rad_s);
+      }
+      break;
+    case LaserEffect::kWheelRadiusChange: {
+      *follows = "time";
+      const double step = std::max(std::abs(g), std::abs(model.gamma(info.offset + 1)));
+      if (step > bounds.radius_step) {
+        return Format("a radius step of %+.1f %% / %+.1f %% (left / right; bound ±%.1f %%)",
+                      100.0 * g, 100.0 * model.gamma(info.offset + 1), 100.0 * bounds.radius_step);
+      }
+      break;
+    }
+    case LaserEffect::kLateralSlip:
+      *follows = "v_times_omega";
+      if (std::abs(g) * turn_rate > bounds.lateral_slip_angle_rad) {
+        return Format(
+            "a slip angle γ·ω of %.2f rad at the log's turn rates (γ = %.0f ms, ω = "
+            "%.2f rad/s; bound %.2f rad)",
+            std::abs(g) * turn_rate, 1e3 * g, turn_rate, bounds.lateral_slip_angle_rad);
+      }
+      break;
+    case LaserEffect::kLongitudinalSlip:
+      *follows = "acceleration";
+      if (std::abs(g) > bounds.longitudinal_slip_s) {
+        return Format("a longitudinal slip coefficient of %.0f ms (bound %.0f ms)", 1e3 * g,
+                      1e3 * bounds.longitudinal_slip_s);
+      }
+      break;
+    default:
+      break;
+  }
+  follows->clear();
+  return "";
+}
 
 std::vector<std::string> ConfoundedWith(const ScoreTestResult& test, const RobustFitBlocks& blocks,
                                         const Eigen::MatrixXd& sensitivity,
@@ -122,6 +182,7 @@ std::vector<std::string> FreeNames(const LaserEffectModel& model) {
 }
 
 std::string LaserStatement(const LaserFinding& f, double typical_wheel_speed) {
+  if (f.implausible) return ImplausibleSentence(f, typical_wheel_speed);
   StatementWords words;
   words.base = "parameters";
   words.params = LaserParamWords();
@@ -195,6 +256,16 @@ FitReport ToFitReport(const LaserFitReport& fit) {
   out.rms_units = {"m", "m", "rad"};
   out.robust_cost = fit.robust_cost;
   out.inliers = fit.inliers;
+  if (fit.stamp_jitter_s > 0.0) {
+    // A timing model of this fit (each interval whitened by its own covariance).
+    out.effects.insert(out.effects.begin(), "stamp_jitter");
+    EffectValue value;
+    value.name = "stamp_jitter";
+    value.value = fit.stamp_jitter_s;
+    value.stddev = fit.stamp_jitter_stddev_s;
+    value.unit = "s";
+    out.effect_values.push_back(value);
+  }
   for (LaserEffect effect : fit.effects) {
     const LaserEffectInfo& info = EffectInfo(effect);
     EffectValue value;
@@ -229,6 +300,9 @@ DiagnosisReport ToDiagnosisReport(const LaserDiagnosis& diagnosis) {
   out.params.assign(std::begin(kLaserParams), std::end(kLaserParams));
   out.baseline = ToFitReport(diagnosis.baseline);
   out.final_fit = ToFitReport(diagnosis.final_fit);
+  for (const Finding& f : diagnosis.timing_findings) {
+    if (f.significant) out.findings.push_back(ReportedFinding{f, {}});
+  }
   for (const LaserFinding& f : diagnosis.findings) {
     ReportedFinding reported{f, {}};
     if (f.effect == LaserEffect::kWheelRadiusChange && f.testable()) {
@@ -239,6 +313,10 @@ DiagnosisReport ToDiagnosisReport(const LaserDiagnosis& diagnosis) {
     }
     out.findings.push_back(reported);
   }
+  for (const Finding& f : diagnosis.timing_findings) {
+    if (!f.significant) out.findings.push_back(ReportedFinding{f, {}});
+  }
+  out.adopted = diagnosis.adopted_timing;
   for (LaserEffect effect : diagnosis.adopted) out.adopted.push_back(LaserEffectName(effect));
   return out;
 }

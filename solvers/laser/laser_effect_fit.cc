@@ -89,7 +89,7 @@ StatusOr<LaserEffectFit> FitLaserEffects(const LaserEffectData& data, const Lase
   size_t residuals = 0;
   for (size_t k = 0; k < contexts.size(); ++k) {
     if (fit_mask != nullptr && !(*fit_mask)[k]) continue;
-    problem.AddResidualBlock(LaserEffectResidual::Create(contexts[k], &data.sqrt_information()),
+    problem.AddResidualBlock(LaserEffectResidual::Create(contexts[k], &data.sqrt_information(k)),
                              loss, odometry, mounting, gamma.data());
     ++residuals;
   }
@@ -143,7 +143,7 @@ LaserEffectEvaluation EvaluateLaserEffects(const LaserEffectData& data,
   Eigen::Matrix<double, 3, kNumLaserEffectParams, Eigen::RowMajor> j_effects;
   double* jacobians[3] = {j_odometry.data(), j_mounting.data(), j_effects.data()};
   for (size_t k = 0; k < n; ++k) {
-    LaserEffectResidual functor(contexts[k], &data.sqrt_information());
+    LaserEffectResidual functor(contexts[k], &data.sqrt_information(k));
     const ceres::AutoDiffCostFunction<LaserEffectResidual, 3, 3, 3, kNumLaserEffectParams> cost(
         &functor, ceres::DO_NOT_TAKE_OWNERSHIP);
     Eigen::Vector3d r;

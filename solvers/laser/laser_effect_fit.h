@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <limits>
 #include <memory>
+#include <utility>
 #include <vector>
 
 // Robust Ceres fits of the laser calibration with candidate effects modelled
@@ -45,6 +46,16 @@ class LaserEffectData {
   const std::vector<LaserInterval>& intervals() const { return *intervals_; }
   size_t size() const { return intervals_->size(); }
   const Eigen::Matrix3d& sqrt_information() const { return sqrt_information_; }
+  // Interval k's whitening: its own when set (e.g. the stamp jitter's Σ_k^{-1/2}), else the
+  // shared one.
+  const Eigen::Matrix3d& sqrt_information(size_t k) const {
+    return interval_sqrt_information_.empty() ? sqrt_information_ : interval_sqrt_information_[k];
+  }
+  // One per interval (empty: back to the shared whitening). Fits made before keep their values.
+  void SetIntervalSqrtInformation(std::vector<Eigen::Matrix3d> roots) {
+    interval_sqrt_information_ = std::move(roots);
+  }
+  bool has_interval_sqrt_information() const { return !interval_sqrt_information_.empty(); }
   const LaserRefinementOptions& options() const { return options_; }
   // ρ(s), ρ'(s), ρ''(s) of the loss.
   void Loss(double s, double rho[3]) const;
@@ -55,6 +66,7 @@ class LaserEffectData {
  private:
   const std::vector<LaserInterval>* intervals_;
   Eigen::Matrix3d sqrt_information_;
+  std::vector<Eigen::Matrix3d> interval_sqrt_information_;
   LaserRefinementOptions options_;
   std::unique_ptr<ceres::LossFunction> loss_;
   std::vector<LaserEffectContext> piecewise_;

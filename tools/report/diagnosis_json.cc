@@ -94,12 +94,18 @@ Json FindingJson(const ReportedFinding& reported, const ParamTable& params,
   const Finding& f = reported.finding;
   Json out;
   out["effect"] = f.name;
-  out["significant"] = f.significant;
+  // Statistically significant; `implausible` says it was not adopted as that physics.
+  out["significant"] = f.significant || f.implausible;
   out["value"] = f.testable() ? Number(f.value) : Json(nullptr);
   out["stddev"] = f.testable() ? Number(f.stddev) : Json(nullptr);
   out["unit"] = f.unit;
   out["statement"] = f.statement;
   if (f.confounded) out["confounded_with"] = f.confounded_with;
+  if (f.implausible) {
+    out["implausible"] = true;
+    out["reason"] = f.implausible_reason;
+    out["follows"] = f.follows;
+  }
   out["no_information"] = f.no_information;
   if (f.testable()) {
     for (const auto& [key, value] : reported.extra) out[key] = Number(value);

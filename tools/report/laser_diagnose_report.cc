@@ -1,8 +1,8 @@
 #include <calib/core/laser/laser_log_io.h>
+#include <calib/core/text_format.h>
 #include <calib/tools/report/bearing_diagnose_report.h>
 #include <calib/tools/report/bearing_report.h>
 #include <calib/tools/report/laser_diagnose_report.h>
-#include <calib/core/text_format.h>
 
 #include <algorithm>
 #include <cmath>
@@ -38,8 +38,11 @@ std::string FindingsSummary(const DiagnosisReport& report) {
   for (const ReportedFinding& reported : report.findings) {
     const Finding& f = reported.finding;
     const char* tag =
-        f.significant ? "found"
-                      : (f.confounded ? "confounded" : (f.no_information ? "unseen" : "not found"));
+        f.significant
+            ? "found"
+            : (f.implausible
+                   ? "structure"
+                   : (f.confounded ? "confounded" : (f.no_information ? "unseen" : "not found")));
     text += "  [" + std::string(tag) + "] " + f.statement + "\n";
   }
   return text;

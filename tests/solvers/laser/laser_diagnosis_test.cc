@@ -63,6 +63,8 @@ TEST_P(DataLogTest, DiagnoseFindsTheEffect) {
   std::sort(adopted.begin(), adopted.end());
   std::sort(expected.begin(), expected.end());
   EXPECT_EQ(adopted, expected) << recipe.name;
+  // None of these logs has a timing error: the timing step adopts nothing.
+  EXPECT_TRUE(d->adopted_timing.empty()) << recipe.name;
   EXPECT_EQ(d->final_fit.effects.size(), d->adopted.size());
 
   for (const LaserFinding& f : d->findings) {
