@@ -1,0 +1,80 @@
+#ifndef CALIB_BENCHMARKS_BENCH_TIMING_STUDY_INTERNAL_H_
+#define CALIB_BENCHMARKS_BENCH_TIMING_STUDY_INTERNAL_H_
+
+#include <calib/core/laser/laser_params.h>
+#include <calib/core/laser/laser_simulator.h>
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "benchmarks/bench_common.h"
+
+// The pieces of the timing section (bench_timing_study.cc: patterns, seeds and the coverage
+// tables; bench_timing_study_alarms.cc: false alarms and speed).
+namespace calib::bench::timing {
+
+enum TimingMethod { kStampsAsTruth = 0, kTimingAware, kNumTimingMethods };
+extern const char* const kTimingMethodNames[kNumTimingMethods];
+
+// How the logger wrote the streams (the fields of the logging model that the study varies).
+struct LoggingPattern {
+  double encoder_period_s = 0.25;
+  double encoder_stamp_jitter_s = 0.0;
+  double sensor_period_s = 0.0;  // > 0: a free-running sensor, stamped at the logger's pick-up.
+  double logger_period_s = 0.0;
+  double repeat_fraction = 0.0;
+};
+
+struct TimingPattern {
+  std::string name;
+  std::string description;
+  LoggingPattern logging;
+};
+
+// One seed of one pattern.
+struct TimingSeedRun {
+  bool ok[kNumTimingMethods] = {};
+  std::string message[kNumTimingMethods];
+  LaserParamVector z[kNumTimingMethods];  // (estimate − truth)/reported σ, θ wrapped.
+  double seconds[kNumTimingMethods] = {};
+  int intervals = 0;
+  // The timing-aware calibration's own timing estimates and decisions.
+  double time_offset_s = 0.0;
+  double time_offset_stddev_s = 0.0;
+  double sensor_jitter_s = 0.0;
+  double encoder_jitter_s = 0.0;
+  std::string sensor_clock;
+  // `calib diagnose` on the stamp-as-truth intervals (clean pattern only).
+  bool diagnosed = false;
+  std::string diagnose_error;
+  std::vector<std::string> adopted;
+};
+
+struct TimingMethodStats {
+  int runs = 0;
+  std::vector<std::string> failures;
+  LaserParamVector mean_z = LaserParamVector::Zero();
+  LaserParamVector rms_z = LaserParamVector::Zero();
+  LaserParamVector coverage2 = LaserParamVector::Zero();
+  double mean_seconds = 0.0;
+};
+
+// The base simulation of the study (motion, noise, truth) for `intervals` sensor intervals.
+LaserSimOptions StudySimOptions(int intervals, uint64_t seed);
+
+// Simulates one log of the pattern: the streams as logged, and the truth.
+LaserStreams SimulatePattern(const TimingPattern& pattern, const LaserSimOptions& sim,
+                             LaserSimTruth* truth);
+
+// Both calibrations on one log; `diagnose`: also DiagnoseLaser on the stamp-as-truth intervals.
+TimingSeedRun RunSeed(const TimingPattern& pattern, int intervals, uint64_t seed, bool diagnose);
+
+// Part 2 and part 3 of the section.
+nlohmann::ordered_json RunFalseAlarms(const std::vector<TimingSeedRun>& clean_runs);
+nlohmann::ordered_json RunTimingSpeed(const BenchConfig& config);
+
+}  // namespace calib::bench::timing
+
+#endif  // CALIB_BENCHMARKS_BENCH_TIMING_STUDY_INTERNAL_H_
