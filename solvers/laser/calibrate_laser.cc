@@ -1,5 +1,6 @@
 #include <calib/solvers/common/solver_options.h>
 #include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/solvers/laser/laser_jitter_refit.h>
 
 #include <algorithm>
 #include <chrono>
@@ -250,6 +251,11 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   result.covariance_seconds = SecondsSince(start);
   result.observability =
       AnalyzeLaserObservability(result.covariance, result.estimate, result.census);
+  if (options.interval_jitter) {
+    start = std::chrono::steady_clock::now();
+    CALIB_RETURN_IF_ERROR(RefitWithIntervalJitter(logs, options, &result));
+    result.refinement_seconds += SecondsSince(start);
+  }
   if (result.inliers < result.samples / 2) {
     result.observability.warnings.push_back(
         "only " + std::to_string(result.inliers) + " of " + std::to_string(result.samples) +

@@ -8,6 +8,7 @@
 #include <calib/solvers/laser/laser_motion.h>
 #include <calib/solvers/laser/laser_observability.h>
 #include <calib/solvers/laser/laser_refinement.h>
+#include <calib/solvers/timing/interval_jitter.h>
 
 #include <Eigen/Core>
 #include <functional>
@@ -32,6 +33,12 @@ struct LaserCalibrationOptions {
   std::optional<Eigen::Vector3d> noise_sigma;
   // Intervals whose squared whitened residual exceeds this are outliers (χ²₃ at 99.9 %).
   double inlier_chi2 = 16.27;
+  // Tuple/CSV logs: estimate the jitter σ_j of the interval boundary stamps after the base fit
+  // (solvers/timing/interval_jitter.h) and, when it is significant, refit with each interval
+  // whitened by its own covariance. Logs read from raw streams should turn this off (the
+  // latent-time calibration models their timing). Not significant: the result is the base fit's.
+  bool interval_jitter = true;
+  IntervalJitterOptions jitter;
   // Called with a line of progress for long runs; may be empty.
   std::function<void(const std::string&)> progress;
 };
@@ -55,6 +62,11 @@ struct LaserCalibrationResult {
   // What went wrong on the way without stopping the calibration (a failed trimming, no
   // convergence, a log without inliers); also appended to observability.warnings.
   std::vector<std::string> warnings;
+  // Per log, the boundary-stamp jitter estimated at the base fit (empty when not asked for), and
+  // whether the result is the refit with it (then noise_sigma, is_inlier and the covariance are
+  // the refit's, and the covariance a sandwich that keeps the neighbours' correlation).
+  std::vector<IntervalJitterEstimate> interval_jitter;
+  bool jitter_refit = false;
   double closed_form_seconds = 0.0;
   double refinement_seconds = 0.0;
   double covariance_seconds = 0.0;

@@ -48,10 +48,20 @@ LaserProblem::LaserProblem(const std::vector<LaserDataset>& datasets,
   // Radii and wheelbase stay positive through the manifold (the problem owns it).
   problem_->AddParameterBlock(odometry_, 3, new PositiveManifold<3>());
   problem_->AddParameterBlock(base_T_sensor_, 3);
-  for (const LaserDataset& dataset : datasets_) {
+  interval_sqrt_information_.resize(datasets_.size());
+  for (size_t d = 0; d < datasets_.size(); ++d) {
+    LaserDataset& dataset = datasets_[d];
     sqrt_information_.push_back(std::make_unique<Eigen::Matrix3d>(dataset.sqrt_information));
-    for (const LaserInterval& interval : *dataset.intervals) {
-      ceres::CostFunction* cost = LaserResidual::Create(interval, sqrt_information_.back().get());
+    // Moved out of the copy: the problem's own storage, whose addresses the residuals keep.
+    if (dataset.interval_sqrt_information.size() == dataset.intervals->size()) {
+      interval_sqrt_information_[d] = std::move(dataset.interval_sqrt_information);
+    }
+    dataset.interval_sqrt_information.clear();
+    for (size_t k = 0; k < dataset.intervals->size(); ++k) {
+      const Eigen::Matrix3d* root = interval_sqrt_information_[d].empty()
+                                        ? sqrt_information_.back().get()
+                                        : &interval_sqrt_information_[d][k];
+      ceres::CostFunction* cost = LaserResidual::Create((*dataset.intervals)[k], root);
       problem_->AddResidualBlock(cost, loss_.get(), odometry_, base_T_sensor_);
       cost_functions_.push_back(cost);
       cost_dataset_.push_back(sqrt_information_.size() - 1);
@@ -92,6 +102,18 @@ void LaserProblem::SetSqrtInformation(size_t dataset, const Eigen::Matrix3d& sqr
   *sqrt_information_[dataset] = sqrt_information;
 }
 
+Status LaserProblem::SetIntervalSqrtInformation(size_t dataset,
+                                                const std::vector<Eigen::Matrix3d>& roots) {
+  std::vector<Eigen::Matrix3d>& own = interval_sqrt_information_[dataset];
+  if (own.empty() || roots.size() != own.size()) {
+    return Status::InvalidInput("per-interval whitening: " + std::to_string(roots.size()) +
+                                " matrices for a dataset of " + std::to_string(own.size()) +
+                                " per-interval ones");
+  }
+  std::copy(roots.begin(), roots.end(), own.begin());  // In place: the residuals point here.
+  return Status::Ok();
+}
+
 std::vector<Eigen::Vector3d> LaserProblem::Errors(size_t dataset) const {
   const std::vector<LaserInterval>& intervals = *datasets_[dataset].intervals;
   std::vector<Eigen::Vector3d> errors(intervals.size());
@@ -104,9 +126,11 @@ std::vector<Eigen::Vector3d> LaserProblem::Errors(size_t dataset) const {
 }
 
 std::vector<double> LaserProblem::WhitenedSquaredNorms(size_t dataset) const {
-  std::vector<double> s;
-  const Eigen::Matrix3d& l = *sqrt_information_[dataset];
-  for (const Eigen::Vector3d& e : Errors(dataset)) s.push_back((l * e).squaredNorm());
+  const std::vector<Eigen::Vector3d> errors = Errors(dataset);
+  std::vector<double> s(errors.size());
+  for (size_t k = 0; k < errors.size(); ++k) {
+    s[k] = (IntervalSqrtInformation(dataset, k) * errors[k]).squaredNorm();
+  }
   return s;
 }
 
@@ -157,6 +181,46 @@ StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::SandwichCovariance
   if (n <= kNumLaserParams) return Status::NotObservable(kTooFew);
   StatusOr<CorrectedCovariance<LaserParamMatrix>> sandwich =
       calib::SandwichCovariance(sums[0], n, n - kNumLaserParams);
+  if (!sandwich.ok() && sandwich.code() == StatusCode::kNotObservable) {
+    return Status::NotObservable(kSingular);
+  }
+  return sandwich;
+}
+
+StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::CorrelatedSandwichCovariance(
+    const std::vector<std::vector<Eigen::Matrix3d>>& lag_one) const {
+  SandwichSums<kNumLaserParams> sums;
+  const double* parameters[2] = {odometry_, base_T_sensor_};
+  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> j_odometry, j_sensor;
+  double* jacobians[2] = {j_odometry.data(), j_sensor.data()};
+  Eigen::Matrix<double, 3, kNumLaserParams> j, j_previous;
+  Eigen::Vector3d r;
+  double weight_previous = 0.0;
+  size_t k = 0;  // The interval's index within its dataset.
+  for (size_t c = 0; c < cost_functions_.size(); ++c, ++k) {
+    const size_t d = cost_dataset_[c];
+    if (c > 0 && cost_dataset_[c - 1] != d) k = 0;
+    if (!cost_functions_[c]->Evaluate(parameters, r.data(), jacobians)) {
+      return Status::Internal("a residual could not be evaluated at the estimate");
+    }
+    j << j_odometry, j_sensor;
+    const LossDerivatives rho = EvaluateLoss(loss_.get(), r.squaredNorm());
+    sums.Add(j, r, rho);
+    if (k > 0 && d < lag_one.size() && k - 1 < lag_one[d].size()) {
+      // Cov(r_{k−1}, r_k) = L_{k−1}·C·L_kᵀ of the whitened residuals.
+      const Eigen::Matrix3d whitened = IntervalSqrtInformation(d, k - 1) * lag_one[d][k - 1] *
+                                       IntervalSqrtInformation(d, k).transpose();
+      const LaserParamMatrix cross =
+          weight_previous * rho.rho1 * j_previous.transpose() * whitened * j;
+      sums.meat += cross + cross.transpose();
+    }
+    j_previous = j;
+    weight_previous = rho.rho1;
+  }
+  const double n = 3.0 * cost_functions_.size();
+  if (n <= kNumLaserParams) return Status::NotObservable(kTooFew);
+  StatusOr<CorrectedCovariance<LaserParamMatrix>> sandwich =
+      calib::SandwichCovariance(sums, n, n - kNumLaserParams);
   if (!sandwich.ok() && sandwich.code() == StatusCode::kNotObservable) {
     return Status::NotObservable(kSingular);
   }

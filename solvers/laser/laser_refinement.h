@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 // Maximum-likelihood refinement of the laser–odometry calibration with Ceres
@@ -26,10 +27,21 @@ struct LaserRefinementOptions {
   int num_threads = 2;
 };
 
-// One log: its intervals and the square root of its scan-noise information.
+// One log: its intervals and the square root of its scan-noise information, shared by all its
+// intervals or, when `interval_sqrt_information` is given (one per interval), per interval (e.g.
+// the timing jitter's Σ_k^{-1/2}, solvers/timing/interval_jitter.h).
 struct LaserDataset {
+  LaserDataset() = default;
+  LaserDataset(const std::vector<LaserInterval>* intervals_in,
+               const Eigen::Matrix3d& sqrt_information_in,
+               std::vector<Eigen::Matrix3d> interval_sqrt_information_in = {})
+      : intervals(intervals_in),
+        sqrt_information(sqrt_information_in),
+        interval_sqrt_information(std::move(interval_sqrt_information_in)) {}
+
   const std::vector<LaserInterval>* intervals = nullptr;
   Eigen::Matrix3d sqrt_information = Eigen::Matrix3d::Identity();
+  std::vector<Eigen::Matrix3d> interval_sqrt_information;
 };
 
 // The Ceres problem over one or more logs sharing the six parameters.
@@ -50,6 +62,12 @@ class LaserProblem {
     return *sqrt_information_[dataset];
   }
   void SetSqrtInformation(size_t dataset, const Eigen::Matrix3d& sqrt_information);
+  // Per-interval whitening of a dataset built with one; InvalidInput on a size mismatch or a
+  // dataset built with a shared one.
+  Status SetIntervalSqrtInformation(size_t dataset, const std::vector<Eigen::Matrix3d>& roots);
+  bool has_interval_sqrt_information(size_t dataset) const {
+    return !interval_sqrt_information_[dataset].empty();
+  }
 
   // Unwhitened errors e (see LaserResidual) of every interval of a dataset.
   std::vector<Eigen::Vector3d> Errors(size_t dataset) const;
@@ -65,12 +83,25 @@ class LaserProblem {
   // pass over the intervals, for logs where ceres::Covariance takes too long.
   StatusOr<CorrectedCovariance<LaserParamMatrix>> SandwichCovariance() const;
 
+  // The sandwich with the errors of neighbouring intervals correlated: lag_one[d][k] is
+  // Cov(e_k, e_{k+1}) of dataset d (unwhitened; empty: none), which adds
+  // ρ'_k ρ'_{k+1}·J_kᵀ L_k C_k L_{k+1}ᵀ J_{k+1} and its transpose to B.
+  StatusOr<CorrectedCovariance<LaserParamMatrix>> CorrelatedSandwichCovariance(
+      const std::vector<std::vector<Eigen::Matrix3d>>& lag_one) const;
+
   // The loss's weight ρ'(s) for a squared whitened norm s (1 without a robust loss).
   double LossWeight(double s) const;
 
  private:
   std::vector<LaserDataset> datasets_;
+  const Eigen::Matrix3d& IntervalSqrtInformation(size_t dataset, size_t k) const {
+    return interval_sqrt_information_[dataset].empty() ? *sqrt_information_[dataset]
+                                                       : interval_sqrt_information_[dataset][k];
+  }
+
   std::vector<std::unique_ptr<Eigen::Matrix3d>> sqrt_information_;  // Stable addresses.
+  // Per dataset, per interval (empty: shared); never resized after construction.
+  std::vector<std::vector<Eigen::Matrix3d>> interval_sqrt_information_;
   std::unique_ptr<ceres::LossFunction> loss_;
   std::unique_ptr<ceres::Problem> problem_;
   std::vector<const ceres::CostFunction*> cost_functions_;  // Owned by problem_.

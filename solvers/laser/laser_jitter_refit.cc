@@ -1,0 +1,115 @@
+#include <calib/solvers/common/solver_options.h>
+#include <calib/solvers/laser/laser_jitter_refit.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace calib {
+namespace {
+
+// The jitter each log's whitening uses: its estimate when significant, none otherwise.
+double UsedJitter(const IntervalJitterEstimate& estimate) {
+  return estimate.significant ? estimate.jitter_s : 0.0;
+}
+
+// Relative change of the jitter and the noise levels between two estimates.
+double Change(const IntervalJitterEstimate& a, const IntervalJitterEstimate& b) {
+  double change =
+      ((a.noise_sigma - b.noise_sigma).cwiseQuotient(b.noise_sigma)).cwiseAbs().maxCoeff();
+  const double jitter = std::max(UsedJitter(a), UsedJitter(b));
+  if (jitter > 0.0) change = std::max(change, std::abs(UsedJitter(a) - UsedJitter(b)) / jitter);
+  return change;
+}
+
+// Inliers under the per-interval whitening (squared whitened norm below the cut).
+std::vector<bool> Inliers(const std::vector<Eigen::Vector3d>& errors,
+                          const std::vector<Eigen::Matrix3d>& roots, double inlier_chi2) {
+  std::vector<bool> inlier(errors.size());
+  for (size_t k = 0; k < errors.size(); ++k) {
+    inlier[k] = (roots[k] * errors[k]).squaredNorm() < inlier_chi2;
+  }
+  return inlier;
+}
+
+}  // namespace
+
+Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval>*>& logs,
+                               const LaserCalibrationOptions& options,
+                               LaserCalibrationResult* result) {
+  std::vector<IntervalJitterEstimate>& jitter = result->interval_jitter;
+  bool any = false;
+  for (size_t d = 0; d < logs.size(); ++d) {
+    jitter.push_back(EstimateIntervalJitter(*logs[d], result->estimate, result->noise_sigma[d],
+                                            result->is_inlier[d], options.jitter));
+    any = any || jitter.back().significant;
+  }
+  if (!any) return Status::Ok();
+
+  // Refit, re-estimate σ_j and the scan noise jointly at the new parameters, refit while they move.
+  std::vector<LaserDataset> datasets;
+  std::vector<std::vector<IntervalTimeSensitivity>> sensitivities(logs.size());
+  for (size_t d = 0; d < logs.size(); ++d) {
+    sensitivities[d] = IntervalTimeSensitivities(*logs[d], result->estimate);
+    datasets.push_back(LaserDataset{
+        logs[d], Eigen::Matrix3d::Identity(),
+        JitterSqrtInformation(sensitivities[d], jitter[d].noise_sigma, UsedJitter(jitter[d]))});
+  }
+  LaserProblem problem(datasets, result->estimate, options.refinement);
+  std::vector<std::vector<bool>> inliers(logs.size());
+  for (int round = 0; round < std::max(1, options.noise_rounds); ++round) {
+    ceres::Solver::Summary summary;
+    CALIB_RETURN_IF_ERROR(problem.Solve(&summary));
+    result->iterations += static_cast<int>(summary.iterations.size());
+    result->converged = Converged(summary);
+    const LaserCalibration estimate = problem.calibration();
+    double change = 0.0;
+    for (size_t d = 0; d < logs.size(); ++d) {
+      sensitivities[d] = IntervalTimeSensitivities(*logs[d], estimate);
+      const std::vector<Eigen::Vector3d> errors = problem.Errors(d);
+      inliers[d] = Inliers(
+          errors,
+          JitterSqrtInformation(sensitivities[d], jitter[d].noise_sigma, UsedJitter(jitter[d])),
+          options.inlier_chi2);
+      IntervalJitterEstimate next = EstimateIntervalJitter(
+          errors, sensitivities[d], jitter[d].noise_sigma, inliers[d], options.jitter);
+      // The decision to model the jitter was taken at the base fit; keep it.
+      next.significant = jitter[d].significant;
+      change = std::max(change, Change(next, jitter[d]));
+      jitter[d] = next;
+    }
+    if (change < 0.01 || round + 1 == std::max(1, options.noise_rounds)) break;
+    for (size_t d = 0; d < logs.size(); ++d) {
+      CALIB_RETURN_IF_ERROR(problem.SetIntervalSqrtInformation(
+          d,
+          JitterSqrtInformation(sensitivities[d], jitter[d].noise_sigma, UsedJitter(jitter[d]))));
+    }
+  }
+
+  result->jitter_refit = true;
+  result->estimate = problem.calibration();
+  result->is_inlier = inliers;
+  result->inliers = 0;
+  result->noise_sigma.clear();
+  std::vector<std::vector<Eigen::Matrix3d>> lag_one(logs.size());
+  for (size_t d = 0; d < logs.size(); ++d) {
+    result->inliers += static_cast<int>(std::count(inliers[d].begin(), inliers[d].end(), true));
+    result->noise_sigma.push_back(jitter[d].noise_sigma);
+    lag_one[d] = JitterCrossCovariances(*logs[d], sensitivities[d], UsedJitter(jitter[d]));
+  }
+  CALIB_ASSIGN_OR_RETURN(const CorrectedCovariance<LaserParamMatrix> covariance,
+                         problem.CorrelatedSandwichCovariance(lag_one));
+  result->covariance = covariance.covariance;
+  result->covariance_scale = covariance.kappa;
+  result->stddev = result->covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  result->observability =
+      AnalyzeLaserObservability(result->covariance, result->estimate, result->census);
+  for (size_t d = 0; d < logs.size(); ++d) {
+    if (!jitter[d].significant) continue;
+    result->warnings.push_back(
+        (logs.size() > 1 ? "log " + std::to_string(d + 1) + ": " : std::string()) +
+        IntervalJitterStatement(jitter[d]));
+  }
+  return Status::Ok();
+}
+
+}  // namespace calib

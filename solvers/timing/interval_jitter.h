@@ -1,0 +1,104 @@
+#ifndef CALIB_SOLVERS_TIMING_INTERVAL_JITTER_H_
+#define CALIB_SOLVERS_TIMING_INTERVAL_JITTER_H_
+
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/laser/laser_params.h>
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+// Timing jitter on logs of intervals (tuple/CSV), which carry no raw odometry: the stamps at the
+// interval boundaries are off by independent ε ~ N(0, σ_j²), so the wheel rotation attributed to
+// interval k is off by φ(t_{k+1})·ε_{k+1} − φ(t_k)·ε_k, φ the wheel speeds at the boundaries
+// (from the neighbouring intervals). Linearised through the prediction, the error of interval k is
+//   e_k = n_k + g_k,start·ε_k + g_k,end·ε_{k+1},   n_k ~ N(0, diag σ_n²),
+// so Σ_k = diag σ_n² + σ_j²·(g_s g_sᵀ + g_e g_eᵀ), and neighbours sharing a boundary correlate:
+// Cov(e_k, e_{k+1}) = σ_j²·g_k,end·g_{k+1},startᵀ. The jitter part grows with the boundary speeds,
+// the scan noise does not: that separates the two.
+//
+// The likelihood used here is the product of the per-interval marginals (the diagonal blocks):
+// under σ_j = 0 the intervals are independent, so its scores are sums of independent terms and the
+// likelihood-ratio test keeps its null distribution; away from it the estimates stay consistent.
+// The refit whitens each interval by its own block; the neglected neighbour correlation is put back
+// into the parameter covariance (JitterCrossCovariances, the refinement's sandwich).
+namespace calib {
+
+// Per-interval sensitivity of the predicted sensor displacement (as the error e = ŝ − ŝ_pred, in
+// SensorMotionError's components) to the interval's start and end times: ∂ŝ/∂t.
+struct IntervalTimeSensitivity {
+  Eigen::Vector3d start = Eigen::Vector3d::Zero();
+  Eigen::Vector3d end = Eigen::Vector3d::Zero();
+};
+
+// Wheel speeds (φ_l, φ_r) rad/s at each interval's start and end. At a boundary between two
+// contiguous intervals, the linear interpolation between the neighbouring mean speeds (or the
+// adjacent wheel steps when present) at the interval centres; after a gap or at the ends of the
+// log, the interval's own.
+struct IntervalBoundarySpeeds {
+  Eigen::Vector2d start = Eigen::Vector2d::Zero();
+  Eigen::Vector2d end = Eigen::Vector2d::Zero();
+};
+std::vector<IntervalBoundarySpeeds> BoundaryWheelSpeeds(
+    const std::vector<LaserInterval>& intervals);
+
+// g_start = ∂/∂ε [ℓ⁻¹ ∘ W(−φ_s·ε) ∘ o ∘ ℓ], g_end = ∂/∂ε [ℓ⁻¹ ∘ o ∘ W(φ_e·ε) ∘ ℓ] at ε = 0, with
+// W the wheel-step displacement and o the interval's robot displacement.
+std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
+    const std::vector<LaserInterval>& intervals, const LaserCalibration& calibration);
+
+// σ_j²·(g_s g_sᵀ + g_e g_eᵀ): what the jitter adds to one interval's error covariance.
+Eigen::Matrix3d JitterCovariance(const IntervalTimeSensitivity& sensitivity, double jitter_s);
+
+// Cov(e_k, e_{k+1}) = σ_j²·g_k,end·g_{k+1},startᵀ for each k (zero where interval k+1 follows a
+// gap); size n − 1 (empty for n < 2).
+std::vector<Eigen::Matrix3d> JitterCrossCovariances(
+    const std::vector<LaserInterval>& intervals,
+    const std::vector<IntervalTimeSensitivity>& sensitivities, double jitter_s);
+
+// Per interval, the upper-triangular L with LᵀL = Σ_k⁻¹, Σ_k = diag(σ_n²) + the jitter's part.
+std::vector<Eigen::Matrix3d> JitterSqrtInformation(
+    const std::vector<IntervalTimeSensitivity>& sensitivities, const Eigen::Vector3d& noise_sigma,
+    double jitter_s);
+
+struct IntervalJitterOptions {
+  // Level of the likelihood-ratio test against σ_j = 0.
+  double significance = 0.01;
+  // Re-estimate the scan noise jointly with σ_j (profile likelihood); false keeps it fixed.
+  bool estimate_noise = true;
+  int grid_points = 41;
+};
+
+struct IntervalJitterEstimate {
+  double jitter_s = 0, jitter_stddev_s = 0;
+  double lr_statistic = 0, p_value = 1;
+  bool significant = false;
+  // The scan noise σ (x, y, θ) estimated jointly at σ_j = jitter_s, and at σ_j = 0.
+  Eigen::Vector3d noise_sigma = Eigen::Vector3d::Zero();
+  Eigen::Vector3d noise_sigma_without_jitter = Eigen::Vector3d::Zero();
+  double log_likelihood = 0, log_likelihood_without_jitter = 0;
+  int intervals_used = 0;  // The inliers the likelihood was evaluated on.
+};
+
+// σ_j by profile likelihood over the inliers' errors e_k: ℓ(σ_j) = max over σ_n of
+// −½Σ[log det Σ_k + e_kᵀΣ_k⁻¹e_k] on a grid, refined by golden section; the LR test against σ_j = 0
+// (on the boundary: ½χ²₀ + ½χ²₁); σ of σ_j from the profile's curvature. `noise_sigma` starts
+// the noise re-estimation (or is kept with estimate_noise = false).
+IntervalJitterEstimate EstimateIntervalJitter(
+    const std::vector<Eigen::Vector3d>& errors,
+    const std::vector<IntervalTimeSensitivity>& sensitivities, const Eigen::Vector3d& noise_sigma,
+    const std::vector<bool>& is_inlier, const IntervalJitterOptions& options = {});
+
+// The same from the intervals and a calibration (errors and sensitivities computed at it).
+IntervalJitterEstimate EstimateIntervalJitter(const std::vector<LaserInterval>& intervals,
+                                              const LaserCalibration& calibration,
+                                              const Eigen::Vector3d& noise_sigma,
+                                              const std::vector<bool>& is_inlier,
+                                              const IntervalJitterOptions& options = {});
+
+// The output's sentence: only the weaker treatment was possible on these intervals.
+std::string IntervalJitterStatement(const IntervalJitterEstimate& estimate);
+
+}  // namespace calib
+
+#endif  // CALIB_SOLVERS_TIMING_INTERVAL_JITTER_H_

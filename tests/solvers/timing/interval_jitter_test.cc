@@ -1,0 +1,116 @@
+// The interval-jitter model of tuple/CSV logs: sensitivities against numeric differences, σ_j
+// recovered within its σ on logs whose boundary stamps were jittered, no false alarms on clean
+// ones.
+#include <calib/core/laser/laser_simulator.h>
+#include <calib/problems/laser/laser_residual.h>
+#include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/solvers/timing/interval_jitter.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tests/solvers/timing/jittered_log.h"
+
+namespace calib {
+namespace {
+
+LaserCalibration Truth(const LaserSimOptions& options) {
+  return LaserCalibration{options.odometry, options.base_T_sensor};
+}
+
+// On a constant arc the end speeds are the interval's: moving the end by δ appends φ·δ of arc,
+// moving the start removes it.
+TEST(IntervalJitterTest, SensitivitiesAreTheDerivativesInTime) {
+  LaserSimOptions sim;
+  sim.trajectory = LaserTrajectory::kConstantArc;
+  sim.num_intervals = 5;
+  sim.scan_noise_sigma.setZero();
+  const LaserLog log = SimulateLaserLog(sim);
+  const LaserCalibration truth = Truth(sim);
+  const std::vector<IntervalTimeSensitivity> g = IntervalTimeSensitivities(log.intervals, truth);
+  const LaserParamVector p = truth.ToVector();
+  const double h = 1e-6;
+  for (size_t k = 0; k < log.intervals.size(); ++k) {
+    LaserInterval longer = log.intervals[k], shorter = log.intervals[k];
+    longer.duration_s += h;
+    shorter.duration_s -= h;
+    // e = ŝ − ŝ_pred: ŝ_pred moves by −de, and ŝ_pred(T + δ) is ŝ with the end moved by δ.
+    const Eigen::Vector3d numeric = -(LaserResidual::Error(longer, p.data(), p.data() + 3) -
+                                      LaserResidual::Error(shorter, p.data(), p.data() + 3)) /
+                                    (2 * h);
+    EXPECT_LT((g[k].end - numeric).norm(), 1e-7 * numeric.norm()) << k;
+    EXPECT_LT((g[k].start + numeric).norm(), 1e-7 * numeric.norm()) << k;
+  }
+}
+
+TEST(IntervalJitterTest, BoundarySpeedsInterpolateTheNeighbours) {
+  std::vector<LaserInterval> intervals(3);
+  intervals[0].duration_s = 1.0, intervals[0].left_speed = 1.0, intervals[0].right_speed = 2.0;
+  intervals[1].duration_s = 3.0, intervals[1].left_speed = 5.0, intervals[1].right_speed = 2.0;
+  intervals[2].duration_s = 1.0, intervals[2].left_speed = 0.0, intervals[2].right_speed = 0.0;
+  intervals[2].gap_before = true;
+  const std::vector<IntervalBoundarySpeeds> speeds = BoundaryWheelSpeeds(intervals);
+  // Centres at 0.5 and 2.5, boundary at 1: a quarter of the way from the first to the second.
+  EXPECT_NEAR(speeds[0].end(0), 2.0, 1e-12);
+  EXPECT_NEAR(speeds[1].start(1), 2.0, 1e-12);
+  EXPECT_NEAR(speeds[0].start(0), 1.0, 1e-12);
+  EXPECT_NEAR(speeds[1].end(0), 5.0, 1e-12);  // A gap follows: its own speed.
+  EXPECT_NEAR(speeds[2].start(0), 0.0, 1e-12);
+}
+
+TEST(IntervalJitterTest, SqrtInformationWhitensTheCovariance) {
+  IntervalTimeSensitivity g;
+  g.start = Eigen::Vector3d(1e-3, 2e-3, -4e-3);
+  g.end = Eigen::Vector3d(-2e-3, 1e-3, 5e-3);
+  const Eigen::Vector3d noise(1e-3, 2e-3, 3e-3);
+  const Eigen::Matrix3d l = JitterSqrtInformation({g}, noise, 0.5).front();
+  const Eigen::Matrix3d sigma =
+      Eigen::Matrix3d(noise.cwiseAbs2().asDiagonal()) + JitterCovariance(g, 0.5);
+  EXPECT_LT((l * sigma * l.transpose() - Eigen::Matrix3d::Identity()).norm(), 1e-9);
+}
+
+TEST(IntervalJitterTest, RecoversTheJitterWithinItsSigma) {
+  LaserSimOptions sim;
+  sim.num_intervals = 2000;
+  sim.seed = 5;
+  const double jitter_s = 0.03;
+  const LaserLog log = JitteredTupleLog(sim, jitter_s);
+  const LaserCalibration truth = Truth(sim);
+  const IntervalJitterEstimate estimate = EstimateIntervalJitter(
+      log.intervals, truth, sim.scan_noise_sigma, std::vector<bool>(log.intervals.size(), true));
+  EXPECT_TRUE(estimate.significant) << estimate.p_value;
+  EXPECT_LT(std::abs(estimate.jitter_s - jitter_s), 3 * estimate.jitter_stddev_s)
+      << estimate.jitter_s << " ± " << estimate.jitter_stddev_s;
+  EXPECT_LT(estimate.jitter_stddev_s, 0.2 * jitter_s);
+  // The scan noise is not inflated by the jitter: it stays the simulated one.
+  for (int j = 0; j < 3; ++j) {
+    EXPECT_NEAR(estimate.noise_sigma(j), sim.scan_noise_sigma(j), 0.1 * sim.scan_noise_sigma(j));
+  }
+}
+
+// At the fitted parameters of clean logs the test rejects σ_j = 0 at about its level.
+TEST(IntervalJitterTest, FewFalseAlarmsOnCleanLogs) {
+  int alarms = 0;
+  const int seeds = 40;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    LaserSimOptions sim;
+    sim.num_intervals = 400;
+    sim.seed = 100 + seed;
+    const LaserLog log = SimulateLaserLog(sim);
+    LaserCalibrationOptions options;
+    options.interval_jitter = false;
+    const StatusOr<LaserCalibrationResult> result = CalibrateLaser(log.intervals, options);
+    ASSERT_TRUE(result.ok()) << result.message();
+    IntervalJitterOptions jitter_options;
+    jitter_options.significance = 0.05;
+    const IntervalJitterEstimate estimate =
+        EstimateIntervalJitter(log.intervals, result->estimate, result->noise_sigma[0],
+                               result->is_inlier[0], jitter_options);
+    alarms += estimate.significant;
+  }
+  // 5 % of 40 is 2; more than 6 has probability below 1 % under the nominal level.
+  EXPECT_LE(alarms, 6);
+}
+
+}  // namespace
+}  // namespace calib
