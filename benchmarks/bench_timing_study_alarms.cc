@@ -24,11 +24,15 @@ nlohmann::ordered_json RunFalseAlarms(const std::vector<TimingSeedRun>& clean_ru
   std::printf(
       "\nFalse alarms on the %zu clean-timing logs of the table above (stamps = sample times):\n",
       clean_runs.size());
-  Proportion any_adopted, timing_adopted;
+  Proportion any_adopted, timing_adopted, jitter_refit;
   std::map<std::string, int> adopted_names, clocks;
   int diagnose_failed = 0;
   for (const TimingSeedRun& run : clean_runs) {
     if (run.ok[kTimingAware]) ++clocks[run.sensor_clock];
+    if (run.ok[kIntervalJitter]) {
+      ++jitter_refit.n;
+      jitter_refit.k += run.jitter_refit;
+    }
     if (!run.diagnosed) {
       ++diagnose_failed;
       continue;
@@ -44,6 +48,8 @@ nlohmann::ordered_json RunFalseAlarms(const std::vector<TimingSeedRun>& clean_ru
     timing_adopted.k += timing;
   }
   TextTable table({"decision", "count", "rate", "95% CI"});
+  table.AddRow({"CalibrateLaser: boundary jitter significant (refit)", jitter_refit.Text(),
+                jitter_refit.Percent(), jitter_refit.Interval()});
   table.AddRow({"diagnose adopts any effect", any_adopted.Text(), any_adopted.Percent(),
                 any_adopted.Interval()});
   table.AddRow({"diagnose adopts a timing effect", timing_adopted.Text(), timing_adopted.Percent(),
@@ -54,6 +60,7 @@ nlohmann::ordered_json RunFalseAlarms(const std::vector<TimingSeedRun>& clean_ru
   std::printf("Adopted effects:%s; diagnose failed on %d logs.\n",
               names.empty() ? " none" : names.c_str(), diagnose_failed);
   nlohmann::ordered_json out = {{"logs", clean_runs.size()},
+                                {"interval_jitter_refit", jitter_refit.Json()},
                                 {"diagnose_any_adopted", any_adopted.Json()},
                                 {"diagnose_timing_adopted", timing_adopted.Json()},
                                 {"adopted_names", adopted_names},
@@ -83,6 +90,7 @@ nlohmann::ordered_json RunTimingSpeed(const BenchConfig& config) {
         LaserLogFromStreams(streams.odometry, streams.sensor_poses, "simulated streams");
     LaserCalibrationOptions options;
     options.refinement.num_threads = config.threads;
+    options.interval_jitter = false;
     const bool ok = log.ok() && CalibrateLaser(log->intervals, options).ok();
     const double stamps_s = watch.Seconds();
     table.AddRow(

@@ -15,7 +15,10 @@
 // tables; bench_timing_study_alarms.cc: false alarms and speed).
 namespace calib::bench::timing {
 
-enum TimingMethod { kStampsAsTruth = 0, kTimingAware, kNumTimingMethods };
+// stamps_as_truth: the stream reader + CalibrateLaser without any timing model; interval_jitter:
+// CalibrateLaser's weaker treatment for logs of intervals (boundary-stamp jitter propagated
+// through the end speeds); timing_aware: the latent-time calibration of the raw streams.
+enum TimingMethod { kStampsAsTruth = 0, kIntervalJitter, kTimingAware, kNumTimingMethods };
 extern const char* const kTimingMethodNames[kNumTimingMethods];
 
 // How the logger wrote the streams (the fields of the logging model that the study varies).
@@ -46,6 +49,9 @@ struct TimingSeedRun {
   double sensor_jitter_s = 0.0;
   double encoder_jitter_s = 0.0;
   std::string sensor_clock;
+  // CalibrateLaser's interval-jitter treatment: judged significant (and refitted), its σ_j.
+  bool jitter_refit = false;
+  double interval_jitter_s = 0.0;
   // `calib diagnose` on the stamp-as-truth intervals (clean pattern only).
   bool diagnosed = false;
   std::string diagnose_error;
