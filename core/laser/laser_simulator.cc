@@ -2,6 +2,7 @@
 #include <calib/core/laser/robot_integrator.h>
 #include <calib/core/laser/wheel_profile.h>
 #include <calib/core/random.h>
+#include <calib/core/timing/logging_model.h>
 
 #include <algorithm>
 #include <cmath>
@@ -30,6 +31,9 @@ enum Stream : uint32_t {
   kOutliers,
   kWheelNoise,
   kPoseNoise,
+  kLoggerTiming,  // The logging model's draws.
+  kEncoderTiming,
+  kRepeats,
 };
 
 using laser_sim_internal::ConstantSpeedProfile;
@@ -98,12 +102,15 @@ void AddOutliers(const LaserSimOptions& options, const std::vector<Pose2d>& robo
   }
 }
 
-Simulation Simulate(const LaserSimOptions& options, LaserSimTruth* truth) {
+// The motion seen by scans taken at `boundaries` (t_0 … t_N); the wheel profile runs at least
+// until `end_s`, so that samples after the last scan can be read from it.
+Simulation SimulateAt(const LaserSimOptions& options, std::vector<double> boundaries, double end_s,
+                      LaserSimTruth* truth) {
   Simulation simulation;
-  if (options.num_intervals > 0 && options.mean_interval_s > 0.0) {
-    simulation.boundaries = Boundaries(options);
-    const double end_s =
-        simulation.boundaries.back() + std::max(options.effects.time_offset_s, 0.0);
+  if (boundaries.size() >= 2) {
+    simulation.boundaries = std::move(boundaries);
+    end_s = std::max(end_s,
+                     simulation.boundaries.back() + std::max(options.effects.time_offset_s, 0.0));
     Random targets(options.seed, Stream::kTargets);
     simulation.profile = options.speed_time_constant_s > 0.0
                              ? SmoothProfile(options, end_s, &targets)
@@ -123,6 +130,39 @@ Simulation Simulate(const LaserSimOptions& options, LaserSimTruth* truth) {
     truth->is_outlier = simulation.is_outlier;
   }
   return simulation;
+}
+
+Simulation Simulate(const LaserSimOptions& options, LaserSimTruth* truth) {
+  std::vector<double> boundaries;
+  if (options.num_intervals > 0 && options.mean_interval_s > 0.0) boundaries = Boundaries(options);
+  return SimulateAt(options, std::move(boundaries), 0.0, truth);
+}
+
+// The scan matcher's world poses of the sensor at t_0 … t_N: chained from the noise-free
+// displacements (so an outlier corrupts only its own displacement), then each with independent
+// noise N(0, σ/√2) composed in the sensor frame. A displacement between consecutive poses thus
+// has noise of about σ per component, as in the log, but consecutive displacements share a pose
+// and are correlated (about −1/2).
+std::vector<Pose2d> MeasuredSensorPoses(const LaserSimOptions& options,
+                                        const Simulation& simulation) {
+  const size_t n = simulation.matched.size();
+  Random pose_noise(options.seed, Stream::kPoseNoise);
+  const Eigen::Vector3d sigma = options.scan_noise_sigma / std::sqrt(2.0);
+  std::vector<Pose2d> poses;
+  poses.reserve(n + 1);
+  Pose2d sensor = options.base_T_sensor;  // The robot starts at the world origin.
+  for (size_t k = 0; k <= n; ++k) {
+    Pose2d noise;
+    for (int j = 0; j < 3; ++j) noise(j) = sigma(j) * pose_noise.Normal();
+    Pose2d measured = Compose(sensor, noise);
+    measured(2) = WrapAngle(measured(2));
+    poses.push_back(measured);
+    if (k < n) {
+      sensor = Compose(sensor, simulation.matched[k]);
+      sensor(2) = WrapAngle(sensor(2));
+    }
+  }
+  return poses;
 }
 
 // Encoder reading: the count of whole ticks when quantized.
@@ -191,12 +231,8 @@ LaserLog SimulateLaserLog(const LaserSimOptions& options, LaserSimTruth* truth) 
   return log;
 }
 
-// Sensor poses are chained from the noise-free scan-matcher displacements (so an outlier corrupts
-// only its own displacement), then each gets independent noise N(0, σ/√2) composed in the sensor
-// frame. A displacement between consecutive poses thus has noise of about σ per component, as in
-// the log, but consecutive displacements share a pose and are correlated (about −1/2).
-// Encoder samples are quantized like the log's but carry no wheel-speed noise; with
-// encoder_rate_hz <= 0 they are taken at the interval boundaries.
+// Sensor poses as MeasuredSensorPoses makes them. Encoder samples are quantized like the log's but
+// carry no wheel-speed noise; with encoder_rate_hz <= 0 they are taken at the interval boundaries.
 LaserStreams SimulateLaserStreams(const LaserSimOptions& options, double encoder_rate_hz,
                                   LaserSimTruth* truth) {
   const Simulation simulation = Simulate(options, truth);
@@ -221,21 +257,69 @@ LaserStreams SimulateLaserStreams(const LaserSimOptions& options, double encoder
     for (const double t : simulation.boundaries) streams.odometry.push_back(sample(t));
   }
 
-  Random pose_noise(options.seed, Stream::kPoseNoise);
-  const Eigen::Vector3d sigma = options.scan_noise_sigma / std::sqrt(2.0);
+  const std::vector<Pose2d> poses = MeasuredSensorPoses(options, simulation);
   streams.sensor_poses.reserve(n + 1);
-  Pose2d sensor = options.base_T_sensor;  // The robot starts at the world origin.
   for (size_t k = 0; k <= n; ++k) {
-    Pose2d noise;
-    for (int j = 0; j < 3; ++j) noise(j) = sigma(j) * pose_noise.Normal();
-    Pose2d measured = Compose(sensor, noise);
-    measured(2) = WrapAngle(measured(2));
-    streams.sensor_poses.push_back(StampedPose{simulation.boundaries[k], measured});
-    if (k < n) {
-      sensor = Compose(sensor, simulation.matched[k]);
-      sensor(2) = WrapAngle(sensor(2));
+    streams.sensor_poses.push_back(StampedPose{simulation.boundaries[k], poses[k]});
+  }
+  return streams;
+}
+
+// The logging model on top of the same machinery: the scans are the sensor's true samples (its own
+// grid when it free-runs), the logger decides which sample each row holds and its stamp, and the
+// encoders are read from the wheel profile at the true poll times.
+LaserStreams SimulateLoggedLaserStreams(const LaserSimOptions& options, const LoggingModel& model,
+                                        LaserSimTruth* truth, LoggedTimingTruth* timing) {
+  std::vector<double> samples;
+  if (options.num_intervals > 0 && model.sensor_period_s > 0.0) {
+    samples = FreeRunningSampleTimes(model, static_cast<size_t>(options.num_intervals) + 1);
+  } else if (options.num_intervals > 0 && options.mean_interval_s > 0.0) {
+    samples = Boundaries(options);
+  }
+  Random logger(options.seed, Stream::kLoggerTiming);
+  Random encoder(options.seed, Stream::kEncoderTiming);
+  Random repeats(options.seed, Stream::kRepeats);
+  const std::vector<LoggedSample> records = LogSamples(model, samples, &logger);
+  double end_s = samples.empty() ? 0.0 : samples.back();
+  for (const LoggedSample& record : records) end_s = std::max(end_s, record.stamp_s);
+  const std::vector<EncoderPoll> polls = model.encoder_period_s > 0.0 && !samples.empty()
+                                             ? EncoderPolls(model, samples.front(), end_s, &encoder)
+                                             : StampedPolls(model, samples, &encoder);
+  for (const EncoderPoll& poll : polls) end_s = std::max(end_s, poll.true_s);
+  const Simulation simulation = SimulateAt(options, samples, end_s, truth);
+
+  LaserStreams streams;
+  LoggedTimingTruth timing_truth;
+  timing_truth.all_sensor_sample_times_s = samples;
+  if (!simulation.matched.empty()) {
+    const std::vector<Pose2d> poses = MeasuredSensorPoses(options, simulation);
+    std::vector<bool> written(samples.size(), false);
+    size_t previous = 0;
+    for (const size_t row : RowsWithRepeats(records.size(), model.repeat_fraction, &repeats)) {
+      const LoggedSample& record = records[row];
+      const bool duplicate = !streams.sensor_poses.empty() && row == previous;
+      timing_truth.sensor_duplicates += duplicate;
+      timing_truth.held_samples += !duplicate && written[record.sample];
+      written[record.sample] = true;
+      previous = row;
+      streams.sensor_poses.push_back(StampedPose{record.stamp_s, poses[record.sample]});
+      timing_truth.sensor_sample_time_s.push_back(samples[record.sample]);
+      timing_truth.sensor_sample_index.push_back(record.sample);
+    }
+    timing_truth.skipped_samples = std::count(written.begin(), written.end(), false);
+    const double ticks = options.encoder_ticks_per_rad;
+    size_t cursor = 0;
+    previous = 0;
+    for (const size_t row : RowsWithRepeats(polls.size(), model.repeat_fraction, &repeats)) {
+      const EncoderPoll& poll = polls[row];
+      timing_truth.encoder_duplicates += !streams.odometry.empty() && row == previous;
+      previous = row;
+      const Eigen::Array2d angle = Quantize(simulation.profile.Angle(poll.true_s, &cursor), ticks);
+      streams.odometry.push_back(EncoderSample{poll.stamp_s, angle(0), angle(1)});
+      timing_truth.encoder_sample_time_s.push_back(poll.true_s);
     }
   }
+  if (timing != nullptr) *timing = std::move(timing_truth);
   return streams;
 }
 

@@ -1,14 +1,15 @@
 #ifndef CALIB_CORE_LASER_LASER_SIMULATOR_H_
 #define CALIB_CORE_LASER_LASER_SIMULATOR_H_
 
-#include <Eigen/Core>
-#include <cstdint>
-#include <vector>
-
 #include <calib/core/diff_drive.h>
 #include <calib/core/laser/laser_log.h>
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/core/se2.h>
+#include <calib/core/timing/logging_model.h>
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
 
 // Simulated laser–odometry logs with known truth, for tests, benchmarks and diagnosis. The robot
 // is integrated finely in continuous time, so physical effects that the base model leaves out
@@ -80,6 +81,16 @@ struct LaserStreams {
 };
 LaserStreams SimulateLaserStreams(const LaserSimOptions& options, double encoder_rate_hz,
                                   LaserSimTruth* truth = nullptr);
+
+// The same motion as a real robot logs it (core/timing/logging_model.h): the sensor's true samples
+// are the scan times (its own grid when it free-runs: options.num_intervals + 1 samples, and
+// mean_interval_s/interval_jitter_s are unused), each logger row holds the latest sample picked
+// up and its pick-up stamp, and encoder rows hold the cumulative wheel angles at the true poll
+// times under scattered stamps. `timing` receives the true time of every row. With every logging
+// field zero the output equals SimulateLaserStreams(options, 0.0, truth).
+LaserStreams SimulateLoggedLaserStreams(const LaserSimOptions& options, const LoggingModel& model,
+                                        LaserSimTruth* truth = nullptr,
+                                        LoggedTimingTruth* timing = nullptr);
 
 }  // namespace calib
 
