@@ -1,7 +1,6 @@
 #include "benchmarks/bench_timing_study.h"
 
 #include <calib/core/laser/laser_log_io.h>
-#include <calib/core/random.h>
 #include <calib/solvers/laser/calibrate_laser.h>
 #include <calib/solvers/laser/laser_diagnosis.h>
 
@@ -98,16 +97,9 @@ void RunStampsAsTruth(const LaserStreams& streams, const LaserCalibration& truth
 
 }  // namespace
 
-// Stand-in for the logging simulator: encoder stamps scattered by N(0, jitter²).
 LaserStreams SimulatePattern(const TimingPattern& pattern, const LaserSimOptions& sim,
                              LaserSimTruth* truth) {
-  const LoggingPattern& logging = pattern.logging;
-  LaserStreams streams = SimulateLaserStreams(sim, 1.0 / logging.encoder_period_s, truth);
-  Random random(sim.seed, 901);
-  for (size_t k = 1; k + 1 < streams.odometry.size(); ++k) {
-    streams.odometry[k].t_s += logging.encoder_stamp_jitter_s * random.Normal();
-  }
-  return streams;
+  return SimulateLoggedLaserStreams(sim, pattern.logging, truth);
 }
 
 TimingSeedRun RunSeed(const TimingPattern& pattern, int intervals, uint64_t seed, bool diagnose) {
@@ -125,17 +117,44 @@ TimingSeedRun RunSeed(const TimingPattern& pattern, int intervals, uint64_t seed
 
 namespace {
 
+// The robot: encoders polled every ~250 ms; a scanner free-running at 99.5 ms whose
+// latest scan a 100 ms logger picks up and stamps (every ~20 s one scan is skipped, and the
+// logger's jitter makes it write some scans twice under new stamps).
 std::vector<TimingPattern> Patterns() {
+  LoggingModel clean;
+  clean.encoder_period_s = 0.25;
   std::vector<TimingPattern> patterns;
-  patterns.push_back({"clean", "stamps are the sample times; encoders polled every 250 ms", {}});
+  patterns.push_back({"clean", "stamps are the sample times; encoders polled every 250 ms", clean});
   for (double jitter : {0.005, 0.010, 0.020}) {
-    TimingPattern p;
-    p.name = Format("encoder_%.0fms", jitter * 1e3);
-    p.description =
-        Format("encoder stamps scattered by %.0f ms (sd) about a 250 ms poll", jitter * 1e3);
+    TimingPattern p{
+        Format("encoder_%.0fms", jitter * 1e3),
+        Format("encoder stamps scattered by %.0f ms (sd) about a 250 ms poll", jitter * 1e3),
+        clean};
     p.logging.encoder_stamp_jitter_s = jitter;
     patterns.push_back(p);
   }
+  TimingPattern free{"free_running", "", clean};
+  free.logging.sensor_period_s = 0.0995;
+  free.logging.sensor_phase_s = 0.031;
+  free.logging.logger_period_s = 0.1;
+  free.logging.logger_jitter_s = 0.002;
+  free.logging.pickup_latency_s = 0.01;
+  free.description = Format(
+      "scanner free-running at %.1f ms, a %.0f ms logger (jitter %.0f ms, latency %.0f ms) "
+      "stamps the latest scan at pick-up; clean encoders",
+      free.logging.sensor_period_s * 1e3, free.logging.logger_period_s * 1e3,
+      free.logging.logger_jitter_s * 1e3, free.logging.pickup_latency_s * 1e3);
+  patterns.push_back(free);
+  TimingPattern both{"both", "", free.logging};
+  both.logging.encoder_poll_jitter_s = 0.005;
+  both.logging.encoder_stamp_jitter_s = 0.017;
+  both.logging.repeat_fraction = 0.02;
+  both.description = Format(
+      "free_running plus encoder polls scattered by %.0f ms and stamps by %.0f ms, %.0f %% of "
+      "the records of each stream written twice",
+      both.logging.encoder_poll_jitter_s * 1e3, both.logging.encoder_stamp_jitter_s * 1e3,
+      both.logging.repeat_fraction * 100);
+  patterns.push_back(both);
   return patterns;
 }
 

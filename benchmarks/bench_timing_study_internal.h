@@ -3,6 +3,7 @@
 
 #include <calib/core/laser/laser_params.h>
 #include <calib/core/laser/laser_simulator.h>
+#include <calib/core/timing/logging_model.h>
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -21,19 +22,10 @@ namespace calib::bench::timing {
 enum TimingMethod { kStampsAsTruth = 0, kIntervalJitter, kTimingAware, kNumTimingMethods };
 extern const char* const kTimingMethodNames[kNumTimingMethods];
 
-// How the logger wrote the streams (the fields of the logging model that the study varies).
-struct LoggingPattern {
-  double encoder_period_s = 0.25;
-  double encoder_stamp_jitter_s = 0.0;
-  double sensor_period_s = 0.0;  // > 0: a free-running sensor, stamped at the logger's pick-up.
-  double logger_period_s = 0.0;
-  double repeat_fraction = 0.0;
-};
-
 struct TimingPattern {
   std::string name;
   std::string description;
-  LoggingPattern logging;
+  LoggingModel logging;
 };
 
 // One seed of one pattern.
