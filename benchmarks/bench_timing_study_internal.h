@@ -26,6 +26,10 @@ struct TimingPattern {
   std::string name;
   std::string description;
   LoggingModel logging;
+  // The scan matcher's errors: false, the simulator's (independent noise on each world pose, so
+  // consecutive intervals' errors correlate by −½); true, chained matches (independent noise on
+  // each interval between distinct samples, as an incremental ICP gives).
+  bool chained_noise = false;
 };
 
 // One seed of one pattern.
