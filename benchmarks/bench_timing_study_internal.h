@@ -5,6 +5,14 @@
 #include <calib/core/laser/laser_simulator.h>
 #include <calib/core/timing/logging_model.h>
 
+// The timing-aware calibration, once its branch is merged (until then its column stays empty).
+#if __has_include(<calib/solvers/timing/laser_timing_calibration.h>)
+#include <calib/solvers/timing/laser_timing_calibration.h>
+#define CALIB_BENCH_TIMING_AWARE 1
+#else
+#define CALIB_BENCH_TIMING_AWARE 0
+#endif
+
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -73,9 +81,15 @@ LaserStreams SimulatePattern(const TimingPattern& pattern, const LaserSimOptions
 // Both calibrations on one log; `diagnose`: also DiagnoseLaser on the stamp-as-truth intervals.
 TimingSeedRun RunSeed(const TimingPattern& pattern, int intervals, uint64_t seed, bool diagnose);
 
+// The timing-aware calibration's own estimates on one pattern's logs: a row of `table` (header
+// TimingEstimatesHeader()) and the JSON.
+std::vector<std::string> TimingEstimatesHeader();
+nlohmann::ordered_json AddTimingEstimates(const TimingPattern& pattern,
+                                          const std::vector<TimingSeedRun>& runs, TextTable* table);
+
 // Part 2 and part 3 of the section.
 nlohmann::ordered_json RunFalseAlarms(const std::vector<TimingSeedRun>& clean_runs);
-nlohmann::ordered_json RunTimingSpeed(const BenchConfig& config);
+nlohmann::ordered_json RunTimingSpeed(const BenchConfig& config, const TimingPattern& pattern);
 
 }  // namespace calib::bench::timing
 
