@@ -1,0 +1,64 @@
+#include <calib/core/timing/banded_ldlt.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace calib {
+
+bool BandedLdlt::Compute(Eigen::MatrixXd band) {
+  const Eigen::Index w = band.rows() - 1;
+  const Eigen::Index n = band.cols();
+  // Right-looking: column j's multipliers update the trailing band.
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const double d = band(0, j);
+    if (!(d > 0.0) || !std::isfinite(d)) return false;
+    for (Eigen::Index a = 1; a <= w && j + a < n; ++a) {
+      const double l = band(a, j) / d;
+      for (Eigen::Index b = a; b <= w && j + b < n; ++b) band(b - a, j + a) -= l * band(b, j);
+    }
+    for (Eigen::Index a = 1; a <= w && j + a < n; ++a) band(a, j) /= d;
+  }
+  factor_ = std::move(band);
+  return true;
+}
+
+Eigen::MatrixXd BandedLdlt::Solve(const Eigen::MatrixXd& b) const {
+  const Eigen::Index w = bandwidth();
+  const Eigen::Index n = size();
+  Eigen::MatrixXd x = b;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    for (Eigen::Index a = 1; a <= w && j + a < n; ++a) x.row(j + a) -= factor_(a, j) * x.row(j);
+  }
+  for (Eigen::Index j = 0; j < n; ++j) x.row(j) /= factor_(0, j);
+  for (Eigen::Index j = n - 1; j >= 0; --j) {
+    for (Eigen::Index a = 1; a <= w && j + a < n; ++a) x.row(j) -= factor_(a, j) * x.row(j + a);
+  }
+  return x;
+}
+
+double BandedLdlt::LogDeterminant() const { return factor_.row(0).array().log().sum(); }
+
+Eigen::VectorXd BandedLdlt::InverseDiagonal() const {
+  // Z = A⁻¹ inside the band: Z(j, i) = −Σ_a L(i + a, i)·Z(i + a, j) for j in (i, i + w], and
+  // Z(i, i) = 1/D_i − Σ_a L(i + a, i)·Z(i + a, i); every Z(i + a, j) lies in the band already.
+  const Eigen::Index w = bandwidth();
+  const Eigen::Index n = size();
+  Eigen::MatrixXd z = Eigen::MatrixXd::Zero(w + 1, n);  // z(d, i) = Z(i + d, i).
+  const auto at = [&](Eigen::Index r, Eigen::Index c) {
+    return r >= c ? z(r - c, c) : z(c - r, r);
+  };
+  for (Eigen::Index i = n - 1; i >= 0; --i) {
+    const Eigen::Index reach = std::min(w, n - 1 - i);
+    for (Eigen::Index d = reach; d >= 1; --d) {
+      double sum = 0.0;
+      for (Eigen::Index a = 1; a <= reach; ++a) sum += factor_(a, i) * at(i + a, i + d);
+      z(d, i) = -sum;
+    }
+    double sum = 0.0;
+    for (Eigen::Index a = 1; a <= reach; ++a) sum += factor_(a, i) * z(a, i);
+    z(0, i) = 1.0 / factor_(0, i) - sum;
+  }
+  return z.row(0).transpose();
+}
+
+}  // namespace calib

@@ -1,0 +1,34 @@
+#ifndef CALIB_CORE_TIMING_BANDED_LDLT_H_
+#define CALIB_CORE_TIMING_BANDED_LDLT_H_
+
+#include <Eigen/Core>
+
+// LDLᵀ of a symmetric positive-definite band matrix (half-bandwidth w): the information of the
+// latent sample times, ordered by time, where each latent touches only its neighbours' intervals.
+// O(n·w²) for the factorisation, the solves, the log-determinant and the diagonal of the inverse
+// (Takahashi's recurrences), which a general sparse factorisation does not give.
+namespace calib {
+
+class BandedLdlt {
+ public:
+  // `band` is (w + 1) × n with band(d, i) = A(i + d, i) (the lower half). False when A is not
+  // positive definite.
+  bool Compute(Eigen::MatrixXd band);
+
+  Eigen::Index size() const { return factor_.cols(); }
+  Eigen::Index bandwidth() const { return factor_.rows() - 1; }
+
+  // A⁻¹·B.
+  Eigen::MatrixXd Solve(const Eigen::MatrixXd& b) const;
+  // log det A.
+  double LogDeterminant() const;
+  // diag(A⁻¹).
+  Eigen::VectorXd InverseDiagonal() const;
+
+ private:
+  Eigen::MatrixXd factor_;  // Row 0: D; rows d ≥ 1: L(i + d, i).
+};
+
+}  // namespace calib
+
+#endif  // CALIB_CORE_TIMING_BANDED_LDLT_H_

@@ -1,0 +1,131 @@
+#ifndef CALIB_PROBLEMS_LASER_LASER_LATENT_TIME_RESIDUAL_H_
+#define CALIB_PROBLEMS_LASER_LASER_LATENT_TIME_RESIDUAL_H_
+
+#include <calib/core/se2.h>
+#include <calib/core/timing/encoder_integration.h>
+#include <calib/problems/laser/laser_residual.h>
+#include <ceres/dynamic_autodiff_cost_function.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <vector>
+
+namespace calib {
+
+// Where the time of one end of an interval comes from, as parameter-block indices of the residual
+// (−1: a constant), and the encoder samples that bracket it.
+struct LatentTimeEnd {
+  // Stamp model: t = stamp + δ, δ the block `time_block` (size 1).
+  // Clock model: t = t0 + P·n + a·u², (t0, P, a) the block `time_block` (size 3).
+  bool clock = false;
+  int time_block = -1;
+  double stamp_s = 0.0;
+  double index = 0.0;      // n.
+  double curvature = 0.0;  // u².
+  // The encoder samples j, j + 1 around the end: e = stamp + η, η the block (size 1) or 0.
+  std::array<int, 2> encoder_block = {-1, -1};
+  std::array<double, 2> encoder_stamp_s = {0.0, 0.0};
+  std::array<double, 2> left_rad = {0.0, 0.0};
+  std::array<double, 2> right_rad = {0.0, 0.0};
+};
+
+// Laser interval residual with latent sample times. The wheel angles at the ends t_a, t_b lie on
+// the lines through their bracketing encoder samples (at their latent times e_j):
+//   α(t) = α_j + (t − e_j)/(e_{j+1} − e_j)·(α_{j+1} − α_j),
+// the robot displacement o chains constant-speed arcs α(t_a) → α_{j_a+1} → … → α_{j_b} → α(t_b),
+// and, as in LaserResidual, r = L·SensorMotionError(ℓ⁻¹ ∘ o ∘ ℓ, ŝ).
+// Blocks: 0 odometry (r_l, r_r, b), 1 base_T_sensor (x, y, θ), then the time blocks the ends name.
+// The interval (its measured motion and interior angles) is copied; `sqrt_information` is held.
+class LaserLatentTimeResidual {
+ public:
+  LaserLatentTimeResidual(const Pose2d& sensor_motion, const Eigen::Matrix3d* sqrt_information,
+                          const LatentTimeEnd& start, const LatentTimeEnd& end,
+                          std::vector<double> interior_left_rad,
+                          std::vector<double> interior_right_rad)
+      : sensor_motion_(sensor_motion),
+        sqrt_information_(sqrt_information),
+        start_(start),
+        end_(end),
+        interior_left_(std::move(interior_left_rad)),
+        interior_right_(std::move(interior_right_rad)) {}
+
+  template <typename T>
+  bool operator()(T const* const* parameters, T* residual) const {
+    const int count = static_cast<int>(interior_left_.size()) + 2;
+    T left[kMaxInline], right[kMaxInline];
+    std::vector<T> left_heap, right_heap;
+    T* l = left;
+    T* r = right;
+    if (count > kMaxInline) {
+      left_heap.resize(count);
+      right_heap.resize(count);
+      l = left_heap.data();
+      r = right_heap.data();
+    }
+    AnglesAt(start_, parameters, &l[0], &r[0]);
+    for (int i = 0; i + 2 < count; ++i) {
+      l[i + 1] = T(interior_left_[i]);
+      r[i + 1] = T(interior_right_[i]);
+    }
+    AnglesAt(end_, parameters, &l[count - 1], &r[count - 1]);
+    const T* odometry = parameters[0];
+    const Pose2<T> robot_motion =
+        WheelAngleChainDisplacement(odometry[0], odometry[1], odometry[2], l, r, count);
+    const Pose2<T> mounting(parameters[1][0], parameters[1][1], parameters[1][2]);
+    const Pose2<T> predicted = SensorMotionFromRobotMotion(mounting, robot_motion);
+    Eigen::Map<Eigen::Matrix<T, 3, 1>> whitened(residual);
+    whitened = sqrt_information_->cast<T>() * SensorMotionError(predicted, sensor_motion_);
+    return true;
+  }
+
+  // `block_sizes` lists the sizes of every block in the order the ends index them.
+  static ceres::CostFunction* Create(const Pose2d& sensor_motion,
+                                     const Eigen::Matrix3d* sqrt_information,
+                                     const LatentTimeEnd& start, const LatentTimeEnd& end,
+                                     std::vector<double> interior_left_rad,
+                                     std::vector<double> interior_right_rad,
+                                     const std::vector<int>& block_sizes) {
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<LaserLatentTimeResidual, kStride>(
+        new LaserLatentTimeResidual(sensor_motion, sqrt_information, start, end,
+                                    std::move(interior_left_rad), std::move(interior_right_rad)));
+    for (const int size : block_sizes) cost->AddParameterBlock(size);
+    cost->SetNumResiduals(3);
+    return cost;
+  }
+
+ private:
+  static constexpr int kStride = 8;
+  static constexpr int kMaxInline = 16;
+
+  template <typename T>
+  static T Time(const LatentTimeEnd& end, T const* const* parameters) {
+    if (end.clock) {
+      const T* c = parameters[end.time_block];
+      return c[0] + c[1] * end.index + c[2] * end.curvature;
+    }
+    return end.time_block < 0 ? T(end.stamp_s) : T(end.stamp_s) + parameters[end.time_block][0];
+  }
+
+  template <typename T>
+  static void AnglesAt(const LatentTimeEnd& end, T const* const* parameters, T* left, T* right) {
+    T e[2];
+    for (int i = 0; i < 2; ++i) {
+      e[i] = T(end.encoder_stamp_s[i]);
+      if (end.encoder_block[i] >= 0) e[i] += parameters[end.encoder_block[i]][0];
+    }
+    const T t = Time(end, parameters);
+    *left = WheelAngleOnSegment(t, e[0], e[1], end.left_rad[0], end.left_rad[1]);
+    *right = WheelAngleOnSegment(t, e[0], e[1], end.right_rad[0], end.right_rad[1]);
+  }
+
+  Pose2d sensor_motion_;
+  const Eigen::Matrix3d* sqrt_information_;
+  LatentTimeEnd start_;
+  LatentTimeEnd end_;
+  std::vector<double> interior_left_;
+  std::vector<double> interior_right_;
+};
+
+}  // namespace calib
+
+#endif  // CALIB_PROBLEMS_LASER_LASER_LATENT_TIME_RESIDUAL_H_

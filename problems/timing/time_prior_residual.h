@@ -1,0 +1,44 @@
+#ifndef CALIB_PROBLEMS_TIMING_TIME_PRIOR_RESIDUAL_H_
+#define CALIB_PROBLEMS_TIMING_TIME_PRIOR_RESIDUAL_H_
+
+#include <ceres/sized_cost_function.h>
+
+namespace calib {
+
+// The prior of a latent time correction: r = (δ − τ)/σ with τ a common offset (the block
+// `offset`), or r = δ/σ without one. Linear, so its Jacobian is written out. σ is held by pointer
+// so that a re-estimated jitter applies without rebuilding the problem; it must outlive the cost.
+class TimePriorWithOffset : public ceres::SizedCostFunction<1, 1, 1> {
+ public:
+  explicit TimePriorWithOffset(const double* sigma_s) : sigma_(sigma_s) {}
+  bool Evaluate(double const* const* parameters, double* residual,
+                double** jacobians) const override {
+    residual[0] = (parameters[0][0] - parameters[1][0]) / *sigma_;
+    if (jacobians != nullptr) {
+      if (jacobians[0] != nullptr) jacobians[0][0] = 1.0 / *sigma_;
+      if (jacobians[1] != nullptr) jacobians[1][0] = -1.0 / *sigma_;
+    }
+    return true;
+  }
+
+ private:
+  const double* sigma_;
+};
+
+class TimePrior : public ceres::SizedCostFunction<1, 1> {
+ public:
+  explicit TimePrior(const double* sigma_s) : sigma_(sigma_s) {}
+  bool Evaluate(double const* const* parameters, double* residual,
+                double** jacobians) const override {
+    residual[0] = parameters[0][0] / *sigma_;
+    if (jacobians != nullptr && jacobians[0] != nullptr) jacobians[0][0] = 1.0 / *sigma_;
+    return true;
+  }
+
+ private:
+  const double* sigma_;
+};
+
+}  // namespace calib
+
+#endif  // CALIB_PROBLEMS_TIMING_TIME_PRIOR_RESIDUAL_H_

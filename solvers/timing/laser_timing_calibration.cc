@@ -1,0 +1,182 @@
+#include <calib/core/timing/stream_samples.h>
+#include <calib/solvers/timing/laser_timing_calibration.h>
+#include <calib/solvers/timing/timing_model_fit.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace calib {
+namespace {
+
+// A free-running sensor stamped at pick-up is worth trying when records repeat (held samples) or
+// the stamps are regular (the logger's own period): the evidence then decides.
+bool ClockCandidate(const StreamSamples& data) {
+  if (data.samples.size() < 50) return false;
+  if (data.held_repeats_dropped > 0) return true;
+  std::vector<double> deviation;
+  for (size_t k = 1; k < data.samples.size(); ++k) {
+    deviation.push_back(
+        std::abs(data.samples[k].stamp_s - data.samples[k - 1].stamp_s - data.sensor_period_s));
+  }
+  std::nth_element(deviation.begin(), deviation.begin() + deviation.size() / 2, deviation.end());
+  return 1.4826 * deviation[deviation.size() / 2] < 0.1 * data.sensor_period_s;
+}
+
+// The distinct streams (held repeats and duplicates dropped) on their original clock.
+LaserStreams DistinctStreams(const StreamSamples& data) {
+  LaserStreams streams;
+  for (EncoderSample s : data.encoders) {
+    s.t_s += data.origin_s;
+    streams.odometry.push_back(s);
+  }
+  for (const StreamSample& s : data.samples) {
+    streams.sensor_poses.push_back(StampedPose{s.stamp_s + data.origin_s, s.world_T_sensor});
+  }
+  return streams;
+}
+
+// The six parameters' covariance in the ambient space, times κ.
+LaserParamMatrix ParameterCovariance(const TimingModelFit& fit) {
+  Eigen::Matrix<double, 6, 6> plus = Eigen::Matrix<double, 6, 6>::Identity();
+  plus.topLeftCorner<3, 3>() = fit.lin.odometry_plus_jacobian;
+  return fit.kappa * plus * fit.covariance.globals.topLeftCorner<6, 6>() * plus.transpose();
+}
+
+void FillCalibration(const TimingModelFit& fit, const LaserCalibrationOptions& options,
+                     LaserCalibrationResult* out) {
+  out->estimate = fit.state.calibration;
+  out->covariance = ParameterCovariance(fit);
+  out->stddev = out->covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  out->covariance_scale = fit.kappa;
+  out->samples = static_cast<int>(fit.errors.size());
+  out->iterations = fit.iterations;
+  out->converged = fit.converged;
+  out->inliers = 0;
+  std::vector<bool> inlier;
+  const Eigen::Vector3d inverse_sigma = fit.state.noise_sigma.cwiseInverse();
+  for (const Eigen::Vector3d& e : fit.errors) {
+    inlier.push_back(e.cwiseProduct(inverse_sigma).squaredNorm() < options.inlier_chi2);
+    out->inliers += inlier.back();
+  }
+  out->is_inlier = {inlier};
+  out->noise_sigma = {fit.state.noise_sigma};
+  out->warnings.clear();
+  out->observability = AnalyzeLaserObservability(out->covariance, out->estimate, out->census);
+}
+
+// τ, the period and the per-sample times with their σ.
+void FillTiming(const StreamSamples& data, const TimingModelFit& fit, LaserTimingResult* out) {
+  const Eigen::MatrixXd& cov = fit.covariance.globals;
+  const int n = static_cast<int>(data.samples.size());
+  out->sample_time_s.assign(n, 0.0);
+  out->sample_time_stddev_s.assign(n, 0.0);
+  out->sample_record.assign(n, 0);
+  Eigen::VectorXd latent_sd = Eigen::VectorXd::Zero(n);
+  for (Eigen::Index i = 0; i < fit.lin.latent_value.size(); ++i) {
+    if (fit.lin.latent_is_sensor[i]) {
+      latent_sd(fit.lin.latent_owner[i]) =
+          std::sqrt(std::max(0.0, fit.kappa * fit.covariance.latent_variance(i)));
+    }
+  }
+  Eigen::Vector3d mean_gradient = Eigen::Vector3d::Zero();  // d mean(t − s)/d(t0, P, a).
+  double mean_lag = 0.0;
+  for (int k = 0; k < n; ++k) {
+    out->sample_time_s[k] = fit.sample_time_s[k] + data.origin_s;
+    out->sample_record[k] = data.samples[k].record;
+    mean_lag += (fit.sample_time_s[k] - data.samples[k].stamp_s) / n;
+    if (fit.model == SensorClockModel::kFreeRunning) {
+      const double index = fit.state.clock_index[k];
+      const Eigen::Vector3d g(1.0, index, fit.state.clock.Curvature(index));
+      mean_gradient += g / n;
+      out->sample_time_stddev_s[k] =
+          std::sqrt(std::max(0.0, fit.kappa * g.dot(cov.block<3, 3>(6, 6) * g)));
+    } else {
+      out->sample_time_stddev_s[k] = latent_sd(k);
+    }
+  }
+  if (fit.model == SensorClockModel::kFreeRunning) {
+    out->sensor_clock = "free_running";
+    out->time_offset_s = mean_lag;
+    out->time_offset_stddev_s = std::sqrt(
+        std::max(0.0, fit.kappa * mean_gradient.dot(cov.block<3, 3>(6, 6) * mean_gradient)));
+    out->sensor_period_s = fit.state.clock.period_s;
+    out->sensor_period_stddev_s = std::sqrt(std::max(0.0, fit.kappa * cov(7, 7)));
+    out->clock_drift_s = fit.state.clock.drift_s;
+    out->sensor_jitter_s = 0.0;
+  } else {
+    out->sensor_clock = "stamps";
+    out->time_offset_s = fit.state.offset_s;
+    if (fit.lin.offset_global >= 0) {
+      const int i = fit.lin.offset_global;
+      out->time_offset_stddev_s = std::sqrt(std::max(0.0, fit.kappa * cov(i, i)));
+    }
+    out->sensor_period_s = data.sensor_period_s;
+    out->sensor_jitter_s = fit.state.sensor_sigma_s;
+  }
+  out->encoder_jitter_s = fit.state.encoder_sigma_s;
+}
+
+}  // namespace
+
+StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
+                                                  const LaserTimingOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (options.sensor_clock != "auto" && options.sensor_clock != "stamps" &&
+      options.sensor_clock != "free_running") {
+    return Status::InvalidInput("sensor clock '" + options.sensor_clock +
+                                "': expected auto, stamps or free_running");
+  }
+  CALIB_ASSIGN_OR_RETURN(const StreamSamples data,
+                         BuildStreamSamples(streams.odometry, streams.sensor_poses, "streams"));
+  LaserTimingResult result;
+  result.held_repeats_dropped = data.held_repeats_dropped;
+  result.intervals = static_cast<int>(data.interval_start.size());
+  const LaserStreams distinct = DistinctStreams(data);
+  CALIB_ASSIGN_OR_RETURN(const LaserLog log,
+                         LaserLogFromStreams(distinct.odometry, distinct.sensor_poses, "streams"));
+  CALIB_ASSIGN_OR_RETURN(result.stamps_as_truth,
+                         CalibrateLaser(log.intervals, options.calibration));
+
+  LatentTimeState initial;
+  initial.calibration = result.stamps_as_truth.estimate;
+  initial.noise_sigma = result.stamps_as_truth.noise_sigma.front();
+  initial.sensor_sigma_s = options.sensor_jitter_s.value_or(0.25 * data.sensor_period_s);
+  initial.encoder_sigma_s = options.encoder_jitter_s.value_or(0.1 * data.encoder_period_s);
+  const bool try_stamps = options.sensor_clock != "free_running";
+  const bool try_clock = options.sensor_clock == "free_running" ||
+                         (options.sensor_clock == "auto" && ClockCandidate(data));
+  // The stamp model always runs first: its latent times seed the clock model.
+  CALIB_ASSIGN_OR_RETURN(TimingModelFit best,
+                         FitTimingModel(data, SensorClockModel::kStamps, initial, options));
+  result.stamps_score = best.score;
+  result.rounds = best.rounds;
+  if (try_clock) {
+    LatentTimeState clock_start = ClockStartFromTimes(data, best.state, best.sample_time_s);
+    StatusOr<TimingModelFit> clock =
+        FitTimingModel(data, SensorClockModel::kFreeRunning, clock_start, options);
+    if (clock.ok()) {
+      result.free_running_score = clock->score;
+      result.rounds += clock->rounds;
+      if (!try_stamps || clock->score < best.score) best = std::move(clock).value();
+    } else if (!try_stamps) {
+      return clock.status();
+    } else {
+      result.warnings.push_back("the free-running clock model failed (" + clock.message() +
+                                "): the stamp model is used");
+    }
+  }
+  result.calibration = result.stamps_as_truth;
+  FillCalibration(best, options.calibration, &result.calibration);
+  FillTiming(data, best, &result);
+  if (!best.converged) {
+    result.warnings.push_back("the timing-aware refinement stopped before converging");
+  }
+  result.calibration.warnings = result.warnings;
+  result.calibration.observability.warnings.insert(result.calibration.observability.warnings.end(),
+                                                   result.warnings.begin(), result.warnings.end());
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace calib

@@ -1,0 +1,101 @@
+// LatentTimeProblem::Linearize: the Jacobian of the interval residuals from Ceres, folded into the
+// information blocks of the globals and of the time-ordered (banded) latents.
+#include <calib/solvers/timing/latent_time_problem.h>
+
+#include <algorithm>
+#include <tuple>
+
+namespace calib {
+
+StatusOr<LatentLinearization> LatentTimeProblem::Linearize() const {
+  LatentLinearization lin;
+  std::vector<double*> blocks = {const_cast<double*>(odometry_),
+                                 const_cast<double*>(base_T_sensor_)};
+  lin.num_globals = 6;
+  if (model_ == SensorClockModel::kFreeRunning) {
+    blocks.push_back(const_cast<double*>(clock_));
+    lin.num_globals += 3;
+  } else if (state_.sensor_sigma_s > 0.0 && estimate_offset_) {
+    blocks.push_back(const_cast<double*>(&offset_));
+    lin.offset_global = lin.num_globals++;
+  }
+  // Latents in time order (stamp order: the latent times keep it up to a few σ).
+  std::vector<std::tuple<double, int, bool>> order;  // (stamp, owner, is sensor)
+  if (model_ == SensorClockModel::kStamps && state_.sensor_sigma_s > 0.0) {
+    for (size_t k = 0; k < sensor_used_.size(); ++k) {
+      if (sensor_used_[k]) order.emplace_back(data_.samples[k].stamp_s, static_cast<int>(k), true);
+    }
+  }
+  for (size_t j = 0; j < encoder_used_.size(); ++j) {
+    if (encoder_used_[j]) order.emplace_back(data_.encoders[j].t_s, static_cast<int>(j), false);
+  }
+  std::sort(order.begin(), order.end());
+  const int num_latents = static_cast<int>(order.size());
+  lin.latent_value.resize(num_latents);
+  for (int i = 0; i < num_latents; ++i) {
+    const auto& [stamp, owner, sensor] = order[i];
+    lin.latent_is_sensor.push_back(sensor);
+    lin.latent_owner.push_back(owner);
+    double* value = sensor ? const_cast<double*>(&state_.sensor_latent[owner])
+                           : const_cast<double*>(&state_.encoder_latent[owner]);
+    lin.latent_value(i) = *value;
+    blocks.push_back(value);
+  }
+
+  ceres::Problem::EvaluateOptions evaluate;
+  evaluate.parameter_blocks = blocks;
+  evaluate.residual_blocks = interval_costs_;
+  evaluate.apply_loss_function = true;
+  evaluate.num_threads = options_.num_threads;
+  double cost = 0.0;
+  std::vector<double> residuals;
+  ceres::CRSMatrix jacobian;
+  if (!problem_->Evaluate(evaluate, &cost, &residuals, nullptr, &jacobian)) {
+    return Status::Internal("the timing-aware problem could not be evaluated");
+  }
+  lin.data_cost = cost;
+  const int g = lin.num_globals;
+  // Half-bandwidth of the latent block: the widest latent span of one residual row.
+  int width = 0;
+  for (int row = 0; row < jacobian.num_rows; ++row) {
+    int lo = num_latents, hi = -1;
+    for (int e = jacobian.rows[row]; e < jacobian.rows[row + 1]; ++e) {
+      const int c = jacobian.cols[e] - g;
+      if (c >= 0) lo = std::min(lo, c), hi = std::max(hi, c);
+    }
+    if (hi >= lo) width = std::max(width, hi - lo);
+  }
+  lin.h_gg = Eigen::MatrixXd::Zero(g, g);
+  lin.h_lg = Eigen::MatrixXd::Zero(num_latents, g);
+  lin.h_ll_band = Eigen::MatrixXd::Zero(width + 1, num_latents);
+  lin.b_l = Eigen::VectorXd::Zero(num_latents);
+  for (int row = 0; row < jacobian.num_rows; ++row) {
+    const int begin = jacobian.rows[row], end = jacobian.rows[row + 1];
+    for (int a = begin; a < end; ++a) {
+      const int ca = jacobian.cols[a];
+      const double va = jacobian.values[a];
+      if (ca >= g) lin.b_l(ca - g) += va * residuals[row];
+      for (int b = begin; b < end; ++b) {
+        const int cb = jacobian.cols[b];
+        const double product = va * jacobian.values[b];
+        if (ca < g && cb < g) {
+          lin.h_gg(ca, cb) += product;
+        } else if (ca >= g && cb < g) {
+          lin.h_lg(ca - g, cb) += product;
+        } else if (ca >= g && cb >= ca) {
+          lin.h_ll_band(cb - ca, ca - g) += product;
+        }
+      }
+    }
+  }
+  for (int i = 0; i < 3; ++i) lin.odometry_plus_jacobian(i, i) = odometry_[i];
+  for (const ceres::ResidualBlockId id : interval_costs_) {
+    Eigen::Vector3d r;
+    double block_cost = 0.0;
+    problem_->EvaluateResidualBlock(id, false, &block_cost, r.data(), nullptr);
+    lin.loss_sums.Add(r.squaredNorm(), loss_.get(), 3);
+  }
+  return lin;
+}
+
+}  // namespace calib

@@ -1,0 +1,217 @@
+#include <calib/problems/laser/laser_latent_time_residual.h>
+#include <calib/problems/positive_manifold.h>
+#include <calib/problems/timing/time_prior_residual.h>
+#include <calib/solvers/common/solver_options.h>
+#include <calib/solvers/timing/latent_time_problem.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace calib {
+LatentTimeProblem::LatentTimeProblem(const StreamSamples& data, SensorClockModel model,
+                                     const LatentTimeState& state,
+                                     const LaserRefinementOptions& options, bool estimate_offset)
+    : data_(data),
+      model_(model),
+      state_(state),
+      options_(options),
+      estimate_offset_(estimate_offset) {
+  state_.sensor_latent.resize(data.samples.size(), 0.0);
+  state_.encoder_latent.resize(data.encoders.size(), 0.0);
+  state_.clock_index.resize(data.samples.size(), 0.0);
+  if (state_.bracket.size() != data.samples.size()) {
+    state_.bracket.clear();
+    for (const StreamSample& sample : data.samples) state_.bracket.push_back(sample.bracket);
+  }
+  loss_ = MakeLossFunction(options.loss, options.loss_scale);
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.enable_fast_removal = false;
+  problem_ = std::make_unique<ceres::Problem>(problem_options);
+  sqrt_information_ =
+      std::make_unique<Eigen::Matrix3d>(state.noise_sigma.cwiseInverse().asDiagonal());
+  const LaserParamVector v = state.calibration.ToVector();
+  for (int i = 0; i < 3; ++i) {
+    odometry_[i] = v(i);
+    base_T_sensor_[i] = v(3 + i);
+  }
+  offset_ = state.offset_s;
+  clock_[0] = state.clock.t0_s;
+  clock_[1] = state.clock.period_s;
+  clock_[2] = state.clock.drift_s;
+  problem_->AddParameterBlock(odometry_, 3, new PositiveManifold<3>());
+  problem_->AddParameterBlock(base_T_sensor_, 3);
+  sensor_used_.assign(data.samples.size(), 0);
+  encoder_used_.assign(data.encoders.size(), 0);
+  AddIntervals();
+}
+
+LatentTimeProblem::~LatentTimeProblem() = default;
+
+LatentTimeEnd LatentTimeProblem::MakeEnd(int k, std::vector<double*>* blocks,
+                                         std::vector<int>* sizes) const {
+  const auto block_index = [&](double* block, int size) {
+    const auto it = std::find(blocks->begin(), blocks->end(), block);
+    if (it != blocks->end()) return static_cast<int>(it - blocks->begin());
+    blocks->push_back(block);
+    sizes->push_back(size);
+    return static_cast<int>(blocks->size()) - 1;
+  };
+  const StreamSample& sample = data_.samples[k];
+  LatentTimeEnd end;
+  end.stamp_s = sample.stamp_s;
+  if (model_ == SensorClockModel::kFreeRunning) {
+    end.clock = true;
+    end.index = state_.clock_index[k];
+    end.curvature = state_.clock.Curvature(end.index);
+    end.time_block = block_index(const_cast<double*>(clock_), 3);
+  } else if (state_.sensor_sigma_s > 0.0) {
+    end.time_block = block_index(const_cast<double*>(&state_.sensor_latent[k]), 1);
+  } else {
+    end.stamp_s += state_.offset_s;
+  }
+  for (int i = 0; i < 2; ++i) {
+    const EncoderSample& e = data_.encoders[state_.bracket[k] + i];
+    end.encoder_stamp_s[i] = e.t_s;
+    end.left_rad[i] = e.left_rad;
+    end.right_rad[i] = e.right_rad;
+    if (state_.encoder_sigma_s > 0.0) {
+      end.encoder_block[i] =
+          block_index(const_cast<double*>(&state_.encoder_latent[state_.bracket[k] + i]), 1);
+    }
+  }
+  return end;
+}
+
+void LatentTimeProblem::AddIntervals() {
+  static_assert(sizeof(double) == 8);
+  for (const int k : data_.interval_start) {
+    std::vector<double*> blocks = {odometry_, base_T_sensor_};
+    std::vector<int> sizes = {3, 3};
+    const LatentTimeEnd start = MakeEnd(k, &blocks, &sizes);
+    const LatentTimeEnd end = MakeEnd(k + 1, &blocks, &sizes);
+    std::vector<double> left, right;
+    for (int j = state_.bracket[k] + 1; j <= state_.bracket[k + 1]; ++j) {
+      left.push_back(data_.encoders[j].left_rad);
+      right.push_back(data_.encoders[j].right_rad);
+    }
+    const Pose2d measured =
+        Between(data_.samples[k].world_T_sensor, data_.samples[k + 1].world_T_sensor);
+    ceres::CostFunction* cost = LaserLatentTimeResidual::Create(
+        Pose2d(measured(0), measured(1), WrapAngle(measured(2))), sqrt_information_.get(), start,
+        end, std::move(left), std::move(right), sizes);
+    interval_costs_.push_back(problem_->AddResidualBlock(cost, loss_.get(), blocks));
+    interval_functions_.push_back(cost);
+    for (double* block : blocks) {
+      if (block >= state_.sensor_latent.data() &&
+          block < state_.sensor_latent.data() + state_.sensor_latent.size()) {
+        sensor_used_[block - state_.sensor_latent.data()] = 1;
+      } else if (block >= state_.encoder_latent.data() &&
+                 block < state_.encoder_latent.data() + state_.encoder_latent.size()) {
+        encoder_used_[block - state_.encoder_latent.data()] = 1;
+      }
+    }
+  }
+  // Priors: δ_k ~ N(τ, σ_s²) (τ fixed at its value unless estimated), η_j ~ N(0, σ_e²).
+  if (model_ == SensorClockModel::kStamps && state_.sensor_sigma_s > 0.0) {
+    problem_->AddParameterBlock(&offset_, 1);
+    if (!estimate_offset_) problem_->SetParameterBlockConstant(&offset_);
+    for (size_t k = 0; k < sensor_used_.size(); ++k) {
+      if (!sensor_used_[k]) continue;
+      problem_->AddResidualBlock(new TimePriorWithOffset(&state_.sensor_sigma_s), nullptr,
+                                 &state_.sensor_latent[k], &offset_);
+    }
+  }
+  for (size_t j = 0; j < encoder_used_.size(); ++j) {
+    if (!encoder_used_[j]) continue;
+    problem_->AddResidualBlock(new TimePrior(&state_.encoder_sigma_s), nullptr,
+                               &state_.encoder_latent[j]);
+  }
+}
+
+Status LatentTimeProblem::Solve(ceres::Solver::Summary* summary) {
+  SolverSettings settings;
+  // Each latent touches the one or two intervals at its time: sparse normal equations, with
+  // SuiteSparse's fill-reducing ordering (Schur elimination does not apply, latents share
+  // residuals with each other).
+  settings.linear_solver = ceres::SPARSE_NORMAL_CHOLESKY;
+  settings.max_iterations = options_.max_iterations;
+  settings.num_threads = options_.num_threads;
+  settings.function_tolerance = std::min(1e-6, 0.005 / std::max<size_t>(1, interval_costs_.size()));
+  settings.gradient_tolerance = 1e-12;
+  settings.parameter_tolerance = 1e-10;
+  CALIB_RETURN_IF_ERROR(
+      calib::Solve(settings, "the timing-aware refinement", problem_.get(), summary));
+  if (!(odometry_[0] > 0.0 && odometry_[1] > 0.0 && odometry_[2] > 0.0)) {
+    return Status::NotObservable(
+        "the timing-aware refinement drove a wheel radius or the wheelbase to a non-positive "
+        "value");
+  }
+  return Status::Ok();
+}
+
+LatentTimeState LatentTimeProblem::state() const {
+  LatentTimeState s = state_;
+  LaserParamVector v;
+  v << odometry_[0], odometry_[1], odometry_[2], base_T_sensor_[0], base_T_sensor_[1],
+      WrapAngle(base_T_sensor_[2]);
+  s.calibration = LaserCalibration::FromVector(v);
+  s.offset_s = offset_;
+  s.clock.t0_s = clock_[0];
+  s.clock.period_s = clock_[1];
+  s.clock.drift_s = clock_[2];
+  if (model_ == SensorClockModel::kStamps && state_.sensor_sigma_s <= 0.0) {
+    std::fill(s.sensor_latent.begin(), s.sensor_latent.end(), offset_);
+  }
+  return s;
+}
+
+double LatentTimeProblem::SampleTime(int k) const {
+  const StreamSample& sample = data_.samples[k];
+  if (model_ == SensorClockModel::kFreeRunning) {
+    const double n = state_.clock_index[k];
+    return clock_[0] + clock_[1] * n + clock_[2] * state_.clock.Curvature(n);
+  }
+  return sample.stamp_s + (state_.sensor_sigma_s > 0.0 ? state_.sensor_latent[k] : offset_);
+}
+
+double LatentTimeProblem::EncoderTime(int j) const {
+  return data_.encoders[j].t_s + (state_.encoder_sigma_s > 0.0 ? state_.encoder_latent[j] : 0.0);
+}
+
+std::vector<int> LatentTimeProblem::Brackets() const {
+  std::vector<double> times(data_.encoders.size());
+  for (size_t j = 0; j < times.size(); ++j) times[j] = EncoderTime(static_cast<int>(j));
+  std::vector<int> brackets(data_.samples.size());
+  const int last = static_cast<int>(times.size()) - 2;
+  for (size_t k = 0; k < brackets.size(); ++k) {
+    const int after = static_cast<int>(
+        std::upper_bound(times.begin(), times.end(), SampleTime(static_cast<int>(k))) -
+        times.begin());
+    brackets[k] = std::clamp(after - 1, 0, last);
+  }
+  return brackets;
+}
+
+bool LatentTimeProblem::BracketsHold() const {
+  for (size_t j = 0; j + 1 < data_.encoders.size(); ++j) {
+    if (!(EncoderTime(static_cast<int>(j) + 1) > EncoderTime(static_cast<int>(j)))) return false;
+  }
+  return Brackets() == state_.bracket;
+}
+
+std::vector<Eigen::Vector3d> LatentTimeProblem::Errors() const {
+  std::vector<Eigen::Vector3d> errors;
+  errors.reserve(interval_costs_.size());
+  const Eigen::Matrix3d l_inv = sqrt_information_->inverse();
+  for (const ceres::ResidualBlockId id : interval_costs_) {
+    Eigen::Vector3d r;
+    double cost = 0.0;
+    problem_->EvaluateResidualBlock(id, false, &cost, r.data(), nullptr);
+    errors.push_back(l_inv * r);
+  }
+  return errors;
+}
+
+}  // namespace calib

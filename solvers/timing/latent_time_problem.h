@@ -1,0 +1,104 @@
+#ifndef CALIB_SOLVERS_TIMING_LATENT_TIME_PROBLEM_H_
+#define CALIB_SOLVERS_TIMING_LATENT_TIME_PROBLEM_H_
+
+#include <calib/core/laser/laser_params.h>
+#include <calib/core/status.h>
+#include <calib/core/timing/sample_clock.h>
+#include <calib/core/timing/stream_samples.h>
+#include <calib/problems/laser/laser_latent_time_residual.h>
+#include <calib/solvers/common/robust_covariance.h>
+#include <calib/solvers/laser/laser_refinement.h>
+#include <ceres/ceres.h>
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+// The laser calibration with latent sample times as one sparse Ceres problem: the six parameters,
+// the sensor sample times (stamp + δ_k with a prior N(τ, σ_s²), or a free-running clock
+// t0 + P·n + a·u²), and the encoder sample times (stamp + η_j, prior N(0, σ_e²)) of the samples
+// that bracket a sensor sample. Each latent touches the one or two intervals at its time, so the
+// normal equations are sparse (SPARSE_NORMAL_CHOLESKY); ordered by time, the latent block is
+// banded, which Linearize() exposes for the jitter estimate and the covariance.
+namespace calib {
+
+enum class SensorClockModel { kStamps, kFreeRunning };
+
+struct LatentTimeState {
+  LaserCalibration calibration;
+  Eigen::Vector3d noise_sigma = Eigen::Vector3d::Ones();  // Scan noise (x, y, θ).
+  double offset_s = 0.0;                                  // τ (stamp model).
+  SampleClock clock;                                      // Clock model.
+  std::vector<double> clock_index;                        // n_k per sample (clock model).
+  std::vector<double> sensor_latent;   // δ_k per sample: t_k = stamp_k + δ_k (stamp model).
+  std::vector<double> encoder_latent;  // η_j per encoder sample.
+  double sensor_sigma_s = 0.0;         // Prior σ of δ_k − τ.
+  double encoder_sigma_s = 0.0;        // Prior σ of η_j; 0: encoder stamps are times.
+  std::vector<int> bracket;            // Per sample: the encoder samples j, j + 1 around it.
+};
+
+// The Gauss–Newton information of the interval residuals (robustified) at the current point,
+// split into the global parameters (tangent space) and the latents ordered by time.
+struct LatentLinearization {
+  int num_globals = 0;
+  int offset_global = -1;        // Column of τ among the globals (stamp model), or −1.
+  Eigen::MatrixXd h_gg;          // G × G.
+  Eigen::MatrixXd h_lg;          // L × G.
+  Eigen::MatrixXd h_ll_band;     // (w + 1) × L, band(d, i) = H(i + d, i).
+  Eigen::VectorXd b_l;           // Jᵀr, latent part.
+  Eigen::VectorXd latent_value;  // Current latent values.
+  std::vector<bool> latent_is_sensor;
+  std::vector<int> latent_owner;  // Sample or encoder index.
+  Eigen::Matrix3d odometry_plus_jacobian = Eigen::Matrix3d::Identity();
+  LossCorrectionSums loss_sums;  // Over the interval residuals.
+  double data_cost = 0.0;        // Ceres cost of the interval residuals (½Σρ).
+};
+
+class LatentTimeProblem {
+ public:
+  LatentTimeProblem(const StreamSamples& data, SensorClockModel model, const LatentTimeState& state,
+                    const LaserRefinementOptions& options, bool estimate_offset);
+  ~LatentTimeProblem();
+  LatentTimeProblem(const LatentTimeProblem&) = delete;
+  LatentTimeProblem& operator=(const LatentTimeProblem&) = delete;
+
+  Status Solve(ceres::Solver::Summary* summary);
+  LatentTimeState state() const;
+  // The latent time of sample k and of encoder sample j.
+  double SampleTime(int k) const;
+  double EncoderTime(int j) const;
+  // True when every sample's time still lies between its bracketing encoder times (else the
+  // problem must be rebuilt from state() with new brackets).
+  bool BracketsHold() const;
+  // The brackets of the current latent times (for a rebuilt problem).
+  std::vector<int> Brackets() const;
+  // Unwhitened errors of the intervals, in data.interval_start order.
+  std::vector<Eigen::Vector3d> Errors() const;
+  StatusOr<LatentLinearization> Linearize() const;
+  size_t num_intervals() const { return interval_costs_.size(); }
+  const ceres::LossFunction* loss() const { return loss_.get(); }
+
+ private:
+  void AddIntervals();
+  LatentTimeEnd MakeEnd(int k, std::vector<double*>* blocks, std::vector<int>* sizes) const;
+
+  const StreamSamples& data_;
+  SensorClockModel model_;
+  LatentTimeState state_;
+  LaserRefinementOptions options_;
+  bool estimate_offset_;
+  std::unique_ptr<ceres::LossFunction> loss_;
+  std::unique_ptr<ceres::Problem> problem_;
+  std::unique_ptr<Eigen::Matrix3d> sqrt_information_;
+  double odometry_[3];
+  double base_T_sensor_[3];
+  double offset_ = 0.0;
+  double clock_[3] = {0.0, 0.0, 0.0};
+  std::vector<char> sensor_used_, encoder_used_;
+  std::vector<ceres::ResidualBlockId> interval_costs_;
+  std::vector<const ceres::CostFunction*> interval_functions_;
+};
+
+}  // namespace calib
+
+#endif  // CALIB_SOLVERS_TIMING_LATENT_TIME_PROBLEM_H_

