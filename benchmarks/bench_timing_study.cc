@@ -43,6 +43,20 @@ std::vector<Sample> DropRepeats(const std::vector<Sample>& samples, Same same) {
   return kept;
 }
 
+}  // namespace
+
+StatusOr<LaserLog> StampsAsTruthLog(const LaserStreams& streams) {
+  const auto odometry = DropRepeats(streams.odometry, [](const auto& a, const auto& b) {
+    return a.left_rad == b.left_rad && a.right_rad == b.right_rad;
+  });
+  const auto poses = DropRepeats(streams.sensor_poses, [](const auto& a, const auto& b) {
+    return a.world_T_sensor == b.world_T_sensor;
+  });
+  return LaserLogFromStreams(odometry, poses, "simulated streams");
+}
+
+namespace {
+
 LaserParamVector ZScore(const LaserCalibration& estimate, const LaserParamVector& stddev,
                         const LaserCalibration& truth) {
   LaserParamVector d = estimate.ToVector() - truth.ToVector();
@@ -53,13 +67,7 @@ LaserParamVector ZScore(const LaserCalibration& estimate, const LaserParamVector
 void RunStampsAsTruth(const LaserStreams& streams, const LaserCalibration& truth, bool diagnose,
                       TimingSeedRun* run) {
   const Stopwatch watch;
-  const auto odometry = DropRepeats(streams.odometry, [](const auto& a, const auto& b) {
-    return a.left_rad == b.left_rad && a.right_rad == b.right_rad;
-  });
-  const auto poses = DropRepeats(streams.sensor_poses, [](const auto& a, const auto& b) {
-    return a.world_T_sensor == b.world_T_sensor;
-  });
-  const StatusOr<LaserLog> log = LaserLogFromStreams(odometry, poses, "simulated streams");
+  const StatusOr<LaserLog> log = StampsAsTruthLog(streams);
   if (!log.ok()) {
     run->message[kStampsAsTruth] = log.message();
     return;
@@ -100,7 +108,6 @@ void RunStampsAsTruth(const LaserStreams& streams, const LaserCalibration& truth
 
 void RunTimingAware(const LaserStreams& streams, const LaserCalibration& truth,
                     TimingSeedRun* run) {
-#if CALIB_BENCH_TIMING_AWARE
   LaserTimingOptions options;
   options.calibration.refinement.num_threads = 1;  // Seeds already run in parallel.
   const Stopwatch watch;
@@ -117,11 +124,6 @@ void RunTimingAware(const LaserStreams& streams, const LaserCalibration& truth,
   run->sensor_jitter_s = result->sensor_jitter_s;
   run->encoder_jitter_s = result->encoder_jitter_s;
   run->sensor_clock = result->sensor_clock;
-#else
-  (void)streams;
-  (void)truth;
-  run->message[kTimingAware] = "the timing-aware calibration is not built in";
-#endif
 }
 
 }  // namespace
@@ -275,8 +277,8 @@ void AddRows(const TimingPattern& pattern, const TimingMethodStats (&stats)[kNum
 
 nlohmann::ordered_json RunTimingStudy(const BenchConfig& config) {
   using namespace timing;
-  const int seeds = config.seeds > 0 ? config.seeds : (config.quick ? 12 : 60);
-  const int intervals = 1000;
+  const int seeds = config.seeds > 0 ? config.seeds : (config.quick ? 8 : 60);
+  const int intervals = config.quick ? 500 : 1000;
   const Stopwatch total;
   std::printf("\n=== Section timing: calibration through logging artefacts (issue 10) ===\n");
   const LaserSimOptions sim = StudySimOptions(intervals, 1);

@@ -4,14 +4,7 @@
 #include <calib/core/laser/laser_params.h>
 #include <calib/core/laser/laser_simulator.h>
 #include <calib/core/timing/logging_model.h>
-
-// The timing-aware calibration, once its branch is merged (until then its column stays empty).
-#if __has_include(<calib/solvers/timing/laser_timing_calibration.h>)
 #include <calib/solvers/timing/laser_timing_calibration.h>
-#define CALIB_BENCH_TIMING_AWARE 1
-#else
-#define CALIB_BENCH_TIMING_AWARE 0
-#endif
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -77,6 +70,9 @@ LaserSimOptions StudySimOptions(int intervals, uint64_t seed);
 // Simulates one log of the pattern: the streams as logged, and the truth.
 LaserStreams SimulatePattern(const TimingPattern& pattern, const LaserSimOptions& sim,
                              LaserSimTruth* truth);
+
+// The stamp-as-truth log: exact repeated records dropped, then the stream reader.
+StatusOr<LaserLog> StampsAsTruthLog(const LaserStreams& streams);
 
 // Both calibrations on one log; `diagnose`: also DiagnoseLaser on the stamp-as-truth intervals.
 TimingSeedRun RunSeed(const TimingPattern& pattern, int intervals, uint64_t seed, bool diagnose);
