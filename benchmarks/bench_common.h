@@ -40,6 +40,9 @@ void ParallelFor(int n, int threads, const std::function<void(int)>& f);
 
 double Median(std::vector<double> values);
 
+// Least-squares slope of log(y) against log(x): the exponent of a power-law scaling.
+double LogLogSlope(const std::vector<double>& x, const std::vector<double>& y);
+
 // Parameter i of a LaserParamVector in display units: mm for lengths, mrad (or deg) for θ.
 double ToDisplay(int param, double value, bool degrees = false);
 

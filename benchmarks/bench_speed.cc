@@ -53,20 +53,6 @@ StatusOr<nlohmann::json> RunChild(const std::string& command) {
   return j;
 }
 
-// Least-squares slope of log(y) against log(x).
-double LogLogSlope(const std::vector<double>& x, const std::vector<double>& y) {
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  const double n = static_cast<double>(x.size());
-  for (size_t i = 0; i < x.size(); ++i) {
-    const double lx = std::log(x[i]), ly = std::log(y[i]);
-    sx += lx;
-    sy += ly;
-    sxx += lx * lx;
-    sxy += lx * ly;
-  }
-  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
-}
-
 }  // namespace
 
 int RunSpeedChild(const std::string& path, int64_t intervals) {
