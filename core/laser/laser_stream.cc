@@ -209,40 +209,39 @@ void SetWheelMotion(const std::vector<EncoderSample>& odometry, size_t j, size_t
   }
 }
 
+StreamNames DirectoryNames(const std::string& directory) {
+  return StreamNames{directory, (fs::path(directory) / "odometry.csv").string(),
+                     (fs::path(directory) / "sensor_poses.csv").string()};
+}
+
 // Drops exact duplicates (an error for a repeated stamp with other values), validates, and
 // appends the timing of each stream as given to `timing` (may be null).
-StatusOr<LaserStreams> PrepareStreams(const std::vector<EncoderSample>& odometry,
-                                      const std::vector<StampedPose>& poses,
+StatusOr<LaserStreams> PrepareStreams(StreamRecords odometry, StreamRecords poses,
                                       const StreamNames& names, std::vector<StreamTiming>* timing) {
-  StreamRecords odometry_records = OdometryRecords(odometry);
-  StreamRecords pose_records = PoseRecords(poses);
-  DropUnknownLines(&odometry_records);
-  DropUnknownLines(&pose_records);
-  CALIB_RETURN_IF_ERROR(DropExactDuplicates(names.odometry, &odometry_records));
-  CALIB_RETURN_IF_ERROR(DropExactDuplicates(names.poses, &pose_records));
-  LaserStreams streams;
-  for (size_t k = 0; k < odometry_records.stamps_s.size(); ++k) {
-    const double* v = &odometry_records.values[2 * k];
-    const int line = odometry_records.lines.empty() ? 0 : odometry_records.lines[k];
-    streams.odometry.push_back(EncoderSample{odometry_records.stamps_s[k], v[0], v[1], line});
+  if (timing != nullptr) {
+    // The records as given: the analysis counts the duplicates itself.
+    timing->push_back(
+        AnalyzeStreamTiming(odometry.stamps_s, odometry.values, "odometry", names.odometry));
+    timing->push_back(
+        AnalyzeStreamTiming(poses.stamps_s, poses.values, "sensor_poses", names.poses));
   }
-  for (size_t k = 0; k < pose_records.stamps_s.size(); ++k) {
-    const double* v = &pose_records.values[3 * k];
-    const int line = pose_records.lines.empty() ? 0 : pose_records.lines[k];
-    streams.sensor_poses.push_back(
-        StampedPose{pose_records.stamps_s[k], Pose2d(v[0], v[1], v[2]), line});
+  DropUnknownLines(&odometry);
+  DropUnknownLines(&poses);
+  CALIB_RETURN_IF_ERROR(DropExactDuplicates(names.odometry, &odometry));
+  CALIB_RETURN_IF_ERROR(DropExactDuplicates(names.poses, &poses));
+  LaserStreams streams;
+  for (size_t k = 0; k < odometry.stamps_s.size(); ++k) {
+    const double* v = &odometry.values[2 * k];
+    const int line = odometry.lines.empty() ? 0 : odometry.lines[k];
+    streams.odometry.push_back(EncoderSample{odometry.stamps_s[k], v[0], v[1], line});
+  }
+  for (size_t k = 0; k < poses.stamps_s.size(); ++k) {
+    const double* v = &poses.values[3 * k];
+    const int line = poses.lines.empty() ? 0 : poses.lines[k];
+    streams.sensor_poses.push_back(StampedPose{poses.stamps_s[k], Pose2d(v[0], v[1], v[2]), line});
   }
   CALIB_RETURN_IF_ERROR(ValidateOdometry(streams.odometry, names));
   CALIB_RETURN_IF_ERROR(ValidatePoses(streams.sensor_poses, names));
-  if (timing != nullptr) {
-    // The records as given: the analysis counts the duplicates itself.
-    const StreamRecords odometry_given = OdometryRecords(odometry);
-    const StreamRecords poses_given = PoseRecords(poses);
-    timing->push_back(AnalyzeStreamTiming(odometry_given.stamps_s, odometry_given.values,
-                                          "odometry", names.odometry));
-    timing->push_back(
-        AnalyzeStreamTiming(poses_given.stamps_s, poses_given.values, "sensor_poses", names.poses));
-  }
   return streams;
 }
 
@@ -322,8 +321,9 @@ StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometr
   names.odometry = source + " (odometry)";
   names.poses = source + " (sensor poses)";
   std::vector<StreamTiming> timing;
-  CALIB_ASSIGN_OR_RETURN(LaserStreams streams,
-                         PrepareStreams(odometry, sensor_poses, names, &timing));
+  CALIB_ASSIGN_OR_RETURN(
+      LaserStreams streams,
+      PrepareStreams(OdometryRecords(odometry), PoseRecords(sensor_poses), names, &timing));
   CALIB_ASSIGN_OR_RETURN(LaserLog log,
                          BuildFromStreams(streams.odometry, streams.sensor_poses, names));
   log.streams = std::move(streams);
@@ -339,41 +339,21 @@ StatusOr<LaserStreams> ReadLaserStreamSamples(const std::string& directory,
                       ": not a directory (the stream format reads a directory "
                       "holding odometry.csv and sensor_poses.csv)");
   }
-  StreamNames names;
-  names.source = directory;
-  names.odometry = (fs::path(directory) / "odometry.csv").string();
-  names.poses = (fs::path(directory) / "sensor_poses.csv").string();
+  const StreamNames names = DirectoryNames(directory);
 
   std::string text;
   CALIB_RETURN_IF_ERROR(ReadWholeFile(names.odometry, &text));
-  CALIB_ASSIGN_OR_RETURN(const StreamRecords odometry_records,
+  CALIB_ASSIGN_OR_RETURN(StreamRecords odometry,
                          ReadRecords(text, names.odometry, {"left", "right"}));
-  std::vector<EncoderSample> odometry(odometry_records.stamps_s.size());
-  for (size_t k = 0; k < odometry.size(); ++k) {
-    const double* v = &odometry_records.values[2 * k];
-    odometry[k] =
-        EncoderSample{odometry_records.stamps_s[k], v[0], v[1], odometry_records.lines[k]};
-  }
-
   CALIB_RETURN_IF_ERROR(ReadWholeFile(names.poses, &text));
-  CALIB_ASSIGN_OR_RETURN(const StreamRecords pose_records,
-                         ReadRecords(text, names.poses, {"x", "y", "theta"}));
-  std::vector<StampedPose> poses(pose_records.stamps_s.size());
-  for (size_t k = 0; k < poses.size(); ++k) {
-    const double* v = &pose_records.values[3 * k];
-    poses[k] =
-        StampedPose{pose_records.stamps_s[k], Pose2d(v[0], v[1], v[2]), pose_records.lines[k]};
-  }
-  return PrepareStreams(odometry, poses, names, timing);
+  CALIB_ASSIGN_OR_RETURN(StreamRecords poses, ReadRecords(text, names.poses, {"x", "y", "theta"}));
+  return PrepareStreams(std::move(odometry), std::move(poses), names, timing);
 }
 
 StatusOr<LaserLog> ReadLaserStream(const std::string& directory) {
   std::vector<StreamTiming> timing;
   CALIB_ASSIGN_OR_RETURN(LaserStreams streams, ReadLaserStreamSamples(directory, &timing));
-  StreamNames names;
-  names.source = directory;
-  names.odometry = (fs::path(directory) / "odometry.csv").string();
-  names.poses = (fs::path(directory) / "sensor_poses.csv").string();
+  const StreamNames names = DirectoryNames(directory);
   CALIB_ASSIGN_OR_RETURN(LaserLog log,
                          BuildFromStreams(streams.odometry, streams.sensor_poses, names));
   log.streams = std::move(streams);

@@ -61,6 +61,9 @@ bool SteadyWindow(const double* d, int w, double tolerance, std::vector<int>* k_
   return false;
 }
 
+// Irregular but exact stamps (independent intervals, as the simulator's 0.8 s ± 0.02 s) are not
+// `regular` (the intervals' random walk shows as scatter about the local grid) but are taken as
+// sample times: their intervals are uncorrelated, where scatter added to a grid gives −0.5.
 void Conclude(StreamTiming* t) {
   const double period = t->period_s;
   const bool known = t->samples >= 3 && period > 0.0;
