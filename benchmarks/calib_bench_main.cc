@@ -14,10 +14,11 @@
 #include "benchmarks/bench_laser_monte_carlo.h"
 #include "benchmarks/bench_plot.h"
 #include "benchmarks/bench_sections.h"
+#include "benchmarks/bench_timing.h"
 
 DEFINE_bool(quick, false, "Reduced grid and seeds (CI smoke test, under a minute)");
 DEFINE_string(json, "", "Write every result to this JSON file (and the RMSE plot beside it)");
-DEFINE_string(sections, "laser_mc,laser_real,bearing,diagnose,speed",
+DEFINE_string(sections, "laser_mc,laser_real,bearing,diagnose,timing,speed",
               "Comma-separated sections to run");
 DEFINE_int32(
     seeds, 0,
@@ -33,11 +34,12 @@ namespace {
 
 constexpr const char* kUsage =
     "calib_bench [--quick] [--json OUT.json] [--sections "
-    "laser_mc,laser_real,bearing,diagnose,speed] [--seeds N] "
+    "laser_mc,laser_real,bearing,diagnose,timing,speed] [--seeds N] "
     "[--censi_dir DIR]";
 
 std::set<std::string> ParseSections(const std::string& text, bool* ok) {
-  const std::set<std::string> known = {"laser_mc", "laser_real", "bearing", "diagnose", "speed"};
+  const std::set<std::string> known = {"laser_mc", "laser_real", "bearing",
+                                       "diagnose", "timing",     "speed"};
   std::set<std::string> sections;
   std::stringstream stream(text);
   std::string name;
@@ -45,10 +47,10 @@ std::set<std::string> ParseSections(const std::string& text, bool* ok) {
   while (std::getline(stream, name, ',')) {
     if (name.empty()) continue;
     if (known.count(name) == 0) {
-      std::fprintf(
-          stderr,
-          "unknown section '%s' (expected laser_mc, laser_real, bearing, diagnose, speed)\n",
-          name.c_str());
+      std::fprintf(stderr,
+                   "unknown section '%s' (expected laser_mc, laser_real, bearing, diagnose, "
+                   "timing, speed)\n",
+                   name.c_str());
       *ok = false;
     }
     sections.insert(name);
@@ -133,6 +135,8 @@ int Main(int argc, char** argv) {
   if (sections.count("bearing")) root["bearing"] = RunBearingBench(config);
   std::fflush(stdout);
   if (sections.count("diagnose")) root["diagnose"] = RunDiagnoseBench(config.quick, FLAGS_seeds);
+  std::fflush(stdout);
+  if (sections.count("timing")) root["timing"] = RunTimingBench(config);
   std::fflush(stdout);
   if (sections.count("speed")) root["speed"] = RunSpeed(config);
   root["seconds"] = total.Seconds();
