@@ -13,7 +13,8 @@ constexpr char kUsage[] =
     "calib <command> [flags]\n"
     "  calibrate --input PATH --output OUT.json   estimate the calibration\n"
     "  diagnose  --input PATH --output OUT.json   find physics the model leaves out\n"
-    "  simulate  --output LOG [--truth T.json]    write a simulated laser log (.tuple or .csv)\n";
+    "  simulate  --output LOG [--truth T.json]    write a simulated laser log (.tuple, .csv, or a\n"
+    "            raw stream directory when LOG has no extension or with --format stream)\n";
 
 }  // namespace
 
