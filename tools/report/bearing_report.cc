@@ -140,7 +140,10 @@ nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
                     {"adjustment", result.adjustment_seconds},
                     {"covariance", result.covariance_seconds}};
   if (!stream_timing.empty()) out["timing"] = {{"streams", StreamTimingJson(stream_timing)}};
-  AddTimingJson(result.timing, &out);  // After the streams' hook: adds keys beside "streams".
+  // After the streams' hook: adds keys beside "streams" (none when the timing was not tested).
+  if (result.timing.time_offset_tested || result.timing.jitter_tested) {
+    AddTimingJson(result.timing, &out);
+  }
   return out;
 }
 
