@@ -289,10 +289,10 @@ IntervalJitterEstimate EstimateIntervalJitter(const std::vector<LaserInterval>& 
 std::string IntervalJitterStatement(const IntervalJitterEstimate& estimate) {
   char buffer[320];
   std::snprintf(buffer, sizeof(buffer),
-                "these intervals carry no raw odometry: the timing jitter (σ = %.1f ± %.1f ms) "
-                "was propagated into each interval's covariance through its end speeds; only "
-                "this weaker treatment was possible — a raw stream log would allow the "
-                "latent-time calibration",
+                "the interval stamps scatter about the sample times (σ = %.1f ± %.1f ms): the "
+                "scatter was propagated into each interval's covariance through its end speeds; "
+                "only this weaker treatment was possible (it works on the intervals, without the "
+                "raw odometry a latent-time calibration needs)",
                 estimate.jitter_s * 1e3, estimate.jitter_stddev_s * 1e3);
   return buffer;
 }

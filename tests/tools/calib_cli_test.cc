@@ -69,6 +69,21 @@ TEST_F(CalibCliTest, SampleLogGivesTheContractJson) {
   EXPECT_GT(json["samples"].get<int>(), 0);
   EXPECT_GT(json["inliers"].get<int>(), json["samples"].get<int>() / 2);
   EXPECT_LE(json["inliers"].get<int>(), json["samples"].get<int>());
+  EXPECT_TRUE(json["warnings"].is_array());
+  EXPECT_EQ(json["verdict"], "trusted") << json["warnings"];
+}
+
+// Stamps that are pick-up times (data/timing/README.md): the stream diagnostics see it and the
+// verdict says the result cannot be trusted; the control with clean timing is not condemned.
+TEST_F(CalibCliTest, PickUpStampsMakeTheVerdictUnreliable) {
+  const fs::path timing = fs::path(CALIB_SOURCE_DIR) / "data" / "timing";
+  ASSERT_EQ(Calib(Calibrate(timing / "robot_like")).exit_code, 0);
+  nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+  EXPECT_EQ(json["verdict"], "unreliable");
+  EXPECT_FALSE(json["timing"]["streams"][0]["stamps_are_sample_times"].get<bool>());
+  ASSERT_EQ(Calib(Calibrate(timing / "clean")).exit_code, 0);
+  json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+  EXPECT_NE(json["verdict"], "unreliable") << json["warnings"];
 }
 
 TEST_F(CalibCliTest, EmptyFile) {

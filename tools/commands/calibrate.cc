@@ -7,6 +7,7 @@
 #include <calib/tools/commands/commands.h>
 #include <calib/tools/report/bearing_report.h>
 #include <calib/tools/report/laser_report.h>
+#include <calib/tools/report/verdict.h>
 
 #include <vector>
 
@@ -42,8 +43,15 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   }
   nlohmann::ordered_json json = LaserResultJson(*result, flags.input, flags.loss, timing);
   json["seconds"]["total"] = clock.Seconds();
+  VerdictInputs verdict;
+  verdict.converged = result->converged;
+  verdict.warnings = result->observability.warnings;
+  verdict.disagreements = result->consistency.warnings;
+  verdict.streams = &timing;
+  const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
   return WriteReport(flags.output, json,
-                     LaserResultSummary(*result, flags.input, flags.loss, timing), flags.quiet);
+                     LaserResultSummary(*result, flags.input, flags.loss, timing) + verdict_line,
+                     flags.quiet);
 }
 
 int CalibrateBearingLog(const CalibrateOptions& flags) {
@@ -58,8 +66,15 @@ int CalibrateBearingLog(const CalibrateOptions& flags) {
   const std::vector<StreamTiming>& timing = input->log.stream_timing;
   nlohmann::ordered_json json = BearingResultJson(*result, flags.input, flags.loss, timing);
   json["seconds"]["total"] = clock.Seconds();
+  VerdictInputs verdict;
+  verdict.converged = result->converged;
+  verdict.warnings = result->warnings;
+  verdict.streams = &timing;
+  verdict.timing_treated = true;  // Offset and stamp jitter are modelled (calibrate_bearing).
+  const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
   return WriteReport(flags.output, json,
-                     BearingResultSummary(*result, flags.input, flags.loss, timing), flags.quiet);
+                     BearingResultSummary(*result, flags.input, flags.loss, timing) + verdict_line,
+                     flags.quiet);
 }
 
 }  // namespace

@@ -36,9 +36,13 @@ std::string CommandIn(int argc, char** argv) {
 // diagnose (diagnose runs a calibration first); `output` also serves simulate.
 bool FlagBelongsTo(const gflags::CommandLineFlagInfo& flag, const std::string& command) {
   const std::string& text = flag.description;
+  // "simulate: ..." or "simulate (streams): ...".
   for (const char* other : kCommands) {
-    const std::string prefix = std::string(other) + ":";
-    if (text.compare(0, prefix.size(), prefix) == 0) return command == other;
+    const std::string name = other;
+    if (text.compare(0, name.size(), name) == 0 && text.size() > name.size() &&
+        (text[name.size()] == ':' || text[name.size()] == ' ')) {
+      return command == other;
+    }
   }
   if (command == "simulate") return flag.name == "output";
   return true;

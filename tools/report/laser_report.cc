@@ -83,7 +83,7 @@ nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
   out["seconds"] = {{"closed_form", result.closed_form_seconds},
                     {"refinement", result.refinement_seconds},
                     {"covariance", result.covariance_seconds}};
-  if (!stream_timing.empty()) out["timing"] = {{"streams", StreamTimingJson(stream_timing)}};
+  if (!stream_timing.empty()) out["timing"]["streams"] = StreamTimingJson(stream_timing);
   return out;
 }
 

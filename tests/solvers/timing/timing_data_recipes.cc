@@ -138,7 +138,9 @@ StatusOr<LaserStreams> ReadStreamFiles(const std::filesystem::path& directory) {
 StatusOr<StampAsTruthFit> FitStampAsTruth(const LaserStreams& streams, const LaserSimTruth& truth) {
   CALIB_ASSIGN_OR_RETURN(const LaserLog log, StampAsTruthLog(streams, "streams"));
   StampAsTruthFit fit;
-  CALIB_ASSIGN_OR_RETURN(fit.result, CalibrateLaser(log.intervals));
+  LaserCalibrationOptions options;
+  options.interval_jitter = false;  // Stamps taken as the sample times, nothing more.
+  CALIB_ASSIGN_OR_RETURN(fit.result, CalibrateLaser(log.intervals, options));
   const LaserCalibration exact{truth.odometry, truth.base_T_sensor};
   fit.error_sigmas =
       (fit.result.estimate.ToVector() - exact.ToVector()).cwiseQuotient(fit.result.stddev);
