@@ -18,6 +18,7 @@ struct StreamSample {
   double stamp_s = 0.0;  // Relative to StreamSamples::origin_s.
   Pose2d world_T_sensor = Pose2d::Zero();
   int record = 0;   // 1-based position in the input stream.
+  int line = 0;     // Its line in sensor_poses.csv (0: not from a file).
   int bracket = 0;  // Last encoder sample with stamp ≤ this stamp (the next one is after it).
 };
 

@@ -39,6 +39,27 @@ class TimePrior : public ceres::SizedCostFunction<1, 1> {
   const double* sigma_;
 };
 
+// The prior of a free-running clock's curvature a (the block (t0, P, a)): r = a/σ_a. A real
+// oscillator's rate error is constant over a log (it is in P); curvature is aging, a millisecond
+// at most, and left free it trades against misassigned sample indices.
+class ClockDriftPrior : public ceres::SizedCostFunction<1, 3> {
+ public:
+  explicit ClockDriftPrior(double sigma_s) : sigma_(sigma_s) {}
+  bool Evaluate(double const* const* parameters, double* residual,
+                double** jacobians) const override {
+    residual[0] = parameters[0][2] / sigma_;
+    if (jacobians != nullptr && jacobians[0] != nullptr) {
+      jacobians[0][0] = 0.0;
+      jacobians[0][1] = 0.0;
+      jacobians[0][2] = 1.0 / sigma_;
+    }
+    return true;
+  }
+
+ private:
+  double sigma_;
+};
+
 }  // namespace calib
 
 #endif  // CALIB_PROBLEMS_TIMING_TIME_PRIOR_RESIDUAL_H_

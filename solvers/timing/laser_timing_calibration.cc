@@ -1,4 +1,5 @@
 #include <calib/core/timing/stream_samples.h>
+#include <calib/solvers/laser/laser_consistency.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/solvers/timing/timing_model_fit.h>
 
@@ -72,6 +73,7 @@ void FillTiming(const StreamSamples& data, const TimingModelFit& fit, LaserTimin
   out->sample_time_s.assign(n, 0.0);
   out->sample_time_stddev_s.assign(n, 0.0);
   out->sample_record.assign(n, 0);
+  out->sample_line.assign(n, 0);
   Eigen::VectorXd latent_sd = Eigen::VectorXd::Zero(n);
   for (Eigen::Index i = 0; i < fit.lin.latent_value.size(); ++i) {
     if (fit.lin.latent_is_sensor[i]) {
@@ -84,6 +86,7 @@ void FillTiming(const StreamSamples& data, const TimingModelFit& fit, LaserTimin
   for (int k = 0; k < n; ++k) {
     out->sample_time_s[k] = fit.sample_time_s[k] + data.origin_s;
     out->sample_record[k] = data.samples[k].record;
+    out->sample_line[k] = data.samples[k].line;
     mean_lag += (fit.sample_time_s[k] - data.samples[k].stamp_s) / n;
     if (fit.model == SensorClockModel::kFreeRunning) {
       const double index = fit.state.clock_index[k];
@@ -135,8 +138,9 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
   const LaserStreams distinct = DistinctStreams(data);
   CALIB_ASSIGN_OR_RETURN(const LaserLog log,
                          LaserLogFromStreams(distinct.odometry, distinct.sensor_poses, "streams"));
-  CALIB_ASSIGN_OR_RETURN(result.stamps_as_truth,
-                         CalibrateLaser(log.intervals, options.calibration));
+  LaserCalibrationOptions stamps_options = options.calibration;
+  stamps_options.interval_jitter = false;  // The seed and the comparison: stamps as sample times.
+  CALIB_ASSIGN_OR_RETURN(result.stamps_as_truth, CalibrateLaser(log.intervals, stamps_options));
 
   LatentTimeState initial;
   initial.calibration = result.stamps_as_truth.estimate;
@@ -152,7 +156,7 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
   result.stamps_score = best.score;
   result.rounds = best.rounds;
   if (try_clock) {
-    LatentTimeState clock_start = ClockStartFromTimes(data, best.state, best.sample_time_s);
+    LatentTimeState clock_start = ClockStartFromTimes(data, best);
     StatusOr<TimingModelFit> clock =
         FitTimingModel(data, SensorClockModel::kFreeRunning, clock_start, options);
     if (clock.ok()) {
@@ -166,12 +170,24 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
                                 "): the stamp model is used");
     }
   }
+  if (best.model == SensorClockModel::kFreeRunning) {
+    result.warnings.push_back(
+        "the free-running sensor's sample indices are inferred from the motion and the stamps: "
+        "across stretches where the robot stood still a sample time may be whole periods off, "
+        "which the sample times' σ does not include (the calibration is not affected)");
+  }
   result.calibration = result.stamps_as_truth;
   FillCalibration(best, options.calibration, &result.calibration);
   FillTiming(data, best, &result);
   if (!best.converged) {
     result.warnings.push_back("the timing-aware refinement stopped before converging");
   }
+  // The timing-free totals, now at the timing-aware estimate.
+  result.calibration.consistency = CheckLaserConsistency(
+      log.intervals, result.calibration.estimate, result.calibration.covariance,
+      result.stamps_as_truth.noise_sigma.front(), result.stamps_as_truth.is_inlier.front());
+  result.warnings.insert(result.warnings.end(), result.calibration.consistency.warnings.begin(),
+                         result.calibration.consistency.warnings.end());
   result.calibration.warnings = result.warnings;
   result.calibration.observability.warnings.insert(result.calibration.observability.warnings.end(),
                                                    result.warnings.begin(), result.warnings.end());

@@ -40,6 +40,7 @@ struct LaserTimingResult {
   double clock_drift_s = 0;  // a: the clock's largest departure from a constant period.
   std::vector<double> sample_time_s, sample_time_stddev_s;  // Per distinct sensor sample.
   std::vector<int> sample_record;  // Its 1-based record in the input sensor stream.
+  std::vector<int> sample_line;    // Its line in sensor_poses.csv (0: not from a file).
   int held_repeats_dropped = 0;
   int intervals = 0;
   // −2 log evidence (Laplace) + 2·globals of each model tried; lower is better.

@@ -69,12 +69,19 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize() const {
   lin.h_lg = Eigen::MatrixXd::Zero(num_latents, g);
   lin.h_ll_band = Eigen::MatrixXd::Zero(width + 1, num_latents);
   lin.b_l = Eigen::VectorXd::Zero(num_latents);
+  for (int c = 0; c < 3; ++c) {
+    lin.h_ll_band_c[c] = Eigen::MatrixXd::Zero(width + 1, num_latents);
+    lin.b_l_c[c] = Eigen::VectorXd::Zero(num_latents);
+  }
+  // Rows come three per interval, in the residual's (x, y, θ) order.
   for (int row = 0; row < jacobian.num_rows; ++row) {
+    const int component = row % 3;
+    lin.rr_c(component) += residuals[row] * residuals[row];
     const int begin = jacobian.rows[row], end = jacobian.rows[row + 1];
     for (int a = begin; a < end; ++a) {
       const int ca = jacobian.cols[a];
       const double va = jacobian.values[a];
-      if (ca >= g) lin.b_l(ca - g) += va * residuals[row];
+      if (ca >= g) lin.b_l_c[component](ca - g) += va * residuals[row];
       for (int b = begin; b < end; ++b) {
         const int cb = jacobian.cols[b];
         const double product = va * jacobian.values[b];
@@ -83,11 +90,20 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize() const {
         } else if (ca >= g && cb < g) {
           lin.h_lg(ca - g, cb) += product;
         } else if (ca >= g && cb >= ca) {
-          lin.h_ll_band(cb - ca, ca - g) += product;
+          lin.h_ll_band_c[component](cb - ca, ca - g) += product;
         }
       }
     }
   }
+  if (model_ == SensorClockModel::kFreeRunning) {
+    lin.h_gg(8, 8) += 1.0 / (kClockDriftSigmaS * kClockDriftSigmaS);  // The curvature's prior.
+  }
+  for (int c = 0; c < 3; ++c) {
+    lin.h_ll_band += lin.h_ll_band_c[c];
+    lin.b_l += lin.b_l_c[c];
+  }
+  lin.noise_sigma = state_.noise_sigma;
+  lin.num_intervals = static_cast<int>(interval_costs_.size());
   for (int i = 0; i < 3; ++i) lin.odometry_plus_jacobian(i, i) = odometry_[i];
   for (const ceres::ResidualBlockId id : interval_costs_) {
     Eigen::Vector3d r;

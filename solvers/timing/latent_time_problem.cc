@@ -123,6 +123,9 @@ void LatentTimeProblem::AddIntervals() {
                                  &state_.sensor_latent[k], &offset_);
     }
   }
+  if (model_ == SensorClockModel::kFreeRunning) {
+    problem_->AddResidualBlock(new ClockDriftPrior(kClockDriftSigmaS), nullptr, clock_);
+  }
   for (size_t j = 0; j < encoder_used_.size(); ++j) {
     if (!encoder_used_[j]) continue;
     problem_->AddResidualBlock(new TimePrior(&state_.encoder_sigma_s), nullptr,

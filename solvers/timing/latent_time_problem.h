@@ -11,6 +11,7 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Core>
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -23,6 +24,9 @@
 namespace calib {
 
 enum class SensorClockModel { kStamps, kFreeRunning };
+
+// Prior σ of the clock's curvature a (problems/timing/time_prior_residual.h, ClockDriftPrior).
+inline constexpr double kClockDriftSigmaS = 1e-3;
 
 struct LatentTimeState {
   LaserCalibration calibration;
@@ -41,11 +45,18 @@ struct LatentTimeState {
 // split into the global parameters (tangent space) and the latents ordered by time.
 struct LatentLinearization {
   int num_globals = 0;
-  int offset_global = -1;        // Column of τ among the globals (stamp model), or −1.
-  Eigen::MatrixXd h_gg;          // G × G.
-  Eigen::MatrixXd h_lg;          // L × G.
-  Eigen::MatrixXd h_ll_band;     // (w + 1) × L, band(d, i) = H(i + d, i).
-  Eigen::VectorXd b_l;           // Jᵀr, latent part.
+  int offset_global = -1;     // Column of τ among the globals (stamp model), or −1.
+  Eigen::MatrixXd h_gg;       // G × G.
+  Eigen::MatrixXd h_lg;       // L × G.
+  Eigen::MatrixXd h_ll_band;  // (w + 1) × L, band(d, i) = H(i + d, i).
+  Eigen::VectorXd b_l;        // Jᵀr, latent part.
+  // The same latent pieces per residual component c (x, y, θ), whitened by `noise_sigma`, so that
+  // the evidence can be evaluated at another scan noise (rows scale by noise_sigma(c)/σ_c).
+  std::array<Eigen::MatrixXd, 3> h_ll_band_c;
+  std::array<Eigen::VectorXd, 3> b_l_c;
+  Eigen::Vector3d rr_c = Eigen::Vector3d::Zero();  // Σ r_c² (whitened, loss-corrected).
+  Eigen::Vector3d noise_sigma = Eigen::Vector3d::Ones();
+  int num_intervals = 0;
   Eigen::VectorXd latent_value;  // Current latent values.
   std::vector<bool> latent_is_sensor;
   std::vector<int> latent_owner;  // Sample or encoder index.

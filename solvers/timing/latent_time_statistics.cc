@@ -8,19 +8,6 @@
 namespace calib {
 namespace {
 
-// y = H·x for H in band storage.
-Eigen::VectorXd BandTimes(const Eigen::MatrixXd& band, const Eigen::VectorXd& x) {
-  const Eigen::Index n = band.cols();
-  Eigen::VectorXd y = band.row(0).transpose().cwiseProduct(x);
-  for (Eigen::Index d = 1; d < band.rows(); ++d) {
-    for (Eigen::Index i = 0; i + d < n; ++i) {
-      y(i) += band(d, i) * x(i + d);
-      y(i + d) += band(d, i) * x(i);
-    }
-  }
-  return y;
-}
-
 StatusOr<BandedLdlt> FactorWithPrior(const LatentLinearization& lin, const LatentPrior& prior) {
   Eigen::MatrixXd band = lin.h_ll_band;
   band.row(0) += prior.sigma.array().square().inverse().matrix().transpose();
@@ -75,31 +62,67 @@ LatentPrior MakeLatentPrior(const LatentLinearization& lin, double offset_s, dou
   return prior;
 }
 
-StatusOr<double> LatentNegLogEvidence(const LatentLinearization& lin, const LatentPrior& prior) {
-  if (lin.latent_value.size() == 0) return 0.0;
-  CALIB_ASSIGN_OR_RETURN(const BandedLdlt ldlt, FactorWithPrior(lin, prior));
-  const Eigen::VectorXd g = lin.b_l + BandTimes(lin.h_ll_band, prior.mean - lin.latent_value);
-  const double quadratic = g.dot(ldlt.Solve(g).col(0));
-  return -quadratic + ldlt.LogDeterminant() + 2.0 * prior.sigma.array().log().sum();
+StatusOr<double> LatentNegLogEvidence(const LatentLinearization& lin, double offset_s,
+                                      const NoiseScales& scales) {
+  const Eigen::Array3d scale = (lin.noise_sigma.array() / scales.scan.array()).square();
+  double value =
+      scale.matrix().dot(lin.rr_c) + 2.0 * lin.num_intervals * scales.scan.array().log().sum();
+  if (lin.latent_value.size() == 0) return value;
+  const LatentPrior prior = MakeLatentPrior(lin, offset_s, scales.sensor_s, scales.encoder_s);
+  LatentLinearization scaled;
+  scaled.h_ll_band = scale(0) * lin.h_ll_band_c[0];
+  Eigen::VectorXd b = scale(0) * lin.b_l_c[0];
+  for (int c = 1; c < 3; ++c) {
+    scaled.h_ll_band += scale(c) * lin.h_ll_band_c[c];
+    b += scale(c) * lin.b_l_c[c];
+  }
+  CALIB_ASSIGN_OR_RETURN(const BandedLdlt ldlt, FactorWithPrior(scaled, prior));
+  const Eigen::VectorXd lambda = prior.sigma.array().square().inverse();
+  const Eigen::VectorXd dm = prior.mean - lin.latent_value;
+  const Eigen::VectorXd u = b - lambda.cwiseProduct(dm);
+  value += dm.dot(lambda.cwiseProduct(dm)) - u.dot(ldlt.Solve(u).col(0));
+  return value + ldlt.LogDeterminant() + 2.0 * prior.sigma.array().log().sum();
 }
 
-JitterScales MaximizeLatentEvidence(const LatentLinearization& lin, double offset_s,
-                                    JitterScales initial, bool fit_sensor, bool fit_encoder,
-                                    double floor_s, double ceiling_s) {
-  JitterScales s = initial;
-  const auto evidence = [&](double sensor, double encoder) {
-    const StatusOr<double> value =
-        LatentNegLogEvidence(lin, MakeLatentPrior(lin, offset_s, sensor, encoder));
+NoiseScales MaximizeLatentEvidence(const LatentLinearization& lin, double offset_s,
+                                   NoiseScales initial, const NoiseScaleFit& fit) {
+  NoiseScales s = initial;
+  const auto evidence = [&](const NoiseScales& trial) {
+    const StatusOr<double> value = LatentNegLogEvidence(lin, offset_s, trial);
     return value.ok() ? *value : INFINITY;
   };
-  for (int sweep = 0; sweep < (fit_sensor && fit_encoder ? 2 : 1); ++sweep) {
-    if (fit_sensor) {
-      s.sensor_s =
-          MinimizeLog([&](double x) { return evidence(x, s.encoder_s); }, floor_s, ceiling_s);
+  const bool has_sensor = std::find(lin.latent_is_sensor.begin(), lin.latent_is_sensor.end(),
+                                    true) != lin.latent_is_sensor.end();
+  const bool has_encoder = std::find(lin.latent_is_sensor.begin(), lin.latent_is_sensor.end(),
+                                     false) != lin.latent_is_sensor.end();
+  for (int sweep = 0; sweep < 3; ++sweep) {
+    for (int c = 0; c < 3 && fit.scan; ++c) {
+      const double at = s.scan(c);
+      s.scan(c) = MinimizeLog(
+          [&](double x) {
+            NoiseScales trial = s;
+            trial.scan(c) = x;
+            return evidence(trial);
+          },
+          at / 8.0, at * 8.0);
     }
-    if (fit_encoder) {
-      s.encoder_s =
-          MinimizeLog([&](double x) { return evidence(s.sensor_s, x); }, floor_s, ceiling_s);
+    if (fit.sensor && has_sensor) {
+      s.sensor_s = MinimizeLog(
+          [&](double x) {
+            NoiseScales trial = s;
+            trial.sensor_s = x;
+            return evidence(trial);
+          },
+          fit.floor_s, fit.ceiling_s);
+    }
+    if (fit.encoder && has_encoder) {
+      s.encoder_s = MinimizeLog(
+          [&](double x) {
+            NoiseScales trial = s;
+            trial.encoder_s = x;
+            return evidence(trial);
+          },
+          fit.floor_s, fit.ceiling_s);
     }
   }
   return s;

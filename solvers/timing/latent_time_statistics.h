@@ -20,20 +20,31 @@ struct LatentPrior {
 LatentPrior MakeLatentPrior(const LatentLinearization& lin, double offset_s, double sensor_sigma_s,
                             double encoder_sigma_s);
 
-// −2 log of the evidence p(data | σ) at fixed globals, up to a constant: for the linearised
-// residual r(x) = r̂ + J(x − x̂) and the prior x ~ N(m, Λ⁻¹),
-//   −g̃ᵀ(H + Λ)⁻¹g̃ + log det(H + Λ) − log det Λ,   g̃ = Jᵀr̂ + H(m − x̂),  H = JᵀJ.
-StatusOr<double> LatentNegLogEvidence(const LatentLinearization& lin, const LatentPrior& prior);
-
-struct JitterScales {
+// The variance components: scan noise (x, y, θ) and the jitter of sensor and encoder times.
+struct NoiseScales {
+  Eigen::Vector3d scan = Eigen::Vector3d::Ones();
   double sensor_s = 0.0;
   double encoder_s = 0.0;
 };
-// The σ's that maximise the evidence (coordinate-wise: a log grid, then golden section), each in
-// [floor, ceiling]; those not fitted keep their values.
-JitterScales MaximizeLatentEvidence(const LatentLinearization& lin, double offset_s,
-                                    JitterScales initial, bool fit_sensor, bool fit_encoder,
-                                    double floor_s, double ceiling_s);
+
+// −2 log of the evidence p(data | scales) at fixed globals, up to a constant, with the latents x
+// integrated out of the linearised problem (residual rows rescaled to the scan noise `scales`):
+//   min_x [Σ‖r + J(x − x̂)‖² + ‖x − m‖²_Λ] + log det(H + Λ) − log det Λ + N·log det Σ_scan.
+// The scan noise must come from here, not from the fitted residuals: the latents absorb the
+// rotation errors they can explain, and a noise level re-estimated from what they leave feeds
+// back into ever freer latents (an incidental-parameter collapse that biases b).
+StatusOr<double> LatentNegLogEvidence(const LatentLinearization& lin, double offset_s,
+                                      const NoiseScales& scales);
+
+// The scales that maximise the evidence: coordinate-wise searches in log σ (a grid, then golden
+// section), scan noise within [1/8, 8] of the linearisation's, jitters in [floor, ceiling]; those
+// not fitted keep their values.
+struct NoiseScaleFit {
+  bool scan = true, sensor = true, encoder = true;
+  double floor_s = 1e-4, ceiling_s = 1.0;
+};
+NoiseScales MaximizeLatentEvidence(const LatentLinearization& lin, double offset_s,
+                                   NoiseScales initial, const NoiseScaleFit& fit);
 
 struct LatentCovariance {
   Eigen::MatrixXd globals;          // G × G, tangent space (see odometry_plus_jacobian).

@@ -1,3 +1,4 @@
+#include <calib/core/timing/encoder_integration.h>
 #include <calib/solvers/common/solver_options.h>
 #include <calib/solvers/timing/timing_model_fit.h>
 
@@ -31,24 +32,56 @@ double RelativeChange(double now, double before) {
   return std::abs(now - before) / std::max(std::abs(now), 1e-12);
 }
 
-// Score = 2·cost + log det(H_ll + Λ) + Σ log σ_i² + N·log|Σ_scan| + 2·globals.
-double Score(const TimingModelFit& fit, double final_cost, const LatentPrior& prior) {
-  const double n = static_cast<double>(fit.errors.size());
+// −2 log evidence (Laplace, latents integrated out) + 2·(timing globals + 1).
+double Score(const TimingModelFit& fit, const NoiseScales& scales) {
   const int timing_globals = fit.model == SensorClockModel::kFreeRunning ? 3 : 1;
-  return 2.0 * final_cost + fit.covariance.log_det + 2.0 * prior.sigma.array().log().sum() +
-         n * 2.0 * fit.state.noise_sigma.array().log().sum() + 2.0 * (timing_globals + 1);
+  const StatusOr<double> evidence = LatentNegLogEvidence(fit.lin, fit.state.offset_s, scales);
+  return (evidence.ok() ? *evidence : INFINITY) + 2.0 * (timing_globals + 1);
 }
 
 }  // namespace
 
-LatentTimeState ClockStartFromTimes(const StreamSamples& data, const LatentTimeState& stamps,
-                                    const std::vector<double>& sample_time_s) {
-  LatentTimeState s = stamps;
-  const double period = MedianStep(sample_time_s);
-  s.clock_index = ClockIndicesFromTimes(sample_time_s, period);
-  s.clock = FitSampleClock(s.clock_index, sample_time_s);
-  s.clock_index = ReassignClockIndices(data, s);
-  s.clock = FitSampleClock(s.clock_index, sample_time_s);
+LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModelFit& stamps) {
+  LatentTimeState s = stamps.state;
+  // Whole sensor periods per interval: where the robot moves, the ratio of the measured motion to
+  // the motion the wheels made between the two stamps (a sample the logger skipped doubles it);
+  // elsewhere the stamp step. The clock is then fitted to the stamps and the indices re-assigned.
+  const double period = data.sensor_period_s;
+  const LaserParamVector v = s.calibration.ToVector();
+  const Pose2d mounting(v(3), v(4), v(5));
+  const Eigen::Vector3d weight = s.noise_sigma.cwiseInverse().cwiseAbs2();
+  std::vector<double> steps(data.samples.size(), 0.0);
+  for (size_t k = 1; k < data.samples.size(); ++k) {
+    const double stamp_step = data.samples[k].stamp_s - data.samples[k - 1].stamp_s;
+    double ratio = stamp_step / period;
+    double left[2], right[2];
+    for (int i = 0; i < 2; ++i) {
+      InterpolateWheelAngles(data.encoders, data.samples[k - 1 + i].stamp_s, &left[i], &right[i]);
+    }
+    const Pose2d robot = WheelAngleChainDisplacement(v(0), v(1), v(2), left, right, 2);
+    const Eigen::Vector3d predicted = SensorMotionFromRobotMotion(mounting, robot);
+    Eigen::Vector3d measured =
+        Between(data.samples[k - 1].world_T_sensor, data.samples[k].world_T_sensor);
+    measured(2) = WrapAngle(measured(2));
+    const double information = predicted.dot(weight.cwiseProduct(predicted));
+    // Trusted where the motion is known to 5 % and the measured motion is a multiple of the
+    // predicted one in every component (not a failed scan match).
+    const double scale = measured.dot(weight.cwiseProduct(predicted)) / information;
+    const Eigen::Vector3d misfit = measured - scale * predicted;
+    if (information > 400.0 && misfit.dot(weight.cwiseProduct(misfit)) < 16.0) ratio *= scale;
+    steps[k] = std::max(1.0, std::round(ratio));
+  }
+  s.clock_index.assign(data.samples.size(), 0.0);
+  std::vector<double> stamps_s = {data.samples.front().stamp_s};
+  for (size_t k = 1; k < data.samples.size(); ++k) {
+    s.clock_index[k] = s.clock_index[k - 1] + steps[k];
+    stamps_s.push_back(data.samples[k].stamp_s);
+  }
+  s.clock = FitSampleClock(s.clock_index, stamps_s);
+  for (int round = 0; round < 2; ++round) {
+    s.clock_index = ReassignClockIndices(data, s);
+    s.clock = FitSampleClock(s.clock_index, stamps_s);
+  }
   s.bracket.clear();
   return s;
 }
@@ -80,26 +113,22 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
     for (size_t k = 0; k < data.samples.size(); ++k) {
       fit.sample_time_s.push_back(problem.SampleTime(static_cast<int>(k)));
     }
-    fit.score = Score(fit, summary.final_cost, prior);
-
-    // Scan noise: robust level of the errors, inflated for the share of the fit that the latents
-    // and globals took (they absorb part of the noise).
-    const double components = 3.0 * fit.errors.size();
-    const double redundancy = components - fit.lin.num_globals - fit.covariance.effective_latents;
-    const Eigen::Vector3d noise =
-        options.calibration.noise_sigma
-            ? *options.calibration.noise_sigma
-            : RobustNoiseSigma(fit.errors) * std::sqrt(components / std::max(redundancy, 1.0));
-    JitterScales jitter{fit.state.sensor_sigma_s, fit.state.encoder_sigma_s};
-    if (fit_sensor || fit_encoder) {
-      jitter = MaximizeLatentEvidence(fit.lin, fit.state.offset_s, jitter, fit_sensor, fit_encoder,
-                                      kJitterFloor, std::max(ceiling, 2 * kJitterFloor));
-    }
+    // Scan noise and jitters together, by the evidence with the latents integrated out.
+    NoiseScales current{fit.state.noise_sigma, fit.state.sensor_sigma_s, fit.state.encoder_sigma_s};
+    fit.score = Score(fit, current);
+    NoiseScaleFit what;
+    what.scan = !options.calibration.noise_sigma;
+    what.sensor = fit_sensor;
+    what.encoder = fit_encoder;
+    what.floor_s = kJitterFloor;
+    what.ceiling_s = std::max(ceiling, 2 * kJitterFloor);
+    const NoiseScales next = MaximizeLatentEvidence(fit.lin, fit.state.offset_s, current, what);
+    const Eigen::Vector3d noise = next.scan;
     bool settled =
         problem.BracketsHold() &&
         ((noise - fit.state.noise_sigma).cwiseQuotient(noise)).cwiseAbs().maxCoeff() < 0.01 &&
-        RelativeChange(jitter.sensor_s, fit.state.sensor_sigma_s) < 0.05 &&
-        RelativeChange(jitter.encoder_s, fit.state.encoder_sigma_s) < 0.05;
+        RelativeChange(next.sensor_s, fit.state.sensor_sigma_s) < 0.05 &&
+        RelativeChange(next.encoder_s, fit.state.encoder_sigma_s) < 0.05;
     if (model == SensorClockModel::kFreeRunning) {
       const std::vector<double> indices = ReassignClockIndices(data, fit.state);
       if (indices != fit.state.clock_index) {
@@ -110,8 +139,8 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
     if (settled) break;
     if (!problem.BracketsHold()) fit.state.bracket = problem.Brackets();
     fit.state.noise_sigma = noise;
-    fit.state.sensor_sigma_s = jitter.sensor_s;
-    fit.state.encoder_sigma_s = jitter.encoder_s;
+    fit.state.sensor_sigma_s = next.sensor_s;
+    fit.state.encoder_sigma_s = next.encoder_s;
   }
   const double components = 3.0 * fit.errors.size();
   const double redundancy = components - fit.lin.num_globals - fit.covariance.effective_latents;

@@ -31,11 +31,9 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
                                         const LatentTimeState& initial,
                                         const LaserTimingOptions& options);
 
-// The clock model's starting point from latent times of the stamp model: P from their median
-// step, indices by whole periods, (t0, P) by least squares, then indices re-assigned from the
-// stamps.
-LatentTimeState ClockStartFromTimes(const StreamSamples& data, const LatentTimeState& stamps,
-                                    const std::vector<double>& sample_time_s);
+// The clock model's starting point from a fit of the stamp model: the clock by the phase of the
+// latent times the data pinned (FitClockByPhase), then indices re-assigned from the stamps.
+LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModelFit& stamps);
 
 }  // namespace calib
 

@@ -3,10 +3,12 @@
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
 #include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
 #include <calib/tools/report/bearing_report.h>
 #include <calib/tools/report/laser_report.h>
+#include <calib/tools/report/latent_timing_report.h>
 #include <calib/tools/report/verdict.h>
 
 #include <vector>
@@ -14,11 +16,42 @@
 namespace calib::cli {
 namespace {
 
+// One raw-stream log: every sample's true time is estimated with the calibration.
+int CalibrateLaserStreamLog(const CalibrateOptions& flags, const LaserLog& log,
+                            const LaserCalibrationOptions& options, const Stopwatch& clock) {
+  LaserTimingOptions timing;
+  timing.calibration = options;
+  timing.sensor_clock = flags.timing;
+  const StatusOr<LaserTimingResult> result = CalibrateLaserStreams(log.streams, timing);
+  if (!result.ok()) return Fail(flags.input + ": " + result.message());
+  const LaserCalibrationResult& calibration = result->calibration;
+  nlohmann::ordered_json json =
+      LaserResultJson(calibration, flags.input, flags.loss, log.stream_timing);
+  json["timing"]["treatment"] = "latent_times";
+  json["timing"]["latent_times"] = LatentTimingJson(*result);
+  json["seconds"]["total"] = clock.Seconds();
+  VerdictInputs verdict;
+  verdict.converged = calibration.converged;
+  verdict.warnings = calibration.observability.warnings;
+  verdict.disagreements = calibration.consistency.warnings;
+  verdict.streams = &log.stream_timing;
+  verdict.timing_treated = true;
+  const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
+  const std::string summary =
+      LaserResultSummary(calibration, flags.input, flags.loss, log.stream_timing) +
+      LatentTimingSummary(*result) + verdict_line;
+  return WriteReport(flags.output, json, summary, flags.quiet);
+}
+
 int CalibrateLaserLogs(const CalibrateOptions& flags) {
   const StatusOr<LaserFormat> format = ParseLaserFormat(flags.format);
   if (!format.ok()) return Fail(format.message());
   const StatusOr<RobustLoss> loss = ParseLossFlags(flags.loss, flags.loss_scale);
   if (!loss.ok()) return Fail(loss.message());
+  if (flags.timing != "auto" && flags.timing != "stamps" && flags.timing != "free_running" &&
+      flags.timing != "off") {
+    return Fail("--timing " + flags.timing + ": expected auto, stamps, free_running or off");
+  }
   const Stopwatch clock;
   std::vector<LaserLog> logs;
   for (const std::string& path : SplitCommas(flags.input)) {
@@ -28,12 +61,28 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   }
   if (logs.empty()) return Fail("--input names no file");
   std::vector<const std::vector<LaserInterval>*> intervals;
-  for (const LaserLog& log : logs) intervals.push_back(&log.intervals);
+  bool streams = false;
+  for (const LaserLog& log : logs) {
+    intervals.push_back(&log.intervals);
+    streams = streams || !log.streams.sensor_poses.empty();
+  }
 
   LaserCalibrationOptions options;
   options.refinement.loss = *loss;
   options.refinement.loss_scale = flags.loss_scale;
   options.progress = ProgressPrinter(clock, flags.quiet);
+  // Raw streams carry their own timing: the latent-time calibration models it (one log), and
+  // otherwise the interval-jitter treatment for tuples does not apply to them.
+  if (streams && flags.timing != "off") {
+    if (logs.size() != 1) {
+      return Fail("raw-stream logs are calibrated one at a time with their timing (--timing " +
+                  flags.timing +
+                  "); give one, or --timing off to take their stamps as "
+                  "sample times");
+    }
+    return CalibrateLaserStreamLog(flags, logs.front(), options, clock);
+  }
+  options.interval_jitter = !streams;
   const StatusOr<LaserCalibrationResult> result = CalibrateLaserJoint(intervals, options);
   if (!result.ok()) return Fail(flags.input + ": " + result.message());
 

@@ -18,6 +18,9 @@ struct CalibrateOptions {
   std::string loss = "cauchy";  // cauchy, huber or none.
   double loss_scale = 3.0;      // In whitened residual units.
   bool quiet = false;           // No summary on stdout, no progress on stderr.
+  // Raw laser streams: auto (latent sample times, the clock model chosen by the data), stamps or
+  // free_running (that model only), off (stamps taken as sample times).
+  std::string timing = "auto";
 };
 int RunCalibrate(const CalibrateOptions& options);
 

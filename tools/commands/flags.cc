@@ -17,6 +17,10 @@ DEFINE_string(loss, kDiagnose.loss.c_str(), "Robust loss: cauchy, huber or none"
 DEFINE_double(loss_scale, kDiagnose.loss_scale,
               "Scale of the robust loss, in whitened residual units");
 DEFINE_bool(quiet, kDiagnose.quiet, "Do not print the summary on stdout");
+DEFINE_string(timing, kDiagnose.timing.c_str(),
+              "calibrate (raw laser streams): auto estimates every sample's true time with the "
+              "calibration (the sensor clock model chosen by the data), stamps or free_running "
+              "force that clock model, off takes the stamps as sample times");
 
 // `calib diagnose`.
 DEFINE_double(family_alpha, kDiagnose.family_alpha,
@@ -113,6 +117,7 @@ CalibrateOptions CalibrateOptionsFromFlags() {
   options.loss = FLAGS_loss;
   options.loss_scale = FLAGS_loss_scale;
   options.quiet = FLAGS_quiet;
+  options.timing = FLAGS_timing;
   return options;
 }
 

@@ -6,13 +6,16 @@
 #include <cstdio>
 
 namespace calib {
-namespace {
 
-nlohmann::ordered_json ParamObject(const LaserParamVector& v) {
+nlohmann::ordered_json LaserParamJson(const LaserParamVector& v) {
   nlohmann::ordered_json object;
   for (int i = 0; i < kNumLaserParams; ++i) object[kLaserParamNames[i]] = v(i);
   return object;
 }
+
+namespace {
+
+const auto& ParamObject = LaserParamJson;  // The local name this file has always used.
 
 // Display units: mm for lengths, degrees for the angle.
 

@@ -17,6 +17,9 @@ nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
                                        const std::string& input, const std::string& loss,
                                        const std::vector<StreamTiming>& stream_timing = {});
 
+// The six parameters as {"r_l": …, …, "sensor_theta": …}.
+nlohmann::ordered_json LaserParamJson(const LaserParamVector& v);
+
 // The truth of a simulated log in the result's layout ({"problem", "estimate"}) plus the
 // simulated effects (`calib simulate --truth`).
 nlohmann::ordered_json LaserSimTruthJson(const LaserSimTruth& truth);

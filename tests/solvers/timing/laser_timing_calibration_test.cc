@@ -58,10 +58,7 @@ TEST(LaserTimingCalibration, ExactRecoveryOnNoiseFreeExactStamps) {
   EXPECT_LT((r->calibration.estimate.ToVector() - t.ToVector()).cwiseAbs().maxCoeff(), 1e-6);
 }
 
-// DISABLED: the joint mode over calibration and latent times is still biased (the latents are
-// incidental parameters: maximising over them instead of integrating them out pulls b), and the
-// clock model's latent band can lose positive definiteness. See the branch report.
-TEST(LaserTimingCalibration, DISABLED_StampScatterBiasesStampsNotLatentTimes) {
+TEST(LaserTimingCalibration, StampScatterBiasesStampsNotLatentTimes) {
   LaserSimTruth truth;
   LaserStreams streams = SimulateLaserStreams(ScanningRobot(3000, 5), 4.0, &truth);
   test::ScatterEncoderStamps(&streams, 0.017, 11);
@@ -71,12 +68,13 @@ TEST(LaserTimingCalibration, DISABLED_StampScatterBiasesStampsNotLatentTimes) {
   Print("scatter", *r, truth);
   EXPECT_GE(WorstZ(r->stamps_as_truth, truth), 5.0);
   EXPECT_LE(WorstZ(r->calibration, truth), 3.0);
+  // τ = −20 ms and the jitters (10 ms sensor, 17 ms encoder) as variance components.
+  EXPECT_NEAR(r->time_offset_s, -0.02, 3.0 * r->time_offset_stddev_s);
+  EXPECT_NEAR(r->sensor_jitter_s, 0.01, 0.25 * 0.01);
+  EXPECT_NEAR(r->encoder_jitter_s, 0.017, 0.25 * 0.017);
 }
 
-// DISABLED: the joint mode over calibration and latent times is still biased (the latents are
-// incidental parameters: maximising over them instead of integrating them out pulls b), and the
-// clock model's latent band can lose positive definiteness. See the branch report.
-TEST(LaserTimingCalibration, DISABLED_PickUpStampsOfAFreeRunningScanner) {
+TEST(LaserTimingCalibration, PickUpStampsOfAFreeRunningScanner) {
   LaserSimTruth truth;
   LaserStreams streams = SimulateLaserStreams(ScanningRobot(3000, 7), 4.0, &truth);
   test::ScatterEncoderStamps(&streams, 0.017, 21);
@@ -85,14 +83,13 @@ TEST(LaserTimingCalibration, DISABLED_PickUpStampsOfAFreeRunningScanner) {
   ASSERT_TRUE(r.ok()) << r.message();
   Print("pick-up", *r, truth);
   EXPECT_EQ(r->sensor_clock, "free_running");
-  EXPECT_GE(WorstZ(r->stamps_as_truth, truth), 5.0);
+  EXPECT_GT(r->held_repeats_dropped, 0);
   EXPECT_LE(WorstZ(r->calibration, truth), 3.0);
+  // The period to 0.5 %: the sample indices where the robot stood still are a guess.
+  EXPECT_NEAR(r->sensor_period_s, 0.0995, 0.005 * 0.0995);
 }
 
-// DISABLED: the joint mode over calibration and latent times is still biased (the latents are
-// incidental parameters: maximising over them instead of integrating them out pulls b), and the
-// clock model's latent band can lose positive definiteness. See the branch report.
-TEST(LaserTimingCalibration, DISABLED_CleanTimingAgreesWithStampsAsTruth) {
+TEST(LaserTimingCalibration, CleanTimingAgreesWithStampsAsTruth) {
   LaserSimTruth truth;
   LaserSimOptions o = ScanningRobot(3000, 9);
   o.interval_jitter_s = 0.01;

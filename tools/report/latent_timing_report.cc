@@ -1,0 +1,83 @@
+#include <calib/tools/report/laser_report.h>
+#include <calib/tools/report/latent_timing_report.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace calib {
+namespace {
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+// The largest |stamp-as-truth − timing-aware| in units of the timing-aware σ.
+double LargestShift(const LaserTimingResult& r, int* which) {
+  const LaserParamVector shift =
+      (r.stamps_as_truth.estimate.ToVector() - r.calibration.estimate.ToVector())
+          .cwiseQuotient(r.calibration.stddev.cwiseMax(1e-300));
+  return shift.cwiseAbs().maxCoeff(which);
+}
+
+}  // namespace
+
+nlohmann::ordered_json LatentTimingJson(const LaserTimingResult& r) {
+  nlohmann::ordered_json out;
+  out["sensor_clock"] = r.sensor_clock;
+  out["time_offset_s"] = r.time_offset_s;
+  out["time_offset_stddev_s"] = r.time_offset_stddev_s;
+  out["sensor_jitter_s"] = r.sensor_jitter_s;
+  out["encoder_jitter_s"] = r.encoder_jitter_s;
+  out["sensor_period_s"] = r.sensor_period_s;
+  out["sensor_period_stddev_s"] = r.sensor_period_stddev_s;
+  out["clock_drift_s"] = r.clock_drift_s;
+  out["scores"] = {{"stamps", r.stamps_score}};
+  if (r.free_running_score) out["scores"]["free_running"] = *r.free_running_score;
+  out["intervals"] = r.intervals;
+  out["held_repeats_dropped"] = r.held_repeats_dropped;
+  out["rounds"] = r.rounds;
+  out["seconds"] = r.seconds;
+  out["sample_time_stddev_s"] = {
+      {"median", Median(r.sample_time_stddev_s)},
+      {"max", r.sample_time_stddev_s.empty() ? 0.0
+                                             : *std::max_element(r.sample_time_stddev_s.begin(),
+                                                                 r.sample_time_stddev_s.end())}};
+  out["samples"] = {
+      {"line", r.sample_line}, {"time_s", r.sample_time_s}, {"stddev_s", r.sample_time_stddev_s}};
+  out["stamps_as_truth"] = {{"estimate", LaserParamJson(r.stamps_as_truth.estimate.ToVector())},
+                            {"stddev", LaserParamJson(r.stamps_as_truth.stddev)}};
+  out["warnings"] = r.warnings;
+  return out;
+}
+
+std::string LatentTimingSummary(const LaserTimingResult& r) {
+  char line[400];
+  std::string text;
+  if (r.sensor_clock == "free_running") {
+    std::snprintf(line, sizeof(line),
+                  "  timing: latent sample times, free-running sensor clock: period %.4f ± "
+                  "%.4f ms, drift %.1f ms, mean pick-up lag %.1f ± %.1f ms; encoder jitter "
+                  "%.1f ms\n",
+                  1e3 * r.sensor_period_s, 1e3 * r.sensor_period_stddev_s, 1e3 * r.clock_drift_s,
+                  -1e3 * r.time_offset_s, 1e3 * r.time_offset_stddev_s, 1e3 * r.encoder_jitter_s);
+  } else {
+    std::snprintf(line, sizeof(line),
+                  "  timing: latent sample times, stamps + offset %.1f ± %.1f ms + jitter "
+                  "(sensor %.1f ms, encoder %.1f ms)\n",
+                  1e3 * r.time_offset_s, 1e3 * r.time_offset_stddev_s, 1e3 * r.sensor_jitter_s,
+                  1e3 * r.encoder_jitter_s);
+  }
+  text += line;
+  int which = 0;
+  const double shift = LargestShift(r, &which);
+  std::snprintf(line, sizeof(line),
+                "  timing: taking the stamps as sample times would move %s by %.1f σ\n",
+                kLaserParamNames[which].c_str(), shift);
+  text += line;
+  return text;
+}
+
+}  // namespace calib

@@ -1,0 +1,24 @@
+#ifndef CALIB_TOOLS_REPORT_LATENT_TIMING_REPORT_H_
+#define CALIB_TOOLS_REPORT_LATENT_TIMING_REPORT_H_
+
+#include <calib/solvers/timing/laser_timing_calibration.h>
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+// The timing-aware calibration of raw laser streams in the calibrate JSON
+// ("timing": {"treatment": "latent_times", "latent_times": {...}}) and in the summary.
+namespace calib {
+
+// The clock model chosen, τ ± σ, the jitters, the period and drift of a free-running sensor, the
+// models' scores, every sample's time ± σ (by its line in sensor_poses.csv), and the
+// stamp-as-truth estimate for comparison. SI units.
+nlohmann::ordered_json LatentTimingJson(const LaserTimingResult& result);
+
+// Two or three lines: the model, τ, the jitters or the clock, and how far the stamp-as-truth
+// estimate was from this one.
+std::string LatentTimingSummary(const LaserTimingResult& result);
+
+}  // namespace calib
+
+#endif  // CALIB_TOOLS_REPORT_LATENT_TIMING_REPORT_H_
