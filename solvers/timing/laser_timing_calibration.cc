@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 namespace calib {
 namespace {
@@ -24,6 +26,31 @@ bool ClockCandidate(const StreamSamples& data) {
   return 1.4826 * deviation[deviation.size() / 2] < 0.1 * data.sensor_period_s;
 }
 
+// The six parameters' covariance in the ambient space, times κ.
+LaserParamMatrix ParameterCovariance(const TimingModelFit& fit) {
+  Eigen::Matrix<double, 6, 6> plus = Eigen::Matrix<double, 6, 6>::Identity();
+  plus.topLeftCorner<3, 3>() = fit.lin.odometry_plus_jacobian;
+  return fit.kappa * plus * fit.covariance.globals.topLeftCorner<6, 6>() * plus.transpose();
+}
+
+// The free-running clock model is adopted in auto mode only within this many σ of the stamp
+// model (its scores can favour it with a few misassigned sample indices).
+constexpr double kClockAgreement = 2.0;
+
+// The largest change of the six parameters between two fits, in σ of both combined.
+double ParameterShift(const TimingModelFit& a, const TimingModelFit& b) {
+  const LaserParamVector difference =
+      a.state.calibration.ToVector() - b.state.calibration.ToVector();
+  const LaserParamVector variance = (ParameterCovariance(a) + ParameterCovariance(b)).diagonal();
+  return difference.cwiseQuotient(variance.cwiseMax(1e-300).cwiseSqrt()).cwiseAbs().maxCoeff();
+}
+
+std::string FormatDouble(double value, int digits) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.*f", digits, value);
+  return text;
+}
+
 // The distinct streams (held repeats and duplicates dropped) on their original clock.
 LaserStreams DistinctStreams(const StreamSamples& data) {
   LaserStreams streams;
@@ -35,13 +62,6 @@ LaserStreams DistinctStreams(const StreamSamples& data) {
     streams.sensor_poses.push_back(StampedPose{s.stamp_s + data.origin_s, s.world_T_sensor});
   }
   return streams;
-}
-
-// The six parameters' covariance in the ambient space, times κ.
-LaserParamMatrix ParameterCovariance(const TimingModelFit& fit) {
-  Eigen::Matrix<double, 6, 6> plus = Eigen::Matrix<double, 6, 6>::Identity();
-  plus.topLeftCorner<3, 3>() = fit.lin.odometry_plus_jacobian;
-  return fit.kappa * plus * fit.covariance.globals.topLeftCorner<6, 6>() * plus.transpose();
 }
 
 void FillCalibration(const TimingModelFit& fit, const LaserCalibrationOptions& options,
@@ -162,7 +182,20 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
     if (clock.ok()) {
       result.free_running_score = clock->score;
       result.rounds += clock->rounds;
-      if (!try_stamps || clock->score < best.score) best = std::move(clock).value();
+      // The clock's sample indices are inferred, and a wrong one shifts every later time: in
+      // auto mode the clock model must also agree with the stamp model's six parameters.
+      const double shift = ParameterShift(best, *clock);
+      if (!try_stamps) {
+        best = std::move(clock).value();
+      } else if (clock->score < best.score && shift > kClockAgreement) {
+        result.warnings.push_back(
+            "the free-running clock model fits better but moves a parameter by " +
+            FormatDouble(shift, 1) +
+            " σ from the stamp model: its inferred sample indices are likely wrong somewhere, "
+            "so the stamp model is used");
+      } else if (clock->score < best.score) {
+        best = std::move(clock).value();
+      }
     } else if (!try_stamps) {
       return clock.status();
     } else {

@@ -27,7 +27,7 @@ struct LaserTimingOptions {
   std::string sensor_clock = "auto";                        // auto|stamps|free_running.
   std::optional<double> sensor_jitter_s, encoder_jitter_s;  // Fixed σ; empty: estimated.
   bool estimate_offset = true;
-  int max_rounds = 6;  // Solve / re-estimate the noise and jitter / re-bracket, at most this often.
+  int max_rounds = 4;  // Solve / re-estimate the noise and jitter / re-bracket, at most this often.
 };
 
 struct LaserTimingResult {

@@ -21,10 +21,10 @@ StatusOr<BandedLdlt> FactorWithPrior(const LatentLinearization& lin, const Laten
   return ldlt;
 }
 
-// Minimises f over log σ in [log lo, log hi]: a grid of 13, then golden section around the best.
+// Minimises f over log σ in [log lo, log hi]: a grid of 9, then golden section around the best.
 double MinimizeLog(const std::function<double(double)>& f, double lo, double hi) {
   const double a = std::log(lo), b = std::log(hi);
-  constexpr int kGrid = 13;
+  constexpr int kGrid = 9;
   int best = 0;
   double best_value = INFINITY;
   for (int i = 0; i < kGrid; ++i) {
@@ -36,7 +36,7 @@ double MinimizeLog(const std::function<double(double)>& f, double lo, double hi)
   const double ratio = 0.5 * (std::sqrt(5.0) - 1.0);
   double x1 = right - ratio * (right - left), x2 = left + ratio * (right - left);
   double f1 = f(std::exp(x1)), f2 = f(std::exp(x2));
-  for (int i = 0; i < 25; ++i) {
+  for (int i = 0; i < 15; ++i) {
     if (f1 < f2) {
       right = x2, x2 = x1, f2 = f1;
       x1 = right - ratio * (right - left), f1 = f(std::exp(x1));
@@ -95,7 +95,7 @@ NoiseScales MaximizeLatentEvidence(const LatentLinearization& lin, double offset
                                     true) != lin.latent_is_sensor.end();
   const bool has_encoder = std::find(lin.latent_is_sensor.begin(), lin.latent_is_sensor.end(),
                                      false) != lin.latent_is_sensor.end();
-  for (int sweep = 0; sweep < 3; ++sweep) {
+  for (int sweep = 0; sweep < 2; ++sweep) {
     for (int c = 0; c < 3 && fit.scan; ++c) {
       const double at = s.scan(c);
       s.scan(c) = MinimizeLog(

@@ -126,9 +126,9 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
     const Eigen::Vector3d noise = next.scan;
     bool settled =
         problem.BracketsHold() &&
-        ((noise - fit.state.noise_sigma).cwiseQuotient(noise)).cwiseAbs().maxCoeff() < 0.01 &&
-        RelativeChange(next.sensor_s, fit.state.sensor_sigma_s) < 0.05 &&
-        RelativeChange(next.encoder_s, fit.state.encoder_sigma_s) < 0.05;
+        ((noise - fit.state.noise_sigma).cwiseQuotient(noise)).cwiseAbs().maxCoeff() < 0.03 &&
+        RelativeChange(next.sensor_s, fit.state.sensor_sigma_s) < 0.1 &&
+        RelativeChange(next.encoder_s, fit.state.encoder_sigma_s) < 0.1;
     if (model == SensorClockModel::kFreeRunning) {
       const std::vector<double> indices = ReassignClockIndices(data, fit.state);
       if (indices != fit.state.clock_index) {
