@@ -5,14 +5,6 @@
 
 namespace calib {
 
-std::vector<double> ClockIndicesFromTimes(const std::vector<double>& times_s, double period_s) {
-  std::vector<double> n(times_s.size(), 0.0);
-  for (size_t k = 1; k < n.size(); ++k) {
-    n[k] = n[k - 1] + std::max(1.0, std::round((times_s[k] - times_s[k - 1]) / period_s));
-  }
-  return n;
-}
-
 std::vector<double> ClockIndicesFromStamps(const std::vector<double>& stamps_s,
                                            const SampleClock& clock) {
   std::vector<double> n(stamps_s.size(), 0.0);

@@ -22,10 +22,6 @@ struct SampleClock {
   double Time(double n) const { return t0_s + period_s * n + drift_s * Curvature(n); }
 };
 
-// Sample indices from times that are close to the true ones (latent estimates): n_0 = 0, then each
-// step the nearest whole number of periods, at least one (distinct samples).
-std::vector<double> ClockIndicesFromTimes(const std::vector<double>& times_s, double period_s);
-
 // Sample indices from pick-up stamps: the sample a logger stamps at s was taken in
 // (s − P, s], so n = ⌊(s − t0)/P⌋, forced strictly increasing.
 std::vector<double> ClockIndicesFromStamps(const std::vector<double>& stamps_s,
