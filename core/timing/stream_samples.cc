@@ -67,7 +67,10 @@ Status AddSensorSamples(const std::vector<StampedPose>& poses, const std::string
     const double stamp = p.t_s - out->origin_s;
     const auto after = std::upper_bound(enc.begin(), enc.end(), stamp,
                                         [](double t, const EncoderSample& s) { return t < s.t_s; });
-    if (after == enc.begin() || after == enc.end()) continue;  // Outside the encoder span.
+    if (after == enc.begin() || after == enc.end()) {  // Outside the encoder span.
+      ++out->outside_encoder_span;
+      continue;
+    }
     out->samples.push_back(StreamSample{stamp, p.world_T_sensor, static_cast<int>(k) + 1, p.line,
                                         static_cast<int>(after - enc.begin()) - 1});
   }

@@ -9,6 +9,10 @@
 namespace calib {
 namespace {
 
+// Wheel radii outside this range are no real wheel's (a unit mistake).
+constexpr double kSmallestWheelM = 0.005;
+constexpr double kLargestWheelM = 1.0;
+
 // Relative σ above which a parameter is called poorly determined.
 constexpr double kPoorRelativeSigma = 0.05;
 // Share of turning (or translating) intervals below which the log is called thin.
@@ -78,6 +82,18 @@ LaserObservability AnalyzeLaserObservability(const LaserParamMatrix& covariance,
     report.warnings.push_back("few intervals translate (" + std::to_string(census.translating()) +
                               " of " + std::to_string(census.total) +
                               "): b and the radii rest on little data; drive more arcs");
+  }
+  // Sizes no wheeled robot has: the wheel angles' unit is the likely cause (the fit is
+  // consistent at any scale, the radii absorb it).
+  const OdometryParams& odometry = estimate.odometry;
+  for (const double radius : {odometry.left_radius_m, odometry.right_radius_m}) {
+    if (radius < kSmallestWheelM || radius > kLargestWheelM) {
+      report.warnings.push_back(
+          "a wheel radius of " + Format("%.3g", 1e3 * radius) +
+          " mm is not a real wheel's: are the wheel angles in radians (degrees make the radii "
+          "57 times too small, encoder ticks smaller still; revolutions 6.3 times too large)?");
+      break;
+    }
   }
   return report;
 }

@@ -155,6 +155,12 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
   LaserTimingResult result;
   result.held_repeats_dropped = data.held_repeats_dropped;
   result.intervals = static_cast<int>(data.interval_start.size());
+  if (data.outside_encoder_span > 0) {
+    result.warnings.push_back(std::to_string(data.outside_encoder_span) + " of " +
+                              std::to_string(streams.sensor_poses.size()) +
+                              " sensor samples lie outside the encoders' time span and are not "
+                              "used: do the two streams share a clock and cover the same run?");
+  }
   const LaserStreams distinct = DistinctStreams(data);
   CALIB_ASSIGN_OR_RETURN(const LaserLog log,
                          LaserLogFromStreams(distinct.odometry, distinct.sensor_poses, "streams"));

@@ -95,35 +95,22 @@ NoiseScales MaximizeLatentEvidence(const LatentLinearization& lin, double offset
                                     true) != lin.latent_is_sensor.end();
   const bool has_encoder = std::find(lin.latent_is_sensor.begin(), lin.latent_is_sensor.end(),
                                      false) != lin.latent_is_sensor.end();
+  // One coordinate: the scale `value` points at (inside s) over [lo, hi].
+  const auto search = [&](double* value, double lo, double hi) {
+    *value = MinimizeLog(
+        [&](double x) {
+          const double kept = *value;
+          *value = x;
+          const double e = evidence(s);
+          *value = kept;
+          return e;
+        },
+        lo, hi);
+  };
   for (int sweep = 0; sweep < 2; ++sweep) {
-    for (int c = 0; c < 3 && fit.scan; ++c) {
-      const double at = s.scan(c);
-      s.scan(c) = MinimizeLog(
-          [&](double x) {
-            NoiseScales trial = s;
-            trial.scan(c) = x;
-            return evidence(trial);
-          },
-          at / 8.0, at * 8.0);
-    }
-    if (fit.sensor && has_sensor) {
-      s.sensor_s = MinimizeLog(
-          [&](double x) {
-            NoiseScales trial = s;
-            trial.sensor_s = x;
-            return evidence(trial);
-          },
-          fit.floor_s, fit.ceiling_s);
-    }
-    if (fit.encoder && has_encoder) {
-      s.encoder_s = MinimizeLog(
-          [&](double x) {
-            NoiseScales trial = s;
-            trial.encoder_s = x;
-            return evidence(trial);
-          },
-          fit.floor_s, fit.ceiling_s);
-    }
+    for (int c = 0; c < 3 && fit.scan; ++c) search(&s.scan(c), s.scan(c) / 8.0, s.scan(c) * 8.0);
+    if (fit.sensor && has_sensor) search(&s.sensor_s, fit.floor_s, fit.ceiling_s);
+    if (fit.encoder && has_encoder) search(&s.encoder_s, fit.floor_s, fit.ceiling_s);
   }
   return s;
 }

@@ -48,6 +48,37 @@ TEST(CalibrateLaserTest, NoiseFreeDataAreRecoveredExactly) {
   EXPECT_EQ(result->inliers, result->samples);
 }
 
+// Wheel angles logged in degrees fit as well as in radians (the radii absorb the 57.3): only
+// the size of the radius gives it away, and the result says so. In radians, no such warning.
+TEST(CalibrateLaserTest, WheelAnglesInDegreesAreNamed) {
+  LaserSimOptions sim;
+  sim.num_intervals = 600;
+  sim.seed = 5;
+  std::vector<LaserInterval> intervals = SimulateLaserLog(sim).intervals;
+  const auto names_units = [](const LaserCalibrationResult& r) {
+    for (const std::string& w : r.observability.warnings) {
+      if (w.find("radians") != std::string::npos) return true;
+    }
+    return false;
+  };
+  const StatusOr<LaserCalibrationResult> radians = CalibrateLaser(intervals);
+  ASSERT_TRUE(radians.ok()) << radians.message();
+  EXPECT_FALSE(names_units(*radians));
+  for (LaserInterval& interval : intervals) {
+    interval.left_speed *= 180.0 / M_PI;
+    interval.right_speed *= 180.0 / M_PI;
+    for (WheelStep& step : interval.steps) {
+      step.left_rad *= 180.0 / M_PI;
+      step.right_rad *= 180.0 / M_PI;
+    }
+  }
+  const StatusOr<LaserCalibrationResult> degrees = CalibrateLaser(intervals);
+  ASSERT_TRUE(degrees.ok()) << degrees.message();
+  EXPECT_NEAR(degrees->estimate.odometry.left_radius_m, sim.odometry.left_radius_m * M_PI / 180.0,
+              5.0 * degrees->stddev(0));
+  EXPECT_TRUE(names_units(*degrees));
+}
+
 TEST(CalibrateLaserTest, NoisyLogWithinThreeSigmas) {
   LaserSimOptions sim;
   sim.num_intervals = 2000;

@@ -105,5 +105,20 @@ TEST(LaserTimingCalibration, CleanTimingAgreesWithStampsAsTruth) {
   EXPECT_LE(WorstZ(r->calibration, truth), 3.0);
 }
 
+// Sensor samples the encoders do not cover are counted and named, not silently dropped.
+TEST(LaserTimingCalibration, SamplesOutsideTheEncoderSpanAreNamed) {
+  LaserSimTruth truth;
+  LaserStreams streams = SimulateLaserStreams(ScanningRobot(600, 3), 50.0, &truth);
+  streams.odometry.resize(streams.odometry.size() / 2);
+  const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(streams);
+  ASSERT_TRUE(r.ok()) << r.message();
+  bool named = false;
+  for (const std::string& w : r->calibration.warnings) {
+    named = named || w.find("outside the encoders' time span") != std::string::npos;
+  }
+  EXPECT_TRUE(named);
+  EXPECT_LT(r->intervals, 320);
+}
+
 }  // namespace
 }  // namespace calib
