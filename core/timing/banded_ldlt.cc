@@ -26,19 +26,27 @@ Eigen::MatrixXd BandedLdlt::Solve(const Eigen::MatrixXd& b) const {
   const Eigen::Index w = bandwidth();
   const Eigen::Index n = size();
   Eigen::MatrixXd x = b;
-  for (Eigen::Index j = 0; j < n; ++j) {
-    for (Eigen::Index a = 1; a <= w && j + a < n; ++a) x.row(j + a) -= factor_(a, j) * x.row(j);
-  }
-  for (Eigen::Index j = 0; j < n; ++j) x.row(j) /= factor_(0, j);
-  for (Eigen::Index j = n - 1; j >= 0; --j) {
-    for (Eigen::Index a = 1; a <= w && j + a < n; ++a) x.row(j) -= factor_(a, j) * x.row(j + a);
+  // Column by column: contiguous in memory.
+  for (Eigen::Index c = 0; c < x.cols(); ++c) {
+    double* v = x.col(c).data();
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double* l = &factor_(0, j);
+      for (Eigen::Index a = 1; a <= w && j + a < n; ++a) v[j + a] -= l[a] * v[j];
+    }
+    for (Eigen::Index j = 0; j < n; ++j) v[j] /= factor_(0, j);
+    for (Eigen::Index j = n - 1; j >= 0; --j) {
+      const double* l = &factor_(0, j);
+      for (Eigen::Index a = 1; a <= w && j + a < n; ++a) v[j] -= l[a] * v[j + a];
+    }
   }
   return x;
 }
 
 double BandedLdlt::LogDeterminant() const { return factor_.row(0).array().log().sum(); }
 
-Eigen::VectorXd BandedLdlt::InverseDiagonal() const {
+Eigen::VectorXd BandedLdlt::InverseDiagonal() const { return InverseBand().row(0).transpose(); }
+
+Eigen::MatrixXd BandedLdlt::InverseBand() const {
   // Z = A⁻¹ inside the band: Z(j, i) = −Σ_a L(i + a, i)·Z(i + a, j) for j in (i, i + w], and
   // Z(i, i) = 1/D_i − Σ_a L(i + a, i)·Z(i + a, i); every Z(i + a, j) lies in the band already.
   const Eigen::Index w = bandwidth();
@@ -58,7 +66,7 @@ Eigen::VectorXd BandedLdlt::InverseDiagonal() const {
     for (Eigen::Index a = 1; a <= reach; ++a) sum += factor_(a, i) * z(a, i);
     z(0, i) = 1.0 / factor_(0, i) - sum;
   }
-  return z.row(0).transpose();
+  return z;
 }
 
 }  // namespace calib

@@ -5,7 +5,7 @@
 
 // LDLᵀ of a symmetric positive-definite band matrix (half-bandwidth w): the information of the
 // latent sample times, ordered by time, where each latent touches only its neighbours' intervals.
-// O(n·w²) for the factorisation, the solves, the log-determinant and the diagonal of the inverse
+// O(n·w²) for the factorisation, the solves, the log-determinant and the band of the inverse
 // (Takahashi's recurrences), which a general sparse factorisation does not give.
 namespace calib {
 
@@ -24,6 +24,8 @@ class BandedLdlt {
   double LogDeterminant() const;
   // diag(A⁻¹).
   Eigen::VectorXd InverseDiagonal() const;
+  // A⁻¹ inside the band, stored like `band`: z(d, i) = A⁻¹(i + d, i).
+  Eigen::MatrixXd InverseBand() const;
 
  private:
   Eigen::MatrixXd factor_;  // Row 0: D; rows d ≥ 1: L(i + d, i).

@@ -1,9 +1,12 @@
 #include <calib/core/timing/banded_ldlt.h>
 #include <calib/solvers/timing/latent_time_statistics.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
-#include <functional>
+#include <optional>
+#include <vector>
 
 namespace calib {
 namespace {
@@ -21,32 +24,22 @@ StatusOr<BandedLdlt> FactorWithPrior(const LatentLinearization& lin, const Laten
   return ldlt;
 }
 
-// Minimises f over log σ in [log lo, log hi]: a grid of 9, then golden section around the best.
-double MinimizeLog(const std::function<double(double)>& f, double lo, double hi) {
-  const double a = std::log(lo), b = std::log(hi);
-  constexpr int kGrid = 9;
-  int best = 0;
-  double best_value = INFINITY;
-  for (int i = 0; i < kGrid; ++i) {
-    const double value = f(std::exp(a + (b - a) * i / (kGrid - 1)));
-    if (value < best_value) best_value = value, best = i;
-  }
-  double left = a + (b - a) * std::max(0, best - 1) / (kGrid - 1);
-  double right = a + (b - a) * std::min(kGrid - 1, best + 1) / (kGrid - 1);
-  const double ratio = 0.5 * (std::sqrt(5.0) - 1.0);
-  double x1 = right - ratio * (right - left), x2 = left + ratio * (right - left);
-  double f1 = f(std::exp(x1)), f2 = f(std::exp(x2));
-  for (int i = 0; i < 15; ++i) {
-    if (f1 < f2) {
-      right = x2, x2 = x1, f2 = f1;
-      x1 = right - ratio * (right - left), f1 = f(std::exp(x1));
-    } else {
-      left = x1, x1 = x2, f1 = f2;
-      x2 = left + ratio * (right - left), f2 = f(std::exp(x2));
+// Band matrix (lower band, band(d, i) = H(i + d, i)) times a vector.
+Eigen::VectorXd BandTimes(const Eigen::MatrixXd& band, const Eigen::VectorXd& x) {
+  const Eigen::Index n = band.cols();
+  Eigen::VectorXd y = band.row(0).transpose().cwiseProduct(x);
+  for (Eigen::Index d = 1; d < band.rows(); ++d) {
+    for (Eigen::Index i = 0; i + d < n; ++i) {
+      y(i + d) += band(d, i) * x(i);
+      y(i) += band(d, i) * x(i + d);
     }
   }
-  const double x = f1 < f2 ? x1 : x2;
-  return std::min(f1, f2) <= best_value ? std::exp(x) : std::exp(a + (b - a) * best / (kGrid - 1));
+  return y;
+}
+
+// tr(Z·H) of two symmetric matrices given by their lower bands of the same width.
+double BandTrace(const Eigen::MatrixXd& z, const Eigen::MatrixXd& h) {
+  return 2.0 * z.cwiseProduct(h).sum() - z.row(0).cwiseProduct(h.row(0)).sum();
 }
 
 }  // namespace
@@ -62,12 +55,16 @@ LatentPrior MakeLatentPrior(const LatentLinearization& lin, double offset_s, dou
   return prior;
 }
 
-StatusOr<double> LatentNegLogEvidence(const LatentLinearization& lin, double offset_s,
-                                      const NoiseScales& scales) {
+StatusOr<LatentEvidence> LatentEvidenceWithGradient(const LatentLinearization& lin, double offset_s,
+                                                    const NoiseScales& scales, bool with_gradient) {
   const Eigen::Array3d scale = (lin.noise_sigma.array() / scales.scan.array()).square();
-  double value =
+  LatentEvidence out;
+  out.value =
       scale.matrix().dot(lin.rr_c) + 2.0 * lin.num_intervals * scales.scan.array().log().sum();
-  if (lin.latent_value.size() == 0) return value;
+  // d/d log σ_c: the scan rows scale by σ0/σ_c, so every term in them by −2.
+  for (int c = 0; c < 3; ++c)
+    out.gradient(c) = -2.0 * scale(c) * lin.rr_c(c) + 2.0 * lin.num_intervals;
+  if (lin.latent_value.size() == 0) return out;
   const LatentPrior prior = MakeLatentPrior(lin, offset_s, scales.sensor_s, scales.encoder_s);
   LatentLinearization scaled;
   scaled.h_ll_band = scale(0) * lin.h_ll_band_c[0];
@@ -80,39 +77,158 @@ StatusOr<double> LatentNegLogEvidence(const LatentLinearization& lin, double off
   const Eigen::VectorXd lambda = prior.sigma.array().square().inverse();
   const Eigen::VectorXd dm = prior.mean - lin.latent_value;
   const Eigen::VectorXd u = b - lambda.cwiseProduct(dm);
-  value += dm.dot(lambda.cwiseProduct(dm)) - u.dot(ldlt.Solve(u).col(0));
-  return value + ldlt.LogDeterminant() + 2.0 * prior.sigma.array().log().sum();
+  const Eigen::VectorXd x = ldlt.Solve(u).col(0);
+  out.value += dm.dot(lambda.cwiseProduct(dm)) - u.dot(x) + ldlt.LogDeterminant() +
+               2.0 * prior.sigma.array().log().sum();
+  if (!with_gradient) return out;
+  // With A = Σ s_c H_c + Λ, u = Σ s_c b_c − Λ·dm, x = A⁻¹u and Z = A⁻¹:
+  //   d(−uᵀA⁻¹u) = −2xᵀdu + xᵀdA·x,  d log det A = tr(Z·dA).
+  const Eigen::MatrixXd z = ldlt.InverseBand();
+  for (int c = 0; c < 3; ++c) {
+    const double quadratic = x.dot(BandTimes(lin.h_ll_band_c[c], x));
+    out.gradient(c) += scale(c) * (4.0 * x.dot(lin.b_l_c[c]) - 2.0 * quadratic -
+                                   2.0 * BandTrace(z, lin.h_ll_band_c[c]));
+  }
+  // d/d log σ_i of a prior: dΛ_ii = −2λ_i; the latent's departure from its prior mean is
+  // −(dm_i + x_i), so the terms gather into −2λ_i[(dm_i + x_i)² + Z_ii] + 2 (EM's σ² update).
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    const double departure = dm(i) + x(i);
+    const double term = -2.0 * lambda(i) * (departure * departure + z(0, i)) + 2.0;
+    out.gradient(lin.latent_is_sensor[i] ? 3 : 4) += term;
+  }
+  return out;
 }
+
+StatusOr<double> LatentNegLogEvidence(const LatentLinearization& lin, double offset_s,
+                                      const NoiseScales& scales) {
+  CALIB_ASSIGN_OR_RETURN(const LatentEvidence e,
+                         LatentEvidenceWithGradient(lin, offset_s, scales, false));
+  return e.value;
+}
+
+namespace {
+
+using Vector5d = Eigen::Matrix<double, 5, 1>;
+
+NoiseScales ScalesFromLog(const Vector5d& theta) {
+  NoiseScales s;
+  s.scan = theta.head<3>().array().exp();
+  s.sensor_s = std::exp(theta(3));
+  s.encoder_s = std::exp(theta(4));
+  return s;
+}
+
+// One projected Newton step's direction on the free coordinates not held at a bound: the Hessian
+// by forward differences of the analytic gradient, damped until positive definite.
+template <typename Gradient>
+std::optional<Vector5d> NewtonDirection(const Vector5d& theta, const Vector5d& gradient,
+                                        const std::array<bool, 5>& active,
+                                        const Gradient& gradient_at) {
+  std::vector<int> index;
+  for (int i = 0; i < 5; ++i) {
+    if (active[i]) index.push_back(i);
+  }
+  const int m = static_cast<int>(index.size());
+  if (m == 0) return std::nullopt;
+  constexpr double kStep = 1e-4;
+  Eigen::MatrixXd hessian(m, m);
+  for (int a = 0; a < m; ++a) {
+    Vector5d shifted = theta;
+    shifted(index[a]) += kStep;
+    const std::optional<Vector5d> g = gradient_at(shifted);
+    if (!g) return std::nullopt;
+    for (int b = 0; b < m; ++b) hessian(b, a) = ((*g)(index[b]) - gradient(index[b])) / kStep;
+  }
+  hessian = 0.5 * (hessian + hessian.transpose()).eval();
+  Eigen::VectorXd g(m);
+  for (int a = 0; a < m; ++a) g(a) = gradient(index[a]);
+  double damping = 0.0;
+  for (int attempt = 0; attempt < 30; ++attempt) {
+    Eigen::MatrixXd damped = hessian;
+    damped.diagonal().array() += damping;
+    const Eigen::LLT<Eigen::MatrixXd> llt(damped);
+    if (llt.info() == Eigen::Success) {
+      const Eigen::VectorXd p = -llt.solve(g);
+      Vector5d direction = Vector5d::Zero();
+      for (int a = 0; a < m; ++a) direction(index[a]) = p(a);
+      return direction;
+    }
+    damping = std::max(1e-6 * hessian.diagonal().cwiseAbs().maxCoeff(), 4.0 * damping);
+  }
+  return std::nullopt;
+}
+
+}  // namespace
 
 NoiseScales MaximizeLatentEvidence(const LatentLinearization& lin, double offset_s,
                                    NoiseScales initial, const NoiseScaleFit& fit) {
-  NoiseScales s = initial;
-  const auto evidence = [&](const NoiseScales& trial) {
-    const StatusOr<double> value = LatentNegLogEvidence(lin, offset_s, trial);
-    return value.ok() ? *value : INFINITY;
-  };
   const bool has_sensor = std::find(lin.latent_is_sensor.begin(), lin.latent_is_sensor.end(),
                                     true) != lin.latent_is_sensor.end();
   const bool has_encoder = std::find(lin.latent_is_sensor.begin(), lin.latent_is_sensor.end(),
                                      false) != lin.latent_is_sensor.end();
-  // One coordinate: the scale `value` points at (inside s) over [lo, hi].
-  const auto search = [&](double* value, double lo, double hi) {
-    *value = MinimizeLog(
-        [&](double x) {
-          const double kept = *value;
-          *value = x;
-          const double e = evidence(s);
-          *value = kept;
-          return e;
-        },
-        lo, hi);
-  };
-  for (int sweep = 0; sweep < 2; ++sweep) {
-    for (int c = 0; c < 3 && fit.scan; ++c) search(&s.scan(c), s.scan(c) / 8.0, s.scan(c) * 8.0);
-    if (fit.sensor && has_sensor) search(&s.sensor_s, fit.floor_s, fit.ceiling_s);
-    if (fit.encoder && has_encoder) search(&s.encoder_s, fit.floor_s, fit.ceiling_s);
+  Vector5d theta, lo, hi;
+  std::array<bool, 5> free = {fit.scan, fit.scan, fit.scan, fit.sensor && has_sensor,
+                              fit.encoder && has_encoder};
+  theta << initial.scan.array().log(), std::log(std::max(initial.sensor_s, 1e-300)),
+      std::log(std::max(initial.encoder_s, 1e-300));
+  for (int c = 0; c < 3; ++c) lo(c) = theta(c) - std::log(8.0), hi(c) = theta(c) + std::log(8.0);
+  lo.tail<2>().setConstant(std::log(fit.floor_s));
+  hi.tail<2>().setConstant(std::log(fit.ceiling_s));
+  for (int i = 3; i < 5; ++i) {
+    if (free[i]) theta(i) = std::clamp(theta(i), lo(i), hi(i));
   }
-  return s;
+  const auto evaluate = [&](const Vector5d& at, bool gradient) -> std::optional<LatentEvidence> {
+    StatusOr<LatentEvidence> e =
+        LatentEvidenceWithGradient(lin, offset_s, ScalesFromLog(at), gradient);
+    if (!e.ok() || !std::isfinite(e->value)) return std::nullopt;
+    return *e;
+  };
+  const auto gradient_at = [&](const Vector5d& at) -> std::optional<Vector5d> {
+    const std::optional<LatentEvidence> e = evaluate(at, true);
+    if (!e) return std::nullopt;
+    return e->gradient;
+  };
+  std::optional<LatentEvidence> current = evaluate(theta, true);
+  if (!current) return initial;
+  constexpr double kEdge = 1e-9;
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    // Coordinates at a bound whose gradient points out of the box stay there.
+    std::array<bool, 5> active = free;
+    for (int i = 0; i < 5; ++i) {
+      if ((theta(i) <= lo(i) + kEdge && current->gradient(i) > 0.0) ||
+          (theta(i) >= hi(i) - kEdge && current->gradient(i) < 0.0)) {
+        active[i] = false;
+      }
+    }
+    std::optional<Vector5d> direction =
+        NewtonDirection(theta, current->gradient, active, gradient_at);
+    if (!direction) break;
+    // At most a factor e per step in any σ.
+    const double longest = direction->cwiseAbs().maxCoeff();
+    if (longest > 1.0) *direction /= longest;
+    bool accepted = false;
+    Vector5d moved = theta;
+    for (double t = 1.0; t > 1e-3 && !accepted; t *= 0.5) {
+      moved = (theta + t * *direction).cwiseMax(lo).cwiseMin(hi);
+      for (int i = 0; i < 5; ++i) {
+        if (!free[i]) moved(i) = theta(i);
+      }
+      std::optional<LatentEvidence> trial = evaluate(moved, true);
+      if (trial && trial->value <= current->value + 1e-9 * std::abs(current->value)) {
+        current = trial;
+        accepted = true;
+      }
+    }
+    if (!accepted) break;
+    const double change = (moved - theta).cwiseAbs().maxCoeff();
+    theta = moved;
+    if (change < 1e-3) break;  // 0.1 % in every σ.
+  }
+  NoiseScales out = ScalesFromLog(theta);
+  if (!free[3]) out.sensor_s = initial.sensor_s;
+  if (!free[4]) out.encoder_s = initial.encoder_s;
+  if (!fit.scan) out.scan = initial.scan;
+  return out;
 }
 
 StatusOr<LatentCovariance> MarginalLatentCovariance(const LatentLinearization& lin,

@@ -35,10 +35,18 @@ struct NoiseScales {
 // back into ever freer latents (an incidental-parameter collapse that biases b).
 StatusOr<double> LatentNegLogEvidence(const LatentLinearization& lin, double offset_s,
                                       const NoiseScales& scales);
+// The same with its gradient in (log σ_x, log σ_y, log σ_θ, log σ_sensor, log σ_encoder).
+struct LatentEvidence {
+  double value = 0.0;
+  Eigen::Matrix<double, 5, 1> gradient = Eigen::Matrix<double, 5, 1>::Zero();
+};
+StatusOr<LatentEvidence> LatentEvidenceWithGradient(const LatentLinearization& lin, double offset_s,
+                                                    const NoiseScales& scales, bool with_gradient);
 
-// The scales that maximise the evidence: coordinate-wise searches in log σ (a grid, then golden
-// section), scan noise within [1/8, 8] of the linearisation's, jitters in [floor, ceiling]; those
-// not fitted keep their values.
+// The scales that maximise the evidence, jointly (the scan's rotation noise and the jitters trade
+// off, which coordinate-wise searches resolve only slowly): projected Newton in log σ on the
+// analytic gradient, scan noise within [1/8, 8] of the starting one, jitters in [floor, ceiling];
+// those not fitted keep their values.
 struct NoiseScaleFit {
   bool scan = true, sensor = true, encoder = true;
   double floor_s = 1e-4, ceiling_s = 1.0;

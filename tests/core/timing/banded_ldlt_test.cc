@@ -6,7 +6,7 @@
 namespace calib {
 namespace {
 
-TEST(BandedLdlt, MatchesDenseSolveDeterminantAndInverseDiagonal) {
+TEST(BandedLdlt, MatchesDenseSolveDeterminantAndInverseBand) {
   const int n = 40, w = 3;
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
   std::srand(3);
@@ -25,6 +25,11 @@ TEST(BandedLdlt, MatchesDenseSolveDeterminantAndInverseDiagonal) {
   EXPECT_LT((ldlt.Solve(b) - a.ldlt().solve(b)).cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_NEAR(ldlt.LogDeterminant(), std::log(a.determinant()), 1e-9);
   EXPECT_LT((ldlt.InverseDiagonal() - a.inverse().diagonal()).cwiseAbs().maxCoeff(), 1e-12);
+  const Eigen::MatrixXd inverse = a.inverse();
+  const Eigen::MatrixXd z = ldlt.InverseBand();
+  for (int i = 0; i < n; ++i) {
+    for (int d = 0; d <= w && i + d < n; ++d) EXPECT_NEAR(z(d, i), inverse(i + d, i), 1e-12);
+  }
 }
 
 TEST(BandedLdlt, RejectsIndefinite) {
