@@ -71,6 +71,9 @@ struct LaserDiagnosisOptions {
   // Timing candidates (stamp_jitter) are tested, confirmed and modelled before any physical
   // candidate, so that the physical ones are tested with the timing model in the base.
   bool timing_candidates = true;
+  // The intervals lie between estimated sample times (the latent-time calibration of raw
+  // streams), not between stamps.
+  bool sample_times_estimated = false;
   LaserPlausibility plausibility;
   std::function<void(const std::string&)> progress;
 };

@@ -280,8 +280,12 @@ Status TimingStep(const Context& context, Search* search, LaserDiagnosis* diagno
   }
   f.statement = JitterStatement(f);
   diagnosis->timing_findings.push_back(f);
-  const std::string clusters = DurationClusterNote(context.intervals);
-  if (!clusters.empty()) diagnosis->notes.push_back(clusters);
+  // Between estimated sample times, durations at multiples of the sensor period are skipped
+  // samples, not pick-up quantisation.
+  if (!context.options.sample_times_estimated) {
+    const std::string clusters = DurationClusterNote(context.intervals);
+    if (!clusters.empty()) diagnosis->notes.push_back(clusters);
+  }
   return Status::Ok();
 }
 

@@ -59,8 +59,24 @@ LaserStreams DistinctStreams(const StreamSamples& data) {
     streams.odometry.push_back(s);
   }
   for (const StreamSample& s : data.samples) {
-    streams.sensor_poses.push_back(StampedPose{s.stamp_s + data.origin_s, s.world_T_sensor});
+    streams.sensor_poses.push_back(
+        StampedPose{s.stamp_s + data.origin_s, s.world_T_sensor, s.line});
   }
+  return streams;
+}
+
+// The distinct streams with every sample at its estimated time (encoders at stamp + η_j).
+LaserStreams TimedStreams(const StreamSamples& data, const TimingModelFit& fit) {
+  LaserStreams streams = DistinctStreams(data);
+  for (size_t j = 0; j < streams.odometry.size() && j < fit.state.encoder_latent.size(); ++j) {
+    streams.odometry[j].t_s += fit.state.encoder_latent[j];
+  }
+  for (size_t k = 0; k < streams.sensor_poses.size(); ++k) {
+    streams.sensor_poses[k].t_s = fit.sample_time_s[k] + data.origin_s;
+  }
+  const auto by_time = [](const auto& a, const auto& b) { return a.t_s < b.t_s; };
+  std::stable_sort(streams.odometry.begin(), streams.odometry.end(), by_time);
+  std::stable_sort(streams.sensor_poses.begin(), streams.sensor_poses.end(), by_time);
   return streams;
 }
 
@@ -218,6 +234,7 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
   result.calibration = result.stamps_as_truth;
   FillCalibration(best, options.calibration, &result.calibration);
   FillTiming(data, best, &result);
+  result.timed_streams = TimedStreams(data, best);
   if (!best.converged) {
     result.warnings.push_back("the timing-aware refinement stopped before converging");
   }

@@ -41,6 +41,9 @@ struct LaserTimingResult {
   std::vector<double> sample_time_s, sample_time_stddev_s;  // Per distinct sensor sample.
   std::vector<int> sample_record;  // Its 1-based record in the input sensor stream.
   std::vector<int> sample_line;    // Its line in sensor_poses.csv (0: not from a file).
+  // The distinct samples of both streams at their estimated times (original clock), time-ordered:
+  // the intervals built from them carry the timing model (diagnose searches on them).
+  LaserStreams timed_streams;
   int held_repeats_dropped = 0;
   int intervals = 0;
   // −2 log evidence (Laplace) + 2·globals of each model tried; lower is better.

@@ -106,6 +106,32 @@ TEST_F(CalibCliTest, PickUpStampsNeedTheLatentTimeCalibration) {
   EXPECT_NE(Calib(Calibrate(timing / "clean") + " --timing sometimes").exit_code, 0);
 }
 
+// Diagnose on raw streams estimates the sample times first and searches on the intervals between
+// them: on pick-up stamps it names the timing ("sample_times") and adopts no physics (with the
+// stamps as sample times it took the timing for a time offset and a speed-dependent radius); on
+// the clean control it adopts nothing.
+TEST_F(CalibCliTest, DiagnoseNamesTimingAsTimingOnRawStreams) {
+  const fs::path timing = fs::path(CALIB_SOURCE_DIR) / "data" / "timing";
+  const std::string out = (dir_ / "diagnose.json").string();
+  const auto diagnose = [&](const char* log, const std::string& extra) {
+    const CliRun run =
+        Calib("diagnose --quiet --input " + (timing / log).string() + " --output " + out + extra);
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    return nlohmann::json::parse(ReadFile(out));
+  };
+  nlohmann::json json = diagnose("robot_like", "");
+  EXPECT_EQ(json["final"]["effects"], nlohmann::json::array({"sample_times"}));
+  EXPECT_EQ(json["findings"][0]["effect"], "sample_times");
+  EXPECT_TRUE(json["findings"][0]["significant"].get<bool>());
+  EXPECT_EQ(json["timing"]["treatment"], "latent_times");
+  json = diagnose("clean", "");
+  EXPECT_EQ(json["final"]["effects"], nlohmann::json::array());
+  EXPECT_FALSE(json["findings"][0]["significant"].get<bool>());
+  json = diagnose("robot_like", " --timing off");
+  EXPECT_FALSE(json.contains("timing"));
+  EXPECT_NE(json["final"]["effects"], nlohmann::json::array());
+}
+
 TEST_F(CalibCliTest, EmptyFile) {
   const fs::path path = Write("empty.tuple", "");
   ExpectFailure(Calibrate(path), {"empty.tuple"});

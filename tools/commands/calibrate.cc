@@ -48,10 +48,8 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   if (!format.ok()) return Fail(format.message());
   const StatusOr<RobustLoss> loss = ParseLossFlags(flags.loss, flags.loss_scale);
   if (!loss.ok()) return Fail(loss.message());
-  if (flags.timing != "auto" && flags.timing != "stamps" && flags.timing != "free_running" &&
-      flags.timing != "off") {
-    return Fail("--timing " + flags.timing + ": expected auto, stamps, free_running or off");
-  }
+  const Status timing_flag = CheckTimingFlag(flags.timing);
+  if (!timing_flag.ok()) return Fail(timing_flag.message());
   const Stopwatch clock;
   std::vector<LaserLog> logs;
   for (const std::string& path : SplitCommas(flags.input)) {

@@ -34,6 +34,14 @@ bool IsBearingInput(const std::string& input, const std::string& format) {
   return format == "auto" && IsBearingLogDirectory(input);
 }
 
+Status CheckTimingFlag(const std::string& timing) {
+  if (timing != "auto" && timing != "stamps" && timing != "free_running" && timing != "off") {
+    return Status::InvalidInput("--timing " + timing +
+                                ": expected auto, stamps, free_running or off");
+  }
+  return Status::Ok();
+}
+
 StatusOr<RobustLoss> ParseLossFlags(const std::string& loss, double loss_scale) {
   CALIB_ASSIGN_OR_RETURN(const RobustLoss parsed, ParseRobustLoss(loss));
   if (!(loss_scale > 0.0)) return Status::InvalidInput("--loss_scale must be positive");

@@ -47,6 +47,9 @@ bool IsBearingInput(const std::string& input, const std::string& format);
 // The robust loss named by --loss, with --loss_scale checked positive.
 StatusOr<RobustLoss> ParseLossFlags(const std::string& loss, double loss_scale);
 
+// --timing: auto, stamps, free_running or off.
+Status CheckTimingFlag(const std::string& timing);
+
 // The value named `name` among `choices`, or "unknown --FLAG 'NAME' (EXPECTED)".
 template <typename Enum>
 StatusOr<Enum> ParseChoice(const std::string& flag, const std::string& name,

@@ -1,11 +1,14 @@
 // `calib diagnose`: reads one log, searches for the physics the base model leaves out, writes the
 // contract's OUT.json, the plots and the summary.
 #include <calib/core/laser/laser_log_io.h>
+#include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
 #include <calib/tools/report/bearing_diagnose_report.h>
 #include <calib/tools/report/laser_diagnose_report.h>
+#include <calib/tools/report/latent_timing_report.h>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,17 +25,33 @@ struct DiagnosisWriters {
   std::string (*summary)(const Diagnosis&, const std::string& input, const Plots&);
 };
 
+// `timing`: the latent-time calibration the search ran after (raw streams), or null.
 template <typename Diagnosis>
 int WriteDiagnosis(const DiagnoseOptions& flags, const Diagnosis& diagnosis, const Stopwatch& clock,
-                   const DiagnosisWriters<Diagnosis>& writers) {
+                   const DiagnosisWriters<Diagnosis>& writers,
+                   const LaserTimingResult* timing = nullptr) {
   const std::string plots_dir =
       flags.plots_dir.empty() ? DefaultPlotsDir(flags.output) : flags.plots_dir;
   const StatusOr<Plots> plots = writers.plots(diagnosis, plots_dir);
   if (!plots.ok()) return Fail(plots.message());
   nlohmann::ordered_json json = writers.json(diagnosis, flags.input, *plots);
+  std::string summary = writers.summary(diagnosis, flags.input, *plots);
+  if (timing != nullptr) {
+    // Timing is named first, as timing (and adopted when it changes the calibration).
+    const nlohmann::ordered_json finding = LatentTimingFinding(*timing);
+    json["findings"].insert(json["findings"].begin(), finding);
+    if (finding["significant"].get<bool>()) {
+      json["final"]["effects"].insert(json["final"]["effects"].begin(), "sample_times");
+      json["adopted"].insert(json["adopted"].begin(), "sample_times");
+    }
+    json["timing"]["treatment"] = "latent_times";
+    json["timing"]["latent_times"] = LatentTimingJson(*timing);
+    summary += LatentTimingSummary(*timing) +
+               "  timing: modelled first, as timing: the effects above were searched on the "
+               "intervals between the estimated sample times\n";
+  }
   json["seconds"] = clock.Seconds();
-  return WriteReport(flags.output, json, writers.summary(diagnosis, flags.input, *plots),
-                     flags.quiet);
+  return WriteReport(flags.output, json, summary, flags.quiet);
 }
 
 StatusOr<BoundaryChoice> ParseBoundarySpeeds(const std::string& name) {
@@ -71,13 +90,34 @@ int DiagnoseLaserLog(const DiagnoseOptions& flags) {
   if (!options.ok()) return Fail(options.message());
   const Stopwatch clock;
   options->progress = ProgressPrinter(clock, flags.quiet);
-  const StatusOr<LaserLog> log = ReadLaserLog(flags.input, *format);
+  StatusOr<LaserLog> log = ReadLaserLog(flags.input, *format);
   if (!log.ok()) return Fail(log.message());
+  // Raw streams: their timing (sample times behind the stamps, a free-running sensor clock) is
+  // estimated first, and the search runs on the intervals between the estimated times, so that
+  // a timing artefact is not taken for slip or a speed-dependent radius.
+  std::optional<LaserTimingResult> timing;
+  if (!log->streams.sensor_poses.empty() && flags.timing != "off") {
+    LaserTimingOptions timing_options;
+    timing_options.calibration = options->calibration;
+    timing_options.sensor_clock = flags.timing;
+    StatusOr<LaserTimingResult> result = CalibrateLaserStreams(log->streams, timing_options);
+    if (!result.ok()) {
+      return Fail(flags.input + ": the timing-aware calibration failed: " + result.message() +
+                  " (--timing off searches with the stamps as sample times)");
+    }
+    timing = std::move(result).value();
+    StatusOr<LaserLog> timed = LaserLogFromStreams(timing->timed_streams.odometry,
+                                                   timing->timed_streams.sensor_poses, flags.input);
+    if (!timed.ok()) return Fail(flags.input + ": at the estimated times: " + timed.message());
+    log->intervals = std::move(timed->intervals);
+    options->sample_times_estimated = true;
+  }
   const StatusOr<LaserDiagnosis> diagnosis = DiagnoseLaser(log->intervals, *options);
   if (!diagnosis.ok()) return Fail(flags.input + ": " + diagnosis.message());
   return WriteDiagnosis<LaserDiagnosis>(
       flags, *diagnosis, clock,
-      {&WriteLaserDiagnosisPlots, &LaserDiagnosisJson, &LaserDiagnosisSummary});
+      {&WriteLaserDiagnosisPlots, &LaserDiagnosisJson, &LaserDiagnosisSummary},
+      timing ? &*timing : nullptr);
 }
 
 // One candidate (time_offset) for the bearing problem: --candidates, --max_effects and
@@ -110,6 +150,8 @@ int RunDiagnose(const DiagnoseOptions& options) {
     return Fail("--family_alpha must be in (0, 1)");
   }
   if (options.cv_blocks < 2) return Fail("--cv_blocks must be at least 2");
+  const Status timing = CheckTimingFlag(options.timing);
+  if (!timing.ok()) return Fail(timing.message());
   return IsBearingInput(options.input, options.format) ? DiagnoseBearingLog(options)
                                                        : DiagnoseLaserLog(options);
 }

@@ -18,9 +18,10 @@ DEFINE_double(loss_scale, kDiagnose.loss_scale,
               "Scale of the robust loss, in whitened residual units");
 DEFINE_bool(quiet, kDiagnose.quiet, "Do not print the summary on stdout");
 DEFINE_string(timing, kDiagnose.timing.c_str(),
-              "calibrate (raw laser streams): auto estimates every sample's true time with the "
-              "calibration (the sensor clock model chosen by the data), stamps or free_running "
-              "force that clock model, off takes the stamps as sample times");
+              "calibrate, diagnose (raw laser streams): auto estimates every sample's true time "
+              "with the calibration (the sensor clock model chosen by the data), stamps or "
+              "free_running force that clock model, off takes the stamps as sample times; "
+              "diagnose then searches on the intervals between the estimated times");
 
 // `calib diagnose`.
 DEFINE_double(family_alpha, kDiagnose.family_alpha,

@@ -53,6 +53,37 @@ nlohmann::ordered_json LatentTimingJson(const LaserTimingResult& r) {
   return out;
 }
 
+nlohmann::ordered_json LatentTimingFinding(const LaserTimingResult& r) {
+  int which = 0;
+  const double shift = LargestShift(r, &which);
+  const bool significant = shift > 3.0;
+  char text[400];
+  if (significant) {
+    std::snprintf(text, sizeof(text),
+                  "Timing modelled: the sample times are not the stamps (%s, mean offset %.1f ± "
+                  "%.1f ms); taking the stamps as sample times would move %s by %.1f σ.",
+                  r.sensor_clock == "free_running" ? "a free-running sensor clock picked up late"
+                                                   : "stamp jitter about a common offset",
+                  1e3 * r.time_offset_s, 1e3 * r.time_offset_stddev_s,
+                  kLaserParamNames[which].c_str(), shift);
+  } else {
+    std::snprintf(text, sizeof(text),
+                  "No timing effect: with the sample times estimated, no parameter moves by more "
+                  "than %.1f σ from the calibration that takes the stamps as sample times.",
+                  shift);
+  }
+  nlohmann::ordered_json f;
+  f["effect"] = "sample_times";
+  f["significant"] = significant;
+  f["value"] = r.time_offset_s;
+  f["stddev"] = r.time_offset_stddev_s;
+  f["unit"] = "s";
+  f["statement"] = text;
+  f["sensor_clock"] = r.sensor_clock;
+  f["stamps_as_truth_shift_sigma"] = shift;
+  return f;
+}
+
 std::string LatentTimingSummary(const LaserTimingResult& r) {
   char line[400];
   std::string text;

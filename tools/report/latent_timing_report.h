@@ -15,6 +15,11 @@ namespace calib {
 // stamp-as-truth estimate for comparison. SI units.
 nlohmann::ordered_json LatentTimingJson(const LaserTimingResult& result);
 
+// The timing as a diagnose finding: effect "sample_times" (value: the mean offset of the
+// estimated sample times from their stamps, s; "sensor_clock" stamps or free_running),
+// significant when taking the stamps as sample times would move a parameter by more than 3 σ.
+nlohmann::ordered_json LatentTimingFinding(const LaserTimingResult& result);
+
 // Two or three lines: the model, τ, the jitters or the clock, and how far the stamp-as-truth
 // estimate was from this one.
 std::string LatentTimingSummary(const LaserTimingResult& result);
