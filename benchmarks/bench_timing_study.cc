@@ -211,13 +211,6 @@ std::vector<TimingPattern> Patterns(bool quick) {
       both.logging.encoder_poll_jitter_s * 1e3, both.logging.encoder_stamp_jitter_s * 1e3,
       both.logging.repeat_fraction * 100);
   patterns.push_back(both);
-  for (const TimingPattern& base : {patterns.front(), both}) {
-    TimingPattern chained = base;
-    chained.name = base.name + "_chained";
-    chained.description = base.name + " with chained scan-matcher noise";
-    chained.chained_noise = true;
-    patterns.push_back(chained);
-  }
   return patterns;
 }
 

@@ -39,6 +39,33 @@ class TimePrior : public ceres::SizedCostFunction<1, 1> {
   const double* sigma_;
 };
 
+// A sample's stamp under a free-running clock (t0, P, a) and a common offset τ: the time
+// t = t0 + P·n + a·u² of sample n lies τ from its stamp s with the pick-up scatter σ,
+// r = (t − s − τ)/σ. Linear; σ held by pointer like TimePriorWithOffset's.
+class ClockStampPrior : public ceres::SizedCostFunction<1, 3, 1> {
+ public:
+  ClockStampPrior(double stamp_s, double index, double curvature, const double* sigma_s)
+      : stamp_(stamp_s), index_(index), curvature_(curvature), sigma_(sigma_s) {}
+  bool Evaluate(double const* const* parameters, double* residual,
+                double** jacobians) const override {
+    const double* c = parameters[0];
+    residual[0] = (c[0] + c[1] * index_ + c[2] * curvature_ - stamp_ - parameters[1][0]) / *sigma_;
+    if (jacobians != nullptr) {
+      if (jacobians[0] != nullptr) {
+        jacobians[0][0] = 1.0 / *sigma_;
+        jacobians[0][1] = index_ / *sigma_;
+        jacobians[0][2] = curvature_ / *sigma_;
+      }
+      if (jacobians[1] != nullptr) jacobians[1][0] = -1.0 / *sigma_;
+    }
+    return true;
+  }
+
+ private:
+  double stamp_, index_, curvature_;
+  const double* sigma_;
+};
+
 // The prior of a free-running clock's curvature a (the block (t0, P, a)): r = a/σ_a. A real
 // oscillator's rate error is constant over a log (it is in P); curvature is aging, a millisecond
 // at most, and left free it trades against misassigned sample indices.

@@ -139,10 +139,10 @@ void FillTiming(const StreamSamples& data, const TimingModelFit& fit, LaserTimin
     out->time_offset_s = mean_lag;
     out->time_offset_stddev_s = std::sqrt(
         std::max(0.0, fit.kappa * mean_gradient.dot(cov.block<3, 3>(6, 6) * mean_gradient)));
+    out->sensor_jitter_s = fit.state.sensor_sigma_s;  // The stamps' scatter about the clock.
     out->sensor_period_s = fit.state.clock.period_s;
     out->sensor_period_stddev_s = std::sqrt(std::max(0.0, fit.kappa * cov(7, 7)));
     out->clock_drift_s = fit.state.clock.drift_s;
-    out->sensor_jitter_s = 0.0;
   } else {
     out->sensor_clock = "stamps";
     out->time_offset_s = fit.state.offset_s;

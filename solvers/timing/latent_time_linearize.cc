@@ -15,6 +15,10 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize() const {
   if (model_ == SensorClockModel::kFreeRunning) {
     blocks.push_back(const_cast<double*>(clock_));
     lin.num_globals += 3;
+    if (state_.sensor_sigma_s > 0.0 && estimate_offset_) {
+      blocks.push_back(const_cast<double*>(&offset_));
+      lin.offset_global = lin.num_globals++;
+    }
   } else if (state_.sensor_sigma_s > 0.0 && estimate_offset_) {
     blocks.push_back(const_cast<double*>(&offset_));
     lin.offset_global = lin.num_globals++;
@@ -97,6 +101,24 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize() const {
   }
   if (model_ == SensorClockModel::kFreeRunning) {
     lin.h_gg(8, 8) += 1.0 / (kClockDriftSigmaS * kClockDriftSigmaS);  // The curvature's prior.
+    if (state_.sensor_sigma_s > 0.0) {
+      // The stamp prior: gradient (1, n, u², −1)/σ_s in (t0, P, a, τ).
+      const double w = 1.0 / state_.sensor_sigma_s;
+      for (const int k : ClockSamples()) {
+        const double n = state_.clock_index[k];
+        Eigen::Vector4d g(w, w * n, w * state_.clock.Curvature(n), -w);
+        const double r = (SampleTime(k) - data_.samples[k].stamp_s - offset_) * w;
+        lin.stamp_prior_chi2 += r * r;
+        ++lin.stamp_prior_count;
+        if (lin.offset_global < 0) g(3) = 0.0;
+        const int index[4] = {6, 7, 8, lin.offset_global};
+        for (int a = 0; a < 4; ++a) {
+          for (int b = 0; b < 4; ++b) {
+            if (index[a] >= 0 && index[b] >= 0) lin.h_gg(index[a], index[b]) += g(a) * g(b);
+          }
+        }
+      }
+    }
   }
   for (int c = 0; c < 3; ++c) {
     lin.h_ll_band += lin.h_ll_band_c[c];

@@ -125,6 +125,18 @@ void LatentTimeProblem::AddIntervals() {
   }
   if (model_ == SensorClockModel::kFreeRunning) {
     problem_->AddResidualBlock(new ClockDriftPrior(kClockDriftSigmaS), nullptr, clock_);
+    // The stamps: each sample's clock time lies τ from its stamp, with the pick-up scatter σ_s.
+    if (state_.sensor_sigma_s > 0.0) {
+      problem_->AddParameterBlock(&offset_, 1);
+      if (!estimate_offset_) problem_->SetParameterBlockConstant(&offset_);
+      for (const int k : ClockSamples()) {
+        const double n = state_.clock_index[k];
+        problem_->AddResidualBlock(
+            new ClockStampPrior(data_.samples[k].stamp_s, n, state_.clock.Curvature(n),
+                                &state_.sensor_sigma_s),
+            nullptr, clock_, &offset_);
+      }
+    }
   }
   for (size_t j = 0; j < encoder_used_.size(); ++j) {
     if (!encoder_used_[j]) continue;
@@ -152,6 +164,16 @@ Status LatentTimeProblem::Solve(ceres::Solver::Summary* summary) {
         "value");
   }
   return Status::Ok();
+}
+
+std::vector<int> LatentTimeProblem::ClockSamples() const {
+  std::vector<char> used(data_.samples.size(), 0);
+  for (const int k : data_.interval_start) used[k] = used[k + 1] = 1;
+  std::vector<int> samples;
+  for (size_t k = 0; k < used.size(); ++k) {
+    if (used[k]) samples.push_back(static_cast<int>(k));
+  }
+  return samples;
 }
 
 LatentTimeState LatentTimeProblem::state() const {

@@ -17,10 +17,11 @@
 
 // The laser calibration with latent sample times as one sparse Ceres problem: the six parameters,
 // the sensor sample times (stamp + δ_k with a prior N(τ, σ_s²), or a free-running clock
-// t0 + P·n + a·u²), and the encoder sample times (stamp + η_j, prior N(0, σ_e²)) of the samples
-// that bracket a sensor sample. Each latent touches the one or two intervals at its time, so the
-// normal equations are sparse (SPARSE_NORMAL_CHOLESKY); ordered by time, the latent block is
-// banded, which Linearize() exposes for the jitter estimate and the covariance.
+// t0 + P·n + a·u², each within N(τ, σ_s²) of its stamp), and the encoder sample times (stamp + η_j,
+// prior N(0, σ_e²)) of the samples that bracket a sensor sample. Each latent touches the one or two
+// intervals at its time, so the normal equations are sparse (SPARSE_NORMAL_CHOLESKY); ordered by
+// time, the latent block is banded, which Linearize() exposes for the jitter estimate and the
+// covariance.
 namespace calib {
 
 enum class SensorClockModel { kStamps, kFreeRunning };
@@ -63,6 +64,10 @@ struct LatentLinearization {
   Eigen::Matrix3d odometry_plus_jacobian = Eigen::Matrix3d::Identity();
   LossCorrectionSums loss_sums;  // Over the interval residuals.
   double data_cost = 0.0;        // Ceres cost of the interval residuals (½Σρ).
+  // Clock model: Σr² and count of the stamp prior (t − s − τ)/σ_s, a part of the evidence that
+  // the latents' does not hold (the stamp model has it in its sensor latents' prior).
+  double stamp_prior_chi2 = 0.0;
+  int stamp_prior_count = 0;
 };
 
 class LatentTimeProblem {
@@ -91,6 +96,8 @@ class LatentTimeProblem {
 
  private:
   void AddIntervals();
+  // The samples at the ends of the intervals (those the clock model's stamp prior covers).
+  std::vector<int> ClockSamples() const;
   LatentTimeEnd MakeEnd(int k, std::vector<double*>* blocks, std::vector<int>* sizes) const;
 
   const StreamSamples& data_;

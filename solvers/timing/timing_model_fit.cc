@@ -36,7 +36,13 @@ double RelativeChange(double now, double before) {
 double Score(const TimingModelFit& fit, const NoiseScales& scales) {
   const int timing_globals = fit.model == SensorClockModel::kFreeRunning ? 3 : 1;
   const StatusOr<double> evidence = LatentNegLogEvidence(fit.lin, fit.state.offset_s, scales);
-  return (evidence.ok() ? *evidence : INFINITY) + 2.0 * (timing_globals + 1);
+  double value = (evidence.ok() ? *evidence : INFINITY) + 2.0 * (timing_globals + 1);
+  if (fit.lin.stamp_prior_count > 0) {  // The clock model's stamps, at σ_s = scales.sensor_s.
+    const double ratio = fit.state.sensor_sigma_s / scales.sensor_s;
+    value += fit.lin.stamp_prior_chi2 * ratio * ratio +
+             2.0 * fit.lin.stamp_prior_count * std::log(scales.sensor_s);
+  }
+  return value;
 }
 
 }  // namespace
@@ -50,10 +56,14 @@ LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModel
   const LaserParamVector v = s.calibration.ToVector();
   const Pose2d mounting(v(3), v(4), v(5));
   const Eigen::Vector3d weight = s.noise_sigma.cwiseInverse().cwiseAbs2();
-  std::vector<double> steps(data.samples.size(), 0.0);
-  for (size_t k = 1; k < data.samples.size(); ++k) {
-    const double stamp_step = data.samples[k].stamp_s - data.samples[k - 1].stamp_s;
-    double ratio = stamp_step / period;
+  // Per interval: the stamp step in periods, and the measured motion over the motion the wheels
+  // made between the stamps, trusted where the motion is known to 5 % and the measured motion is
+  // a multiple of the predicted one in every component (not a failed scan match).
+  const size_t n = data.samples.size();
+  std::vector<double> stamp_ratio(n, 0.0), motion_ratio(n, 1.0);
+  std::vector<bool> trusted(n, false);
+  for (size_t k = 1; k < n; ++k) {
+    stamp_ratio[k] = (data.samples[k].stamp_s - data.samples[k - 1].stamp_s) / period;
     double left[2], right[2];
     for (int i = 0; i < 2; ++i) {
       InterpolateWheelAngles(data.encoders, data.samples[k - 1 + i].stamp_s, &left[i], &right[i]);
@@ -64,11 +74,33 @@ LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModel
         Between(data.samples[k - 1].world_T_sensor, data.samples[k].world_T_sensor);
     measured(2) = WrapAngle(measured(2));
     const double information = predicted.dot(weight.cwiseProduct(predicted));
-    // Trusted where the motion is known to 5 % and the measured motion is a multiple of the
-    // predicted one in every component (not a failed scan match).
     const double scale = measured.dot(weight.cwiseProduct(predicted)) / information;
     const Eigen::Vector3d misfit = measured - scale * predicted;
-    if (information > 400.0 && misfit.dot(weight.cwiseProduct(misfit)) < 16.0) ratio *= scale;
+    trusted[k] = information > 400.0 && misfit.dot(weight.cwiseProduct(misfit)) < 16.0;
+    if (trusted[k]) motion_ratio[k] = scale;
+  }
+  // Stamps on a grid of the period (steps within 5 % of whole periods), that never repeat a
+  // sample (a logger's pick-up does when its loop outruns the sensor) and whose steps the motion
+  // confirms (a logger slower than the sensor skips samples: double motion in one stamp step) are
+  // the sample times up to a small scatter. Their steps count the periods; the motion ratio of a
+  // single interval (wheel angles interpolated between polls while the robot accelerates) would
+  // only add errors.
+  std::vector<double> off_grid;
+  int trusted_count = 0, disagreeing = 0;
+  for (size_t k = 1; k < n; ++k) {
+    off_grid.push_back(std::abs(stamp_ratio[k] - std::round(stamp_ratio[k])));
+    trusted_count += trusted[k];
+    disagreeing += trusted[k] && std::abs(motion_ratio[k] - 1.0) > 0.15;  // 1.5 % on exact stamps.
+  }
+  const bool on_grid =
+      !off_grid.empty() && data.held_repeats_dropped == 0 && disagreeing <= 0.05 * trusted_count &&
+      [&] {
+        std::nth_element(off_grid.begin(), off_grid.begin() + off_grid.size() / 2, off_grid.end());
+        return 1.4826 * off_grid[off_grid.size() / 2] < 0.05;
+      }();
+  std::vector<double> steps(n, 0.0);
+  for (size_t k = 1; k < n; ++k) {
+    const double ratio = on_grid ? stamp_ratio[k] : stamp_ratio[k] * motion_ratio[k];
     steps[k] = std::max(1.0, std::round(ratio));
   }
   s.clock_index.assign(data.samples.size(), 0.0);
@@ -82,6 +114,18 @@ LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModel
     s.clock_index = ReassignClockIndices(data, s);
     s.clock = FitSampleClock(s.clock_index, stamps_s);
   }
+  // The stamp prior starts at the scatter of the stamps about the fitted clock.
+  double mean = 0.0, square = 0.0;
+  for (size_t k = 0; k < stamps_s.size(); ++k) {
+    const double lag = s.clock.Time(s.clock_index[k]) - stamps_s[k];
+    mean += lag / stamps_s.size();
+    square += lag * lag / stamps_s.size();
+  }
+  // Only stamps on the grid pin the clock: pick-up stamps name their sample only up to the
+  // skips, and a prior on them would hold the clock to a miscounted set of indices.
+  s.offset_s = mean;
+  s.sensor_sigma_s =
+      on_grid ? std::max(kJitterFloor, std::sqrt(std::max(0.0, square - mean * mean))) : 0.0;
   s.bracket.clear();
   return s;
 }
@@ -122,7 +166,14 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
     what.encoder = fit_encoder;
     what.floor_s = kJitterFloor;
     what.ceiling_s = std::max(ceiling, 2 * kJitterFloor);
-    const NoiseScales next = MaximizeLatentEvidence(fit.lin, fit.state.offset_s, current, what);
+    NoiseScales next = MaximizeLatentEvidence(fit.lin, fit.state.offset_s, current, what);
+    if (model == SensorClockModel::kFreeRunning && fit.lin.stamp_prior_count > 4 &&
+        !options.sensor_jitter_s) {
+      // The clock's pick-up scatter: the RMS of t − s − τ (four clock and offset parameters).
+      const double rms = fit.state.sensor_sigma_s *
+                         std::sqrt(fit.lin.stamp_prior_chi2 / (fit.lin.stamp_prior_count - 4));
+      next.sensor_s = std::clamp(rms, kJitterFloor, what.ceiling_s);
+    }
     const Eigen::Vector3d noise = next.scan;
     bool settled =
         problem.BracketsHold() &&

@@ -103,6 +103,9 @@ TEST_F(CalibCliTest, PickUpStampsNeedTheLatentTimeCalibration) {
           << name;
     }
   }
+  // On clean, the stamps are the sample times of the free-running scanner: its clock is exact.
+  EXPECT_EQ(json["timing"]["latent_times"]["sensor_clock"], "free_running");
+  EXPECT_NEAR(json["timing"]["latent_times"]["sensor_period_s"].get<double>(), 0.0995, 1e-7);
   EXPECT_NE(Calib(Calibrate(timing / "clean") + " --timing sometimes").exit_code, 0);
 }
 
