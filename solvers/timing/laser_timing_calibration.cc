@@ -225,7 +225,10 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
                                 "): the stamp model is used");
     }
   }
-  if (best.model == SensorClockModel::kFreeRunning) {
+  // Stamps on the clock's grid (a stamp prior within 5 % of the period) name every sample.
+  const bool indices_from_stamps = best.state.sensor_sigma_s > 0.0 &&
+                                   best.state.sensor_sigma_s < 0.05 * best.state.clock.period_s;
+  if (best.model == SensorClockModel::kFreeRunning && !indices_from_stamps) {
     result.warnings.push_back(
         "the free-running sensor's sample indices are inferred from the motion and the stamps: "
         "across stretches where the robot stood still a sample time may be whole periods off, "
