@@ -31,8 +31,10 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
                                         const LatentTimeState& initial,
                                         const LaserTimingOptions& options);
 
-// The clock model's starting point from a fit of the stamp model: the clock by the phase of the
-// latent times the data pinned (FitClockByPhase), then indices re-assigned from the stamps.
+// The clock model's starting point from a fit of the stamp model: whole periods per interval
+// (from the stamps where they sit on the period's grid and the motion agrees, else from the ratio
+// of measured to wheel motion), the clock fitted to the stamps, indices re-assigned from them, and
+// for stamps on the grid a stamp prior (τ, σ_s) from their scatter about the clock.
 LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModelFit& stamps);
 
 }  // namespace calib
