@@ -7,6 +7,7 @@
 #include <calib/tools/commands/commands.h>
 #include <calib/tools/report/json_output.h>
 #include <calib/tools/report/laser_report.h>
+#include <calib/tools/report/stream_timing_report.h>
 
 #include <cmath>
 #include <filesystem>
@@ -122,14 +123,7 @@ void AddTimingTruth(const SimulateOptions& flags, const LoggedTimingTruth& timin
   nlohmann::ordered_json logging;
   for (const auto& [name, value] : LoggingFlags(flags)) logging[name] = value;
   (*json)["logging"] = logging;
-  (*json)["timing"] = {{"sensor_rows", timing.sensor_sample_time_s.size()},
-                       {"encoder_rows", timing.encoder_sample_time_s.size()},
-                       {"sensor_duplicates", timing.sensor_duplicates},
-                       {"encoder_duplicates", timing.encoder_duplicates},
-                       {"skipped_samples", timing.skipped_samples},
-                       {"held_samples", timing.held_samples},
-                       {"sensor_sample_time", timing.sensor_sample_time_s},
-                       {"encoder_sample_time", timing.encoder_sample_time_s}};
+  (*json)["timing"] = LoggedTimingTruthJson(timing);
 }
 
 bool EndsWith(const std::string& text, const std::string& suffix) {

@@ -52,4 +52,15 @@ std::string StreamTimingSummary(const std::vector<StreamTiming>& streams) {
   return text;
 }
 
+nlohmann::ordered_json LoggedTimingTruthJson(const LoggedTimingTruth& timing) {
+  return {{"sensor_rows", timing.sensor_sample_time_s.size()},
+          {"encoder_rows", timing.encoder_sample_time_s.size()},
+          {"sensor_duplicates", timing.sensor_duplicates},
+          {"encoder_duplicates", timing.encoder_duplicates},
+          {"skipped_samples", timing.skipped_samples},
+          {"held_samples", timing.held_samples},
+          {"sensor_sample_time", timing.sensor_sample_time_s},
+          {"encoder_sample_time", timing.encoder_sample_time_s}};
+}
+
 }  // namespace calib

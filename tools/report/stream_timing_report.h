@@ -1,6 +1,7 @@
 #ifndef CALIB_TOOLS_REPORT_STREAM_TIMING_REPORT_H_
 #define CALIB_TOOLS_REPORT_STREAM_TIMING_REPORT_H_
 
+#include <calib/core/timing/logging_model.h>
 #include <calib/core/timing/stamp_timing.h>
 
 #include <nlohmann/json.hpp>
@@ -18,6 +19,10 @@ nlohmann::json StreamTimingJson(const std::vector<StreamTiming>& streams);
 // streams whose stamps cannot be sample times or that show a free-running signature. Empty for
 // no streams.
 std::string StreamTimingSummary(const std::vector<StreamTiming>& streams);
+
+// A simulated log's true timing for its truth file ("timing"): row, duplicate, skipped and held
+// counts, and the true time of every written row's sample.
+nlohmann::ordered_json LoggedTimingTruthJson(const LoggedTimingTruth& timing);
 
 }  // namespace calib
 

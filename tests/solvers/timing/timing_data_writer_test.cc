@@ -1,6 +1,7 @@
 // Generators of data/timing's stream logs, disabled: run them with
 // --gtest_also_run_disabled_tests (see data/timing/README.md).
 #include <calib/core/laser/laser_log_io.h>
+#include <calib/tools/report/stream_timing_report.h>
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -61,14 +62,7 @@ nlohmann::ordered_json TruthJson(const TimingRecipe& recipe, const TimingGenerat
                      {"encoder_stamp_jitter", m.encoder_stamp_jitter_s},
                      {"repeat_fraction", m.repeat_fraction}};
   json["stamp_as_truth_biased"] = recipe.biased;
-  json["timing"] = {{"sensor_rows", timing.sensor_sample_time_s.size()},
-                    {"encoder_rows", timing.encoder_sample_time_s.size()},
-                    {"sensor_duplicates", timing.sensor_duplicates},
-                    {"encoder_duplicates", timing.encoder_duplicates},
-                    {"skipped_samples", timing.skipped_samples},
-                    {"held_samples", timing.held_samples},
-                    {"sensor_sample_time", timing.sensor_sample_time_s},
-                    {"encoder_sample_time", timing.encoder_sample_time_s}};
+  json["timing"] = LoggedTimingTruthJson(timing);
   return json;
 }
 
