@@ -51,6 +51,16 @@ class LaserLatentTimeResidual {
 
   template <typename T>
   bool operator()(T const* const* parameters, T* residual) const {
+    T ends[4];
+    AnglesAt(start_, parameters, &ends[0], &ends[1]);
+    AnglesAt(end_, parameters, &ends[2], &ends[3]);
+    FromEndAngles(parameters[0], parameters[1], ends, residual);
+    return true;
+  }
+
+  // The residual from the wheel angles at the ends, (left, right) at t_a then at t_b.
+  template <typename T>
+  void FromEndAngles(const T* odometry, const T* base_T_sensor, const T* ends, T* residual) const {
     const int count = static_cast<int>(interior_left_.size()) + 2;
     T left[kMaxInline], right[kMaxInline];
     std::vector<T> left_heap, right_heap;
@@ -62,29 +72,31 @@ class LaserLatentTimeResidual {
       l = left_heap.data();
       r = right_heap.data();
     }
-    AnglesAt(start_, parameters, &l[0], &r[0]);
+    l[0] = ends[0], r[0] = ends[1];
     for (int i = 0; i + 2 < count; ++i) {
       l[i + 1] = T(interior_left_[i]);
       r[i + 1] = T(interior_right_[i]);
     }
-    AnglesAt(end_, parameters, &l[count - 1], &r[count - 1]);
-    const T* odometry = parameters[0];
+    l[count - 1] = ends[2], r[count - 1] = ends[3];
     const Pose2<T> robot_motion =
         WheelAngleChainDisplacement(odometry[0], odometry[1], odometry[2], l, r, count);
-    const Pose2<T> mounting(parameters[1][0], parameters[1][1], parameters[1][2]);
+    const Pose2<T> mounting(base_T_sensor[0], base_T_sensor[1], base_T_sensor[2]);
     const Pose2<T> predicted = SensorMotionFromRobotMotion(mounting, robot_motion);
     Eigen::Map<Eigen::Matrix<T, 3, 1>> whitened(residual);
     whitened = sqrt_information_->cast<T>() * SensorMotionError(predicted, sensor_motion_);
-    return true;
   }
 
+  const LatentTimeEnd& start() const { return start_; }
+  const LatentTimeEnd& end() const { return end_; }
+
   // `block_sizes` lists the sizes of every block in the order the ends index them.
-  static ceres::CostFunction* Create(const Pose2d& sensor_motion,
-                                     const Eigen::Matrix3d* sqrt_information,
-                                     const LatentTimeEnd& start, const LatentTimeEnd& end,
-                                     std::vector<double> interior_left_rad,
-                                     std::vector<double> interior_right_rad,
-                                     const std::vector<int>& block_sizes) {
+  // By automatic differentiation through the time blocks (the reference for LaserLatentTimeCost).
+  static ceres::CostFunction* CreateAutoDiff(const Pose2d& sensor_motion,
+                                             const Eigen::Matrix3d* sqrt_information,
+                                             const LatentTimeEnd& start, const LatentTimeEnd& end,
+                                             std::vector<double> interior_left_rad,
+                                             std::vector<double> interior_right_rad,
+                                             const std::vector<int>& block_sizes) {
     auto* cost = new ceres::DynamicAutoDiffCostFunction<LaserLatentTimeResidual, kStride>(
         new LaserLatentTimeResidual(sensor_motion, sqrt_information, start, end,
                                     std::move(interior_left_rad), std::move(interior_right_rad)));
@@ -93,10 +105,7 @@ class LaserLatentTimeResidual {
     return cost;
   }
 
- private:
-  static constexpr int kStride = 8;
-  static constexpr int kMaxInline = 16;
-
+  // The time of an end, and the wheel angles there.
   template <typename T>
   static T Time(const LatentTimeEnd& end, T const* const* parameters) {
     if (end.clock) {
@@ -117,6 +126,10 @@ class LaserLatentTimeResidual {
     *left = WheelAngleOnSegment(t, e[0], e[1], end.left_rad[0], end.left_rad[1]);
     *right = WheelAngleOnSegment(t, e[0], e[1], end.right_rad[0], end.right_rad[1]);
   }
+
+ private:
+  static constexpr int kStride = 8;
+  static constexpr int kMaxInline = 16;
 
   Pose2d sensor_motion_;
   const Eigen::Matrix3d* sqrt_information_;

@@ -3,7 +3,6 @@
 #include <calib/solvers/timing/latent_time_problem.h>
 
 #include <algorithm>
-#include <tuple>
 
 namespace calib {
 
@@ -23,27 +22,14 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize() const {
     blocks.push_back(const_cast<double*>(&offset_));
     lin.offset_global = lin.num_globals++;
   }
-  // Latents in time order (stamp order: the latent times keep it up to a few σ).
-  std::vector<std::tuple<double, int, bool>> order;  // (stamp, owner, is sensor)
-  if (model_ == SensorClockModel::kStamps && state_.sensor_sigma_s > 0.0) {
-    for (size_t k = 0; k < sensor_used_.size(); ++k) {
-      if (sensor_used_[k]) order.emplace_back(data_.samples[k].stamp_s, static_cast<int>(k), true);
-    }
-  }
-  for (size_t j = 0; j < encoder_used_.size(); ++j) {
-    if (encoder_used_[j]) order.emplace_back(data_.encoders[j].t_s, static_cast<int>(j), false);
-  }
-  std::sort(order.begin(), order.end());
+  const std::vector<LatentTimeProblem::LatentRef> order = LatentOrder();
   const int num_latents = static_cast<int>(order.size());
   lin.latent_value.resize(num_latents);
   for (int i = 0; i < num_latents; ++i) {
-    const auto& [stamp, owner, sensor] = order[i];
-    lin.latent_is_sensor.push_back(sensor);
-    lin.latent_owner.push_back(owner);
-    double* value = sensor ? const_cast<double*>(&state_.sensor_latent[owner])
-                           : const_cast<double*>(&state_.encoder_latent[owner]);
-    lin.latent_value(i) = *value;
-    blocks.push_back(value);
+    lin.latent_is_sensor.push_back(order[i].sensor);
+    lin.latent_owner.push_back(order[i].owner);
+    lin.latent_value(i) = *order[i].value;
+    blocks.push_back(order[i].value);
   }
 
   ceres::Problem::EvaluateOptions evaluate;

@@ -1,4 +1,4 @@
-#include <calib/problems/laser/laser_latent_time_residual.h>
+#include <calib/problems/laser/laser_latent_time_cost.h>
 #include <calib/problems/positive_manifold.h>
 #include <calib/problems/timing/time_prior_residual.h>
 #include <calib/solvers/common/solver_options.h>
@@ -98,7 +98,7 @@ void LatentTimeProblem::AddIntervals() {
     }
     const Pose2d measured =
         Between(data_.samples[k].world_T_sensor, data_.samples[k + 1].world_T_sensor);
-    ceres::CostFunction* cost = LaserLatentTimeResidual::Create(
+    ceres::CostFunction* cost = LaserLatentTimeCost::Create(
         Pose2d(measured(0), measured(1), WrapAngle(measured(2))), sqrt_information_.get(), start,
         end, std::move(left), std::move(right), sizes);
     interval_costs_.push_back(problem_->AddResidualBlock(cost, loss_.get(), blocks));
@@ -145,7 +145,22 @@ void LatentTimeProblem::AddIntervals() {
   }
 }
 
-Status LatentTimeProblem::Solve(ceres::Solver::Summary* summary) {
+Status LatentTimeProblem::Solve(BandArrowSummary* summary, double cost_tolerance) {
+  std::vector<double*> latents;
+  for (const LatentRef& latent : LatentOrder()) latents.push_back(latent.value);
+  BandArrowOptions settings;
+  settings.max_iterations = options_.max_iterations;
+  settings.num_threads = options_.num_threads;
+  settings.function_tolerance =
+      std::min(1e-6, cost_tolerance / std::max<size_t>(1, interval_costs_.size()));
+  settings.gradient_tolerance = 1e-12;
+  settings.parameter_tolerance = 1e-10;
+  CALIB_RETURN_IF_ERROR(
+      SolveBandArrow(settings, latents, "the timing-aware refinement", problem_.get(), summary));
+  return CheckPositive();
+}
+
+Status LatentTimeProblem::SolveWithCeres(ceres::Solver::Summary* summary, double cost_tolerance) {
   SolverSettings settings;
   // Each latent touches the one or two intervals at its time: sparse normal equations, with
   // SuiteSparse's fill-reducing ordering (Schur elimination does not apply, latents share
@@ -153,17 +168,42 @@ Status LatentTimeProblem::Solve(ceres::Solver::Summary* summary) {
   settings.linear_solver = ceres::SPARSE_NORMAL_CHOLESKY;
   settings.max_iterations = options_.max_iterations;
   settings.num_threads = options_.num_threads;
-  settings.function_tolerance = std::min(1e-6, 0.005 / std::max<size_t>(1, interval_costs_.size()));
+  settings.function_tolerance =
+      std::min(1e-6, cost_tolerance / std::max<size_t>(1, interval_costs_.size()));
   settings.gradient_tolerance = 1e-12;
   settings.parameter_tolerance = 1e-10;
   CALIB_RETURN_IF_ERROR(
       calib::Solve(settings, "the timing-aware refinement", problem_.get(), summary));
+  return CheckPositive();
+}
+
+Status LatentTimeProblem::CheckPositive() const {
   if (!(odometry_[0] > 0.0 && odometry_[1] > 0.0 && odometry_[2] > 0.0)) {
     return Status::NotObservable(
         "the timing-aware refinement drove a wheel radius or the wheelbase to a non-positive "
         "value");
   }
   return Status::Ok();
+}
+
+std::vector<LatentTimeProblem::LatentRef> LatentTimeProblem::LatentOrder() const {
+  std::vector<LatentRef> order;
+  if (model_ == SensorClockModel::kStamps && state_.sensor_sigma_s > 0.0) {
+    for (size_t k = 0; k < sensor_used_.size(); ++k) {
+      if (!sensor_used_[k]) continue;
+      order.push_back({data_.samples[k].stamp_s, static_cast<int>(k), true,
+                       const_cast<double*>(&state_.sensor_latent[k])});
+    }
+  }
+  for (size_t j = 0; j < encoder_used_.size(); ++j) {
+    if (!encoder_used_[j]) continue;
+    order.push_back({data_.encoders[j].t_s, static_cast<int>(j), false,
+                     const_cast<double*>(&state_.encoder_latent[j])});
+  }
+  std::stable_sort(order.begin(), order.end(), [](const LatentRef& a, const LatentRef& b) {
+    return a.stamp_s < b.stamp_s || (a.stamp_s == b.stamp_s && a.owner < b.owner);
+  });
+  return order;
 }
 
 std::vector<int> LatentTimeProblem::ClockSamples() const {

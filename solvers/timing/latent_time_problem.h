@@ -6,6 +6,7 @@
 #include <calib/core/timing/sample_clock.h>
 #include <calib/core/timing/stream_samples.h>
 #include <calib/problems/laser/laser_latent_time_residual.h>
+#include <calib/solvers/common/band_arrow_solver.h>
 #include <calib/solvers/common/robust_covariance.h>
 #include <calib/solvers/laser/laser_refinement.h>
 #include <ceres/ceres.h>
@@ -19,12 +20,18 @@
 // the sensor sample times (stamp + δ_k with a prior N(τ, σ_s²), or a free-running clock
 // t0 + P·n + a·u², each within N(τ, σ_s²) of its stamp), and the encoder sample times (stamp + η_j,
 // prior N(0, σ_e²)) of the samples that bracket a sensor sample. Each latent touches the one or two
-// intervals at its time, so the normal equations are sparse (SPARSE_NORMAL_CHOLESKY); ordered by
-// time, the latent block is banded, which Linearize() exposes for the jitter estimate and the
-// covariance.
+// intervals at its time: ordered by time, the latent block of the normal equations is banded and
+// the six parameters and the clock border it (an arrow). Solve() exploits that, and Linearize()
+// exposes it for the jitter estimate and the covariance.
 namespace calib {
 
 enum class SensorClockModel { kStamps, kFreeRunning };
+
+// The refinement stops once a step gains less than this (whitened χ²/2): the estimate then moved by
+// about a tenth of its σ (as LaserRefinementSettings). The rounds that only re-estimate the noise
+// scales stop at the looser one.
+inline constexpr double kLatentCostTolerance = 0.005;
+inline constexpr double kLatentRoundCostTolerance = 0.2;
 
 // Prior σ of the clock's curvature a (problems/timing/time_prior_residual.h, ClockDriftPrior).
 inline constexpr double kClockDriftSigmaS = 1e-3;
@@ -78,7 +85,12 @@ class LatentTimeProblem {
   LatentTimeProblem(const LatentTimeProblem&) = delete;
   LatentTimeProblem& operator=(const LatentTimeProblem&) = delete;
 
-  Status Solve(ceres::Solver::Summary* summary);
+  // Levenberg–Marquardt on the band-plus-arrow normal equations (solvers/common/band_arrow_solver),
+  // until a step gains less than `cost_tolerance` (whitened χ²/2; relative below 1e-6).
+  Status Solve(BandArrowSummary* summary, double cost_tolerance = kLatentCostTolerance);
+  // The same problem by Ceres' own LM and sparse Cholesky: the reference for the solver above.
+  Status SolveWithCeres(ceres::Solver::Summary* summary,
+                        double cost_tolerance = kLatentCostTolerance);
   LatentTimeState state() const;
   // The latent time of sample k and of encoder sample j.
   double SampleTime(int k) const;
@@ -95,7 +107,17 @@ class LatentTimeProblem {
   const ceres::LossFunction* loss() const { return loss_.get(); }
 
  private:
+  // A latent time's block, in time order (stamp order: the latent times keep it up to a few σ),
+  // which makes the latent block of the normal equations banded.
+  struct LatentRef {
+    double stamp_s;
+    int owner;  // Sample or encoder index.
+    bool sensor;
+    double* value;
+  };
+  std::vector<LatentRef> LatentOrder() const;
   void AddIntervals();
+  Status CheckPositive() const;
   // The samples at the ends of the intervals (those the clock model's stamp prior covers).
   std::vector<int> ClockSamples() const;
   LatentTimeEnd MakeEnd(int k, std::vector<double*>* blocks, std::vector<int>* sizes) const;

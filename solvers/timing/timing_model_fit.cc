@@ -45,6 +45,32 @@ double Score(const TimingModelFit& fit, const NoiseScales& scales) {
   return value;
 }
 
+// The fit's state, errors and statistics at the problem's current point (σ's as they were).
+Status CaptureFit(const StreamSamples& data, const LatentTimeProblem& problem,
+                  TimingModelFit* fit) {
+  fit->state = problem.state();
+  fit->errors = problem.Errors();
+  CALIB_ASSIGN_OR_RETURN(fit->lin, problem.Linearize());
+  const LatentPrior prior = MakeLatentPrior(fit->lin, fit->state.offset_s,
+                                            fit->state.sensor_sigma_s, fit->state.encoder_sigma_s);
+  CALIB_ASSIGN_OR_RETURN(fit->covariance, MarginalLatentCovariance(fit->lin, prior));
+  fit->sample_time_s.clear();
+  for (size_t k = 0; k < data.samples.size(); ++k) {
+    fit->sample_time_s.push_back(problem.SampleTime(static_cast<int>(k)));
+  }
+  fit->score = Score(*fit, NoiseScales{fit->state.noise_sigma, fit->state.sensor_sigma_s,
+                                       fit->state.encoder_sigma_s});
+  return Status::Ok();
+}
+
+Status SolveRound(LatentTimeProblem* problem, double cost_tolerance, TimingModelFit* fit) {
+  BandArrowSummary summary;
+  CALIB_RETURN_IF_ERROR(problem->Solve(&summary, cost_tolerance));
+  fit->iterations += summary.iterations;
+  fit->converged = summary.converged;
+  return Status::Ok();
+}
+
 }  // namespace
 
 LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModelFit& stamps) {
@@ -139,27 +165,20 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
   const bool fit_sensor = model == SensorClockModel::kStamps && !options.sensor_jitter_s;
   const bool fit_encoder = !options.encoder_jitter_s;
   const double ceiling = std::max(data.sensor_period_s, data.encoder_period_s);
-  for (int round = 0; round < std::max(1, options.max_rounds); ++round) {
+  const int rounds = std::max(1, options.max_rounds);
+  for (int round = 0; round < rounds; ++round) {
     LatentTimeProblem problem(data, model, fit.state, options.calibration.refinement,
                               options.estimate_offset);
-    ceres::Solver::Summary summary;
-    CALIB_RETURN_IF_ERROR(problem.Solve(&summary));
-    fit.iterations += static_cast<int>(summary.iterations.size());
-    fit.converged = Converged(summary);
+    // Rounds only re-estimate the σ's, which a looser optimum serves as well; the settled (or
+    // last) round is then polished to the full tolerance.
+    const bool last = round + 1 == rounds;
+    CALIB_RETURN_IF_ERROR(
+        SolveRound(&problem, last ? kLatentCostTolerance : kLatentRoundCostTolerance, &fit));
     fit.rounds = round + 1;
-    fit.state = problem.state();
-    fit.errors = problem.Errors();
-    CALIB_ASSIGN_OR_RETURN(fit.lin, problem.Linearize());
-    const LatentPrior prior = MakeLatentPrior(fit.lin, fit.state.offset_s, fit.state.sensor_sigma_s,
-                                              fit.state.encoder_sigma_s);
-    CALIB_ASSIGN_OR_RETURN(fit.covariance, MarginalLatentCovariance(fit.lin, prior));
-    fit.sample_time_s.clear();
-    for (size_t k = 0; k < data.samples.size(); ++k) {
-      fit.sample_time_s.push_back(problem.SampleTime(static_cast<int>(k)));
-    }
+    CALIB_RETURN_IF_ERROR(CaptureFit(data, problem, &fit));
     // Scan noise and jitters together, by the evidence with the latents integrated out.
-    NoiseScales current{fit.state.noise_sigma, fit.state.sensor_sigma_s, fit.state.encoder_sigma_s};
-    fit.score = Score(fit, current);
+    const NoiseScales current{fit.state.noise_sigma, fit.state.sensor_sigma_s,
+                              fit.state.encoder_sigma_s};
     NoiseScaleFit what;
     what.scan = !options.calibration.noise_sigma;
     what.sensor = fit_sensor;
@@ -187,7 +206,13 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
         fit.state.clock_index = indices;
       }
     }
-    if (settled) break;
+    if (settled) {
+      if (!last) {
+        CALIB_RETURN_IF_ERROR(SolveRound(&problem, kLatentCostTolerance, &fit));
+        CALIB_RETURN_IF_ERROR(CaptureFit(data, problem, &fit));
+      }
+      break;
+    }
     if (!problem.BracketsHold()) fit.state.bracket = problem.Brackets();
     fit.state.noise_sigma = noise;
     fit.state.sensor_sigma_s = next.sensor_s;

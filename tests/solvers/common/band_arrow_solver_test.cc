@@ -1,0 +1,133 @@
+#include <calib/problems/positive_manifold.h>
+#include <calib/solvers/common/band_arrow_solver.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace calib {
+namespace {
+
+// y_i = s·x_i + c (robust: a few outliers), x_{i+1} − x_i = v and a stamp z_i = x_i + noise:
+// latents x_i in a chain (band width 1), a positive global s and a plain global (c, v).
+struct Measurement {
+  Measurement(double y, double sigma) : y(y), sigma(sigma) {}
+  template <typename T>
+  bool operator()(const T* x, const T* scale, const T* shift, T* r) const {
+    r[0] = (scale[0] * x[0] + shift[0] - T(y)) / T(sigma);
+    return true;
+  }
+  double y, sigma;
+};
+
+struct Step {
+  explicit Step(double sigma) : sigma(sigma) {}
+  template <typename T>
+  bool operator()(const T* a, const T* b, const T* shift, T* r) const {
+    r[0] = (b[0] - a[0] - shift[1]) / T(sigma);
+    return true;
+  }
+  double sigma;
+};
+
+struct Stamp {
+  explicit Stamp(double z) : z(z) {}
+  template <typename T>
+  bool operator()(const T* x, T* r) const {
+    r[0] = (x[0] - T(z)) / T(0.2);
+    return true;
+  }
+  double z;
+};
+
+struct Problem {
+  std::vector<double> x;
+  double scale = 1.0;
+  double shift[2] = {0.0, 0.0};
+  ceres::CauchyLoss loss{2.0};
+  ceres::Problem problem;
+  explicit Problem(int n) : problem(Options()) {
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> noise(0.0, 0.05);
+    x.assign(n, 0.0);
+    for (int i = 0; i < n; ++i) {
+      const double truth = 0.3 * i + std::sin(0.1 * i);
+      double y = 2.5 * truth + 1.0 + noise(rng);
+      if (i % 37 == 5) y += 3.0;  // Outliers.
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<Stamp, 1, 1>(new Stamp(truth + 0.2 * noise(rng) / 0.05)),
+          nullptr, &x[i]);
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<Measurement, 1, 1, 1, 2>(new Measurement(y, 0.05)), &loss,
+          &x[i], &scale, shift);
+    }
+    for (int i = 0; i + 1 < n; ++i) {
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Step, 1, 1, 1, 2>(new Step(0.5)),
+                               nullptr, &x[i], &x[i + 1], shift);
+    }
+    problem.SetManifold(&scale, new PositiveManifold<1>());
+  }
+  static ceres::Problem::Options Options() {
+    ceres::Problem::Options o;
+    o.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    return o;
+  }
+  std::vector<double*> Latents() {
+    std::vector<double*> latents;
+    for (double& v : x) latents.push_back(&v);
+    return latents;
+  }
+};
+
+TEST(BandArrowSolverTest, ReachesCeresOptimum) {
+  Problem band(300), reference(300);
+  BandArrowOptions options;
+  options.function_tolerance = 1e-14;
+  options.gradient_tolerance = 1e-12;
+  options.parameter_tolerance = 1e-14;
+  options.max_iterations = 200;
+  BandArrowSummary summary;
+  ASSERT_TRUE(SolveBandArrow(options, band.Latents(), "test", &band.problem, &summary).ok());
+  EXPECT_TRUE(summary.converged);
+  EXPECT_EQ(summary.band_width, 1);
+  EXPECT_LT(summary.final_cost, summary.initial_cost);
+
+  ceres::Solver::Options ceres_options;
+  ceres_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  ceres_options.function_tolerance = 1e-15;
+  ceres_options.gradient_tolerance = 1e-14;
+  ceres_options.parameter_tolerance = 1e-15;
+  ceres_options.max_num_iterations = 500;
+  ceres::Solver::Summary ceres_summary;
+  ceres::Solve(ceres_options, &reference.problem, &ceres_summary);
+  EXPECT_NEAR(summary.final_cost, ceres_summary.final_cost, 1e-8 * ceres_summary.final_cost);
+  EXPECT_NEAR(band.scale, reference.scale, 1e-7);
+  EXPECT_NEAR(band.shift[0], reference.shift[0], 1e-6);
+  EXPECT_NEAR(band.shift[1], reference.shift[1], 1e-7);
+  for (size_t i = 0; i < band.x.size(); ++i) EXPECT_NEAR(band.x[i], reference.x[i], 1e-6);
+  EXPECT_NEAR(band.scale, 2.5, 0.01);
+}
+
+TEST(BandArrowSolverTest, ConstantBlocksStayPut) {
+  Problem band(100);
+  band.problem.SetParameterBlockConstant(&band.scale);
+  band.x[10] = 0.123;
+  band.problem.SetParameterBlockConstant(&band.x[10]);
+  BandArrowSummary summary;
+  ASSERT_TRUE(
+      SolveBandArrow(BandArrowOptions(), band.Latents(), "test", &band.problem, &summary).ok());
+  EXPECT_EQ(band.scale, 1.0);
+  EXPECT_EQ(band.x[10], 0.123);
+  EXPECT_LT(summary.final_cost, summary.initial_cost);
+}
+
+TEST(BandArrowSolverTest, RejectsLatentThatIsNotAScalar) {
+  Problem band(20);
+  const Status status =
+      SolveBandArrow(BandArrowOptions(), {band.shift}, "test", &band.problem, nullptr);
+  EXPECT_FALSE(status.ok());
+}
+
+}  // namespace
+}  // namespace calib

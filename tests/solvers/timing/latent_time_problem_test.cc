@@ -1,0 +1,75 @@
+#include <calib/core/laser/laser_simulator.h>
+#include <calib/core/timing/stream_samples.h>
+#include <calib/solvers/timing/latent_time_problem.h>
+#include <gtest/gtest.h>
+
+#include "tests/solvers/timing/perturbed_streams.h"
+
+namespace calib {
+namespace {
+
+// The band-arrow solve and Ceres' own LM (sparse Cholesky) reach the same optimum of the same
+// problem, for both sensor clock models.
+void ExpectSameOptimum(SensorClockModel model) {
+  LaserSimOptions o;
+  o.num_intervals = 400;
+  o.mean_interval_s = 0.0995;
+  o.interval_jitter_s = 0.0;
+  o.max_wheel_speed = 3.0;
+  o.scan_noise_sigma = Eigen::Vector3d(0.0005, 0.0005, 0.001);
+  o.seed = 5;
+  LaserSimTruth truth;
+  LaserStreams streams = SimulateLaserStreams(o, 50.0, &truth);
+  test::ScatterEncoderStamps(&streams, 0.004, 11);
+  if (model == SensorClockModel::kStamps) test::ScatterSensorStamps(&streams, 0.005, 0.01, 12);
+  const StatusOr<StreamSamples> data =
+      BuildStreamSamples(streams.odometry, streams.sensor_poses, "test");
+  ASSERT_TRUE(data.ok()) << data.message();
+
+  LatentTimeState state;
+  state.calibration.odometry = truth.odometry;
+  state.calibration.base_T_sensor = truth.base_T_sensor;
+  state.noise_sigma = o.scan_noise_sigma;
+  state.sensor_sigma_s = 0.005;
+  state.encoder_sigma_s = 0.004;
+  if (model == SensorClockModel::kFreeRunning) {
+    state.clock_index.clear();
+    std::vector<double> stamps;
+    for (size_t k = 0; k < data->samples.size(); ++k) {
+      state.clock_index.push_back(static_cast<double>(k));
+      stamps.push_back(data->samples[k].stamp_s);
+    }
+    state.clock = FitSampleClock(state.clock_index, stamps);
+    state.sensor_sigma_s = 1e-4;
+  }
+  LaserRefinementOptions options;
+  options.num_threads = 2;
+  LatentTimeProblem band(*data, model, state, options, true);
+  LatentTimeProblem reference(*data, model, state, options, true);
+  BandArrowSummary band_summary;
+  ceres::Solver::Summary ceres_summary;
+  ASSERT_TRUE(band.Solve(&band_summary, 1e-6).ok());
+  ASSERT_TRUE(reference.SolveWithCeres(&ceres_summary, 1e-6).ok());
+  EXPECT_TRUE(band_summary.converged);
+  EXPECT_NEAR(band_summary.final_cost, ceres_summary.final_cost, 1e-4);
+  const LatentTimeState a = band.state(), b = reference.state();
+  // σ of the six parameters on such a log: ~1e-5 m for the lengths, ~1e-3 rad for the angle.
+  const LaserParamVector difference = a.calibration.ToVector() - b.calibration.ToVector();
+  EXPECT_LT(difference.head<5>().cwiseAbs().maxCoeff(), 5e-7) << difference.transpose();
+  EXPECT_LT(std::abs(difference(5)), 2e-4);
+  for (size_t k = 0; k < data->samples.size(); ++k) {
+    EXPECT_NEAR(band.SampleTime(static_cast<int>(k)), reference.SampleTime(static_cast<int>(k)),
+                2e-4);
+  }
+}
+
+TEST(LatentTimeProblemTest, BandArrowSolveMatchesCeresStampModel) {
+  ExpectSameOptimum(SensorClockModel::kStamps);
+}
+
+TEST(LatentTimeProblemTest, BandArrowSolveMatchesCeresClockModel) {
+  ExpectSameOptimum(SensorClockModel::kFreeRunning);
+}
+
+}  // namespace
+}  // namespace calib
