@@ -145,25 +145,10 @@ void LatentTimeProblem::AddIntervals() {
   }
 }
 
-Status LatentTimeProblem::Solve(BandArrowSummary* summary, double cost_tolerance) {
-  std::vector<double*> latents;
-  for (const LatentRef& latent : LatentOrder()) latents.push_back(latent.value);
-  BandArrowOptions settings;
-  settings.max_iterations = options_.max_iterations;
-  settings.num_threads = options_.num_threads;
-  settings.function_tolerance =
-      std::min(1e-6, cost_tolerance / std::max<size_t>(1, interval_costs_.size()));
-  settings.gradient_tolerance = 1e-12;
-  settings.parameter_tolerance = 1e-10;
-  CALIB_RETURN_IF_ERROR(
-      SolveBandArrow(settings, latents, "the timing-aware refinement", problem_.get(), summary));
-  return CheckPositive();
-}
-
-Status LatentTimeProblem::SolveWithCeres(ceres::Solver::Summary* summary, double cost_tolerance) {
+SolverSettings LatentTimeProblem::Settings(double cost_tolerance) const {
   SolverSettings settings;
-  // Each latent touches the one or two intervals at its time: sparse normal equations, with
-  // SuiteSparse's fill-reducing ordering (Schur elimination does not apply, latents share
+  // For Ceres: each latent touches the one or two intervals at its time, sparse normal equations
+  // with SuiteSparse's fill-reducing ordering (Schur elimination does not apply, latents share
   // residuals with each other).
   settings.linear_solver = ceres::SPARSE_NORMAL_CHOLESKY;
   settings.max_iterations = options_.max_iterations;
@@ -172,8 +157,27 @@ Status LatentTimeProblem::SolveWithCeres(ceres::Solver::Summary* summary, double
       std::min(1e-6, cost_tolerance / std::max<size_t>(1, interval_costs_.size()));
   settings.gradient_tolerance = 1e-12;
   settings.parameter_tolerance = 1e-10;
+  return settings;
+}
+
+Status LatentTimeProblem::Solve(BandArrowSummary* summary, double cost_tolerance) {
+  std::vector<double*> latents;
+  for (const LatentRef& latent : LatentOrder()) latents.push_back(latent.value);
+  const SolverSettings settings = Settings(cost_tolerance);
+  BandArrowOptions band;
+  band.max_iterations = settings.max_iterations;
+  band.num_threads = settings.num_threads;
+  band.function_tolerance = settings.function_tolerance;
+  band.gradient_tolerance = settings.gradient_tolerance;
+  band.parameter_tolerance = settings.parameter_tolerance;
   CALIB_RETURN_IF_ERROR(
-      calib::Solve(settings, "the timing-aware refinement", problem_.get(), summary));
+      SolveBandArrow(band, latents, "the timing-aware refinement", problem_.get(), summary));
+  return CheckPositive();
+}
+
+Status LatentTimeProblem::SolveWithCeres(ceres::Solver::Summary* summary, double cost_tolerance) {
+  CALIB_RETURN_IF_ERROR(calib::Solve(Settings(cost_tolerance), "the timing-aware refinement",
+                                     problem_.get(), summary));
   return CheckPositive();
 }
 

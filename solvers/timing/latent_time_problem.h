@@ -8,6 +8,7 @@
 #include <calib/problems/laser/laser_latent_time_residual.h>
 #include <calib/solvers/common/band_arrow_solver.h>
 #include <calib/solvers/common/robust_covariance.h>
+#include <calib/solvers/common/solver_options.h>
 #include <calib/solvers/laser/laser_refinement.h>
 #include <ceres/ceres.h>
 
@@ -118,6 +119,7 @@ class LatentTimeProblem {
   std::vector<LatentRef> LatentOrder() const;
   void AddIntervals();
   Status CheckPositive() const;
+  SolverSettings Settings(double cost_tolerance) const;
   // The samples at the ends of the intervals (those the clock model's stamp prior covers).
   std::vector<int> ClockSamples() const;
   LatentTimeEnd MakeEnd(int k, std::vector<double*>* blocks, std::vector<int>* sizes) const;
