@@ -62,8 +62,9 @@ class BandArrowProblem {
   bool Evaluate(ArrowSystem* system, int num_threads, double* cost) const;
   bool EvaluateRange(size_t begin, size_t end, ArrowSystem* system, double* cost) const;
   // Δ from (H + λD)Δ = −g; false when the damped system is not positive definite.
+  // `global_step` is √(Δ_gᵀ S Δ_g), S the Schur complement of the latents.
   bool Step(const ArrowSystem& system, double lambda, Eigen::VectorXd* delta_g,
-            Eigen::VectorXd* delta_l, double* model_decrease) const;
+            Eigen::VectorXd* delta_l, double* model_decrease, double* global_step) const;
   void Save() const;
   void Restore() const;
   void Apply(const Eigen::VectorXd& delta_g, const Eigen::VectorXd& delta_l) const;
@@ -239,7 +240,8 @@ bool BandArrowProblem::EvaluateRange(size_t begin, size_t end, ArrowSystem* syst
 }
 
 bool BandArrowProblem::Step(const ArrowSystem& system, double lambda, Eigen::VectorXd* delta_g,
-                            Eigen::VectorXd* delta_l, double* model_decrease) const {
+                            Eigen::VectorXd* delta_l, double* model_decrease,
+                            double* global_step) const {
   // Marquardt's scaling, clamped as Ceres does.
   const Eigen::VectorXd d_g = system.h_gg.diagonal().cwiseMax(1e-6).cwiseMin(1e32);
   const Eigen::VectorXd d_l = system.band.row(0).transpose().cwiseMax(1e-6).cwiseMin(1e32);
@@ -256,10 +258,13 @@ bool BandArrowProblem::Step(const ArrowSystem& system, double lambda, Eigen::Vec
     y = ldlt.Solve(system.g_l);
   }
   *delta_g = Eigen::VectorXd::Zero(globals_);
+  *global_step = 0.0;
   if (globals_ > 0) {
-    const Eigen::LDLT<Eigen::MatrixXd> schur(c - system.h_lg.transpose() * x);
+    const Eigen::MatrixXd s = c - system.h_lg.transpose() * x;
+    const Eigen::LDLT<Eigen::MatrixXd> schur(s);
     if (schur.info() != Eigen::Success || !(schur.vectorD().array() > 0.0).all()) return false;
     *delta_g = -schur.solve(system.g_g - system.h_lg.transpose() * y);
+    *global_step = std::sqrt(std::max(0.0, delta_g->dot(s * *delta_g)));
   }
   *delta_l = -(y + x * *delta_g);
   if (!delta_g->allFinite() || !delta_l->allFinite()) return false;
@@ -320,7 +325,8 @@ Status SolveBandArrow(const BandArrowOptions& options, const std::vector<double*
   }
   out.initial_cost = cost;
   double lambda = 1e-4, nu = 2.0;
-  bool fresh = true;  // `system` is at the current point.
+  bool fresh = true;        // `system` is at the current point.
+  int settled_globals = 0;  // Accepted steps in a row below options.global_step_tolerance.
   for (; out.iterations < options.max_iterations && !out.converged; ++out.iterations) {
     if (!fresh && !arrow.Evaluate(&system, options.num_threads, &cost)) {
       return Status::NotConverged(what + " failed: the Jacobian could not be evaluated");
@@ -332,8 +338,8 @@ Status SolveBandArrow(const BandArrowOptions& options, const std::vector<double*
       break;
     }
     Eigen::VectorXd delta_g, delta_l;
-    double model_decrease = 0.0;
-    if (!arrow.Step(system, lambda, &delta_g, &delta_l, &model_decrease) ||
+    double model_decrease = 0.0, global_step = 0.0;
+    if (!arrow.Step(system, lambda, &delta_g, &delta_l, &model_decrease, &global_step) ||
         !(model_decrease > 0.0)) {
       lambda *= nu, nu *= 2.0;
       continue;
@@ -366,7 +372,8 @@ Status SolveBandArrow(const BandArrowOptions& options, const std::vector<double*
       fresh = false;
       lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * ratio - 1.0, 3));
       nu = 2.0;
-      out.converged = decrease <= options.function_tolerance * cost;
+      settled_globals = global_step < options.global_step_tolerance ? settled_globals + 1 : 0;
+      out.converged = decrease <= options.function_tolerance * cost || settled_globals >= 2;
     } else {
       arrow.Restore();
       lambda *= nu, nu *= 2.0;

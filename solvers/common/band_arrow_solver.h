@@ -25,6 +25,10 @@ struct BandArrowOptions {
   double function_tolerance = 1e-6;   // Relative cost decrease of an accepted step.
   double gradient_tolerance = 1e-10;  // max |∇cost| in tangent coordinates.
   double parameter_tolerance = 1e-10;
+  // When positive, also converged once two accepted steps in a row move the globals by less than
+  // this, in σ of their information with the latents marginalised (the Schur complement): the
+  // globals have settled while the latents may still creep.
+  double global_step_tolerance = 0.0;
   int num_threads = 1;
 };
 

@@ -36,6 +36,10 @@ LaserParamMatrix ParameterCovariance(const TimingModelFit& fit) {
 // The free-running clock model is adopted in auto mode only within this many σ of the stamp
 // model (its scores can favour it with a few misassigned sample indices).
 constexpr double kClockAgreement = 2.0;
+// Scores (−2 log evidence) closer than this are compared only after both models are polished: the
+// rounds stop at a cost gain of kLatentRoundCostTolerance per interval, well inside it on the logs
+// tried.
+constexpr double kPolishBothMargin = 50.0;
 
 // The largest change of the six parameters between two fits, in σ of both combined.
 double ParameterShift(const TimingModelFit& a, const TimingModelFit& b) {
@@ -187,8 +191,13 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
   LatentTimeState initial;
   initial.calibration = result.stamps_as_truth.estimate;
   initial.noise_sigma = result.stamps_as_truth.noise_sigma.front();
-  initial.sensor_sigma_s = options.sensor_jitter_s.value_or(0.25 * data.sensor_period_s);
-  initial.encoder_sigma_s = options.encoder_jitter_s.value_or(0.1 * data.encoder_period_s);
+  std::vector<double> sensor_stamps, encoder_stamps;
+  for (const StreamSample& s : data.samples) sensor_stamps.push_back(s.stamp_s);
+  for (const EncoderSample& e : data.encoders) encoder_stamps.push_back(e.t_s);
+  initial.sensor_sigma_s =
+      options.sensor_jitter_s.value_or(StartingJitter(sensor_stamps, data.sensor_period_s));
+  initial.encoder_sigma_s =
+      options.encoder_jitter_s.value_or(StartingJitter(encoder_stamps, data.encoder_period_s));
   const bool try_stamps = options.sensor_clock != "free_running";
   const bool try_clock = options.sensor_clock == "free_running" ||
                          (options.sensor_clock == "auto" && ClockCandidate(data));
@@ -201,6 +210,14 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
     LatentTimeState clock_start = ClockStartFromTimes(data, best);
     StatusOr<TimingModelFit> clock =
         FitTimingModel(data, SensorClockModel::kFreeRunning, clock_start, options);
+    // The rounds' looser optimum ranks the two models unless their scores are close; then both
+    // are polished first.
+    if (clock.ok() && try_stamps && std::abs(clock->score - best.score) < kPolishBothMargin) {
+      CALIB_RETURN_IF_ERROR(PolishTimingModel(data, options, &best));
+      result.stamps_score = best.score;
+      const Status polished = PolishTimingModel(data, options, &*clock);
+      if (!polished.ok()) clock = polished;
+    }
     if (clock.ok()) {
       result.free_running_score = clock->score;
       result.rounds += clock->rounds;
@@ -224,6 +241,12 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
       result.warnings.push_back("the free-running clock model failed (" + clock.message() +
                                 "): the stamp model is used");
     }
+  }
+  if (!best.polished) CALIB_RETURN_IF_ERROR(PolishTimingModel(data, options, &best));
+  if (best.model == SensorClockModel::kStamps) {
+    result.stamps_score = best.score;
+  } else {
+    result.free_running_score = best.score;
   }
   // Stamps on the clock's grid (a stamp prior within 5 % of the period) name every sample.
   const bool indices_from_stamps = best.state.sensor_sigma_s > 0.0 &&

@@ -160,7 +160,8 @@ SolverSettings LatentTimeProblem::Settings(double cost_tolerance) const {
   return settings;
 }
 
-Status LatentTimeProblem::Solve(BandArrowSummary* summary, double cost_tolerance) {
+Status LatentTimeProblem::Solve(BandArrowSummary* summary, double cost_tolerance,
+                                double global_step_tolerance, int max_iterations) {
   std::vector<double*> latents;
   for (const LatentRef& latent : LatentOrder()) latents.push_back(latent.value);
   const SolverSettings settings = Settings(cost_tolerance);
@@ -170,6 +171,8 @@ Status LatentTimeProblem::Solve(BandArrowSummary* summary, double cost_tolerance
   band.function_tolerance = settings.function_tolerance;
   band.gradient_tolerance = settings.gradient_tolerance;
   band.parameter_tolerance = settings.parameter_tolerance;
+  band.global_step_tolerance = global_step_tolerance;
+  if (max_iterations > 0) band.max_iterations = std::min(band.max_iterations, max_iterations);
   CALIB_RETURN_IF_ERROR(
       SolveBandArrow(band, latents, "the timing-aware refinement", problem_.get(), summary));
   return CheckPositive();

@@ -33,6 +33,12 @@ enum class SensorClockModel { kStamps, kFreeRunning };
 // scales stop at the looser one.
 inline constexpr double kLatentCostTolerance = 0.005;
 inline constexpr double kLatentRoundCostTolerance = 0.2;
+// Those rounds also stop once the six parameters and the clock have settled to this many σ (their
+// information with the latents marginalised), while latents far from them may still creep.
+inline constexpr double kLatentRoundGlobalStep = 0.05;
+// And after at most this many iterations: a latent far out on an outlier can creep for dozens more
+// while the globals hardly move.
+inline constexpr int kLatentRoundMaxIterations = 12;
 
 // Prior σ of the clock's curvature a (problems/timing/time_prior_residual.h, ClockDriftPrior).
 inline constexpr double kClockDriftSigmaS = 1e-3;
@@ -87,8 +93,11 @@ class LatentTimeProblem {
   LatentTimeProblem& operator=(const LatentTimeProblem&) = delete;
 
   // Levenberg–Marquardt on the band-plus-arrow normal equations (solvers/common/band_arrow_solver),
-  // until a step gains less than `cost_tolerance` (whitened χ²/2; relative below 1e-6).
-  Status Solve(BandArrowSummary* summary, double cost_tolerance = kLatentCostTolerance);
+  // until a step gains less than `cost_tolerance` (whitened χ²/2; relative below 1e-6) or, when
+  // `global_step_tolerance` is positive, two steps in a row move the globals by less than it (σ);
+  // at most `max_iterations` when positive, else the refinement options' limit.
+  Status Solve(BandArrowSummary* summary, double cost_tolerance = kLatentCostTolerance,
+               double global_step_tolerance = 0.0, int max_iterations = 0);
   // The same problem by Ceres' own LM and sparse Cholesky: the reference for the solver above.
   Status SolveWithCeres(ceres::Solver::Summary* summary,
                         double cost_tolerance = kLatentCostTolerance);

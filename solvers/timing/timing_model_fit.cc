@@ -1,5 +1,7 @@
 #include <calib/core/timing/encoder_integration.h>
+#include <calib/core/timing/stamp_timing.h>
 #include <calib/solvers/common/solver_options.h>
+#include <calib/solvers/timing/clock_indices.h>
 #include <calib/solvers/timing/timing_model_fit.h>
 
 #include <algorithm>
@@ -11,25 +13,45 @@ namespace {
 // Jitter σ's are searched in [kJitterFloor, period]: below 0.1 ms no log can tell them from 0.
 constexpr double kJitterFloor = 1e-4;
 
-// Pick-up stamps lag their sample by [c, c + P) with c the logger's fixed delay (≥ 0 up to its
-// jitter): c is estimated as a low quantile of the lags, and each index is the sample whose time
-// lies in that window before its stamp.
-std::vector<double> ReassignClockIndices(const StreamSamples& data, const LatentTimeState& s) {
-  std::vector<double> lags, stamps;
-  for (size_t k = 0; k < data.samples.size(); ++k) {
-    stamps.push_back(data.samples[k].stamp_s);
-    lags.push_back(stamps.back() - s.clock.Time(s.clock_index[k]));
-  }
-  std::vector<double> sorted = lags;
-  const size_t q = sorted.size() / 50;
-  std::nth_element(sorted.begin(), sorted.begin() + q, sorted.end());
-  SampleClock shifted = s.clock;
-  shifted.t0_s += sorted[q] - 0.02 * s.clock.period_s;
-  return ClockIndicesFromStamps(stamps, shifted);
-}
-
 double RelativeChange(double now, double before) {
   return std::abs(now - before) / std::max(std::abs(now), 1e-12);
+}
+
+NoiseScales ScalesOf(const LatentTimeState& s) {
+  return NoiseScales{s.noise_sigma, s.sensor_sigma_s, s.encoder_sigma_s};
+}
+
+// The σ's have settled: scan noise within 3 %, jitters within 10 %.
+bool ScalesSettled(const NoiseScales& before, const NoiseScales& now) {
+  return ((now.scan - before.scan).cwiseQuotient(now.scan)).cwiseAbs().maxCoeff() < 0.03 &&
+         RelativeChange(now.sensor_s, before.sensor_s) < 0.1 &&
+         RelativeChange(now.encoder_s, before.encoder_s) < 0.1;
+}
+
+// Aitken's extrapolation of the σ update, per σ in log: from x0 → x1 = F(x0) → x2 = F(x1) with
+// steps shrinking by q = Δ2/Δ1 ∈ (0, 0.75], the fixed point x2 + Δ2·q/(1 − q). The rounds'
+// update converges linearly: the stamps-as-truth scan noise, inflated by the timing, takes four or
+// five rounds to shed (re-solving the globals inside the evidence was tried and changed little).
+double ExtrapolateLog(double x0, double x1, double x2) {
+  if (!(x0 > 0.0 && x1 > 0.0 && x2 > 0.0)) return x2;
+  const double d1 = std::log(x1 / x0), d2 = std::log(x2 / x1);
+  if (!(d1 * d2 > 0.0) || std::abs(d2) >= std::abs(d1)) return x2;
+  const double q = std::min(d2 / d1, 0.75);
+  return x2 * std::exp(d2 * q / (1.0 - q));
+}
+
+NoiseScales ExtrapolateScales(const NoiseScales& x0, const NoiseScales& x1, const NoiseScales& x2,
+                              const NoiseScaleFit& what) {
+  NoiseScales out = x2;
+  if (what.scan) {
+    for (int c = 0; c < 3; ++c) out.scan(c) = ExtrapolateLog(x0.scan(c), x1.scan(c), x2.scan(c));
+  }
+  const auto jitter = [&](double a, double b, double c) {
+    return std::clamp(ExtrapolateLog(a, b, c), what.floor_s, what.ceiling_s);
+  };
+  if (what.sensor) out.sensor_s = jitter(x0.sensor_s, x1.sensor_s, x2.sensor_s);
+  if (what.encoder) out.encoder_s = jitter(x0.encoder_s, x1.encoder_s, x2.encoder_s);
+  return out;
 }
 
 // −2 log evidence (Laplace, latents integrated out) + 2·(timing globals + 1).
@@ -63,15 +85,12 @@ Status CaptureFit(const StreamSamples& data, const LatentTimeProblem& problem,
   return Status::Ok();
 }
 
-Status SolveRound(LatentTimeProblem* problem, double cost_tolerance, TimingModelFit* fit) {
-  BandArrowSummary summary;
-  CALIB_RETURN_IF_ERROR(problem->Solve(&summary, cost_tolerance));
-  fit->iterations += summary.iterations;
-  fit->converged = summary.converged;
-  return Status::Ok();
-}
-
 }  // namespace
+
+double StartingJitter(const std::vector<double>& stamps_s, double period_s) {
+  const StreamTiming timing = AnalyzeStreamTiming(stamps_s);
+  return std::clamp(2.0 * timing.jitter_s, kJitterFloor, std::max(kJitterFloor, 0.25 * period_s));
+}
 
 LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModelFit& stamps) {
   LatentTimeState s = stamps.state;
@@ -162,29 +181,26 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
   TimingModelFit fit;
   fit.model = model;
   fit.state = initial;
-  const bool fit_sensor = model == SensorClockModel::kStamps && !options.sensor_jitter_s;
-  const bool fit_encoder = !options.encoder_jitter_s;
-  const double ceiling = std::max(data.sensor_period_s, data.encoder_period_s);
-  const int rounds = std::max(1, options.max_rounds);
-  for (int round = 0; round < rounds; ++round) {
+  NoiseScaleFit what;
+  what.scan = !options.calibration.noise_sigma;
+  what.sensor = model == SensorClockModel::kStamps && !options.sensor_jitter_s;
+  what.encoder = !options.encoder_jitter_s;
+  what.floor_s = kJitterFloor;
+  what.ceiling_s = std::max({data.sensor_period_s, data.encoder_period_s, 2 * kJitterFloor});
+  std::vector<NoiseScales> entered;  // The σ's each round was solved with.
+  for (int round = 0; round < std::max(1, options.max_rounds); ++round) {
     LatentTimeProblem problem(data, model, fit.state, options.calibration.refinement,
                               options.estimate_offset);
-    // Rounds only re-estimate the σ's, which a looser optimum serves as well; the settled (or
-    // last) round is then polished to the full tolerance.
-    const bool last = round + 1 == rounds;
-    CALIB_RETURN_IF_ERROR(
-        SolveRound(&problem, last ? kLatentCostTolerance : kLatentRoundCostTolerance, &fit));
+    // The rounds only re-estimate the σ's, which a looser optimum serves as well.
+    BandArrowSummary summary;
+    CALIB_RETURN_IF_ERROR(problem.Solve(&summary, kLatentRoundCostTolerance, kLatentRoundGlobalStep,
+                                        kLatentRoundMaxIterations));
+    fit.iterations += summary.iterations;
     fit.rounds = round + 1;
     CALIB_RETURN_IF_ERROR(CaptureFit(data, problem, &fit));
+    const NoiseScales current = ScalesOf(fit.state);
+    entered.push_back(current);
     // Scan noise and jitters together, by the evidence with the latents integrated out.
-    const NoiseScales current{fit.state.noise_sigma, fit.state.sensor_sigma_s,
-                              fit.state.encoder_sigma_s};
-    NoiseScaleFit what;
-    what.scan = !options.calibration.noise_sigma;
-    what.sensor = fit_sensor;
-    what.encoder = fit_encoder;
-    what.floor_s = kJitterFloor;
-    what.ceiling_s = std::max(ceiling, 2 * kJitterFloor);
     NoiseScales next = MaximizeLatentEvidence(fit.lin, fit.state.offset_s, current, what);
     if (model == SensorClockModel::kFreeRunning && fit.lin.stamp_prior_count > 4 &&
         !options.sensor_jitter_s) {
@@ -193,12 +209,7 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
                          std::sqrt(fit.lin.stamp_prior_chi2 / (fit.lin.stamp_prior_count - 4));
       next.sensor_s = std::clamp(rms, kJitterFloor, what.ceiling_s);
     }
-    const Eigen::Vector3d noise = next.scan;
-    bool settled =
-        problem.BracketsHold() &&
-        ((noise - fit.state.noise_sigma).cwiseQuotient(noise)).cwiseAbs().maxCoeff() < 0.03 &&
-        RelativeChange(next.sensor_s, fit.state.sensor_sigma_s) < 0.1 &&
-        RelativeChange(next.encoder_s, fit.state.encoder_sigma_s) < 0.1;
+    bool settled = ScalesSettled(current, next);
     if (model == SensorClockModel::kFreeRunning) {
       const std::vector<double> indices = ReassignClockIndices(data, fit.state);
       if (indices != fit.state.clock_index) {
@@ -206,23 +217,32 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
         fit.state.clock_index = indices;
       }
     }
-    if (settled) {
-      if (!last) {
-        CALIB_RETURN_IF_ERROR(SolveRound(&problem, kLatentCostTolerance, &fit));
-        CALIB_RETURN_IF_ERROR(CaptureFit(data, problem, &fit));
-      }
-      break;
-    }
     if (!problem.BracketsHold()) fit.state.bracket = problem.Brackets();
-    fit.state.noise_sigma = noise;
+    if (settled) break;
+    // Every other round, the σ's jump towards the fixed point the last two rounds head for.
+    if (entered.size() % 2 == 0) next = ExtrapolateScales(entered.end()[-2], current, next, what);
+    fit.state.noise_sigma = next.scan;
     fit.state.sensor_sigma_s = next.sensor_s;
     fit.state.encoder_sigma_s = next.encoder_s;
   }
-  const double components = 3.0 * fit.errors.size();
-  const double redundancy = components - fit.lin.num_globals - fit.covariance.effective_latents;
-  if (!(redundancy > 0.0)) return Status::NotObservable("too few intervals for the timing model");
-  CALIB_ASSIGN_OR_RETURN(fit.kappa, LossCorrection(fit.lin.loss_sums, components, redundancy));
   return fit;
+}
+
+Status PolishTimingModel(const StreamSamples& data, const LaserTimingOptions& options,
+                         TimingModelFit* fit) {
+  LatentTimeProblem problem(data, fit->model, fit->state, options.calibration.refinement,
+                            options.estimate_offset);
+  BandArrowSummary summary;
+  CALIB_RETURN_IF_ERROR(problem.Solve(&summary, kLatentCostTolerance));
+  fit->iterations += summary.iterations;
+  fit->converged = summary.converged;
+  fit->polished = true;
+  CALIB_RETURN_IF_ERROR(CaptureFit(data, problem, fit));
+  const double components = 3.0 * fit->errors.size();
+  const double redundancy = components - fit->lin.num_globals - fit->covariance.effective_latents;
+  if (!(redundancy > 0.0)) return Status::NotObservable("too few intervals for the timing model");
+  CALIB_ASSIGN_OR_RETURN(fit->kappa, LossCorrection(fit->lin.loss_sums, components, redundancy));
+  return Status::Ok();
 }
 
 }  // namespace calib

@@ -25,11 +25,25 @@ struct TimingModelFit {
   int iterations = 0;
   int rounds = 0;
   bool converged = true;
+  bool polished = false;  // PolishTimingModel ran: κ and the statistics are final.
 };
 
+// Rounds at the looser tolerance (kLatentRoundCostTolerance) until the σ's settle; the models
+// are compared there, and the one kept is then polished.
 StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockModel model,
                                         const LatentTimeState& initial,
                                         const LaserTimingOptions& options);
+// The fit re-solved to the full tolerance (kLatentCostTolerance) at its latest σ's, with its
+// statistics and the robust loss's covariance correction κ.
+Status PolishTimingModel(const StreamSamples& data, const LaserTimingOptions& options,
+                         TimingModelFit* fit);
+
+// A jitter σ to start the rounds from: twice the stamps' robust scatter about their regular grid
+// (a pick-up stamp lags its sample by more than the stamps scatter), within [the floor of the
+// search, a quarter period]. Stamps that are the sample times start at the floor, where the
+// latent times barely move; starting high instead lets the latents absorb the scan noise in the
+// first round and the rounds then take long to shed it.
+double StartingJitter(const std::vector<double>& stamps_s, double period_s);
 
 // The clock model's starting point from a fit of the stamp model: whole periods per interval
 // (from the stamps where they sit on the period's grid and the motion agrees, else from the ratio

@@ -109,6 +109,24 @@ TEST(BandArrowSolverTest, ReachesCeresOptimum) {
   EXPECT_NEAR(band.scale, 2.5, 0.01);
 }
 
+// With a global-step tolerance, two accepted steps that move the globals by less than it (in σ of
+// their marginal information) end the solve: a huge one stops after the second accepted step.
+TEST(BandArrowSolverTest, GlobalStepToleranceStopsOnceTheGlobalsSettle) {
+  Problem loose(300), tight(300);
+  BandArrowOptions options;
+  options.function_tolerance = 1e-14;
+  options.max_iterations = 200;
+  BandArrowSummary reference;
+  ASSERT_TRUE(SolveBandArrow(options, tight.Latents(), "test", &tight.problem, &reference).ok());
+  options.global_step_tolerance = 1e9;
+  BandArrowSummary summary;
+  ASSERT_TRUE(SolveBandArrow(options, loose.Latents(), "test", &loose.problem, &summary).ok());
+  EXPECT_TRUE(summary.converged);
+  EXPECT_LT(summary.iterations, reference.iterations);
+  EXPECT_LT(summary.final_cost, summary.initial_cost);
+  EXPECT_GT(summary.final_cost, reference.final_cost);
+}
+
 TEST(BandArrowSolverTest, ConstantBlocksStayPut) {
   Problem band(100);
   band.problem.SetParameterBlockConstant(&band.scale);

@@ -1,0 +1,55 @@
+#include <calib/core/timing/stream_samples.h>
+#include <calib/solvers/timing/clock_indices.h>
+#include <gtest/gtest.h>
+
+#include "tests/solvers/timing/timing_data_recipes.h"
+
+namespace calib {
+namespace {
+
+// Consecutive samples whose index step differs from the truth's.
+int StepMismatches(const std::vector<double>& indices, const std::vector<double>& truth) {
+  int count = 0;
+  for (size_t k = 1; k < indices.size(); ++k) {
+    count += (indices[k] - indices[k - 1]) != (truth[k] - truth[k - 1]);
+  }
+  return count;
+}
+
+// data/timing/robot_like: a scanner free-running at 99.5 ms picked up by a 100 ms logger with
+// 5 ms jitter, so the pick-up lag sweeps across the period every ~20 s. With the clock 4 ms off
+// (about its error on such a log), the lags alone put a skip a few samples early or late at every
+// sweep; the motion puts almost all of them back.
+TEST(ClockIndices, MotionPlacesTheSkipsTheLagsLeaveAmbiguous) {
+  const auto recipes = testing::TimingRecipes();
+  const auto recipe = std::find_if(recipes.begin(), recipes.end(),
+                                   [](const auto& r) { return r.name == "robot_like"; });
+  ASSERT_NE(recipe, recipes.end());
+  const testing::TimingGenerated generated = testing::Generate(*recipe);
+  const StatusOr<StreamSamples> data =
+      BuildStreamSamples(generated.streams.odometry, generated.streams.sensor_poses, "robot_like");
+  ASSERT_TRUE(data.ok()) << data.message();
+
+  LatentTimeState state;
+  state.calibration.odometry = generated.truth.odometry;
+  state.calibration.base_T_sensor = generated.truth.base_T_sensor;
+  state.noise_sigma = recipe->sim.scan_noise_sigma;
+  std::vector<double> truth, stamps;
+  for (const StreamSample& s : data->samples) {
+    truth.push_back(static_cast<double>(generated.timing.sensor_sample_index[s.record - 1]));
+    stamps.push_back(s.stamp_s);
+  }
+  const LoggingModel& logging = recipe->logging;
+  state.clock.period_s = logging.sensor_period_s * (1.0 + logging.sensor_clock_drift);
+  state.clock.t0_s = logging.sensor_phase_s - data->origin_s + 0.004;
+  state.clock_index = truth;
+
+  const int by_lags = StepMismatches(ClockIndicesFromStamps(stamps, state.clock), truth);
+  const int by_motion = StepMismatches(ReassignClockIndices(*data, state), truth);
+  EXPECT_GT(by_lags, 50) << by_motion;
+  EXPECT_LT(by_motion, by_lags / 4) << by_lags;
+  EXPECT_LT(by_motion, 0.005 * static_cast<double>(truth.size()));
+}
+
+}  // namespace
+}  // namespace calib
