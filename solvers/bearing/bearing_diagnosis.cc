@@ -48,6 +48,9 @@ std::pair<double, int> InlierRms(const std::vector<std::vector<double>>& errors,
 
 // What the steps share.
 struct Steps {
+  Steps(const BearingLog& log_in, const BearingDiagnosisOptions& options_in, std::string source_in,
+        double log_start_in)
+      : log(log_in), options(options_in), source(std::move(source_in)), log_start_s(log_start_in) {}
   const BearingLog& log;
   const BearingDiagnosisOptions& options;
   std::string source;  // For messages.
@@ -242,13 +245,13 @@ StatusOr<BearingDiagnosis> DiagnoseBearing(const BearingLog& log,
                                            const BearingDiagnosisOptions& options) {
   using namespace bearing_diagnosis;  // NOLINT: the adapter's internals.
   const auto clock = std::chrono::steady_clock::now();
-  Steps steps{log, options, log.source.empty() ? "bearing log" : log.source, LogStart(log), {}, {},
-              {},  {}};
+  Steps steps(log, options, log.source.empty() ? "bearing log" : log.source, LogStart(log));
   // The base model takes the stamps as sample times: τ is the candidate tested here (and the
   // series, held-out blocks and inlier cuts below weigh every bearing by one σβ).
   BearingCalibrationOptions base_options = options.calibration;
   base_options.timing.time_offset = false;
   base_options.timing.stamp_jitter = false;
+  base_options.timing.sensor_clock = false;
   CALIB_ASSIGN_OR_RETURN(steps.base, CalibrateBearing(log, base_options));
   BearingDiagnosis out;
   CALIB_RETURN_IF_ERROR(FitBase(&steps, &out));

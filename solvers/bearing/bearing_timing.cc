@@ -99,6 +99,10 @@ BearingJitterEstimate EstimateBearingJitter(const std::vector<double>& errors_ra
 }
 
 std::string BearingTimingTreatment(const BearingTiming& timing) {
+  if (timing.clock_modelled) {
+    return timing.jitter_modelled ? "free-running sensor clock and stamp jitter modelled"
+                                  : "free-running sensor clock modelled";
+  }
   if (timing.time_offset_modelled && timing.jitter_modelled) {
     return "clock offset and stamp jitter modelled";
   }
@@ -109,7 +113,26 @@ std::string BearingTimingTreatment(const BearingTiming& timing) {
 
 std::string BearingTimingStatement(const BearingTiming& timing) {
   std::string text;
-  if (timing.time_offset_modelled) {
+  if (timing.clock_modelled) {
+    text = "The bearing sensor free-runs on its own clock (period " +
+           Num(timing.clock.period_s * 1e3, 6) + " ± " +
+           Num(timing.clock.period_stddev_s * 1e3, 2) + " ms, stamp steps " +
+           Num(timing.clock.stamp_step_s * 1e3, 6) +
+           " ms) and the logger stamped each bearing when it picked it up, up to a period late: "
+           "the calibration takes each bearing at its sample time on that clock (" +
+           std::to_string(timing.clock.skipped_samples) + " samples the logger missed";
+    if (timing.held_bearings_dropped > 0) {
+      text += ", " + std::to_string(timing.held_bearings_dropped) +
+              " picked up twice, the repeats dropped";
+    }
+    if (timing.bearings_before_encoders > 0) {
+      text += ", " + std::to_string(timing.bearings_before_encoders) +
+              " bearings taken before their run's first encoder sample dropped";
+    }
+    text += "). The clock's phase is estimated with the calibration as a clock offset of " +
+            Num(timing.time_offset_s * 1e3, 3) + " ± " + Num(timing.time_offset_stddev_s * 1e3, 2) +
+            " ms.";
+  } else if (timing.time_offset_modelled) {
     text = "The bearings were taken " + Num(std::abs(timing.time_offset_s) * 1e3, 3) + " ± " +
            Num(timing.time_offset_stddev_s * 1e3, 2) + " ms " +
            (timing.time_offset_s >= 0.0 ? "after" : "before") +

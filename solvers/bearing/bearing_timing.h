@@ -1,6 +1,8 @@
 #ifndef CALIB_SOLVERS_BEARING_BEARING_TIMING_H_
 #define CALIB_SOLVERS_BEARING_BEARING_TIMING_H_
 
+#include <calib/solvers/bearing/bearing_clock.h>
+
 #include <string>
 #include <vector>
 
@@ -13,14 +15,18 @@
 // interpolated between two encoder samples, so their stamp errors move it along the path by
 // (1 − f)·ε_a + f·ε_b, which the bearing sees as a timing error of that size; σ_t is the scatter
 // of the bearing times relative to the encoder clock, whichever stream it comes from.
-// Each part is kept only when the data ask for it (likelihood-ratio tests); otherwise the
-// calibration is exactly the plain one.
+// A free-running bearing sensor stamped at pick-up (solvers/bearing/bearing_clock.h) is a third
+// part: its clock replaces the stamps when a screen of the final fit finds it and the re-fit on
+// the clock's times confirms it. Each part is kept only when the data ask for it
+// (likelihood-ratio tests); otherwise the calibration is exactly the plain one.
 namespace calib {
 
 struct BearingTimingOptions {
-  bool time_offset = true;     // Test τ and model it when significant.
-  bool stamp_jitter = true;    // Test σ_t and model it when significant.
-  double significance = 0.01;  // Level of each likelihood-ratio test.
+  bool time_offset = true;        // Test τ and model it when significant.
+  bool stamp_jitter = true;       // Test σ_t and model it when significant.
+  bool sensor_clock = true;       // Screen for a free-running bearing clock and re-fit on it.
+  bool keep_time_offset = false;  // Model τ whatever its test says (the clock's re-fit).
+  double significance = 0.01;     // Level of each likelihood-ratio test.
 };
 
 // σ_t by profile likelihood over the bearing errors e_k (inliers), with rates g_k = dβ̂/dt:
@@ -53,6 +59,16 @@ struct BearingTiming {
   bool jitter_tested = false;
   bool jitter_modelled = false;
   BearingJitterEstimate jitter;
+  // The free-running clock estimated on the stamps' fit, and the re-fit on its times: −2 log L of
+  // its σβ over the stamps' (before either models τ or jitter); the clock is kept unless that is
+  // significantly positive.
+  BearingClockEstimate clock;
+  bool clock_modelled = false;
+  double clock_confirm_lr = 0.0;
+  double clock_confirm_p_value = 1.0;
+  int held_bearings_dropped = 0;         // Held samples picked up again (modelled clock only).
+  int bearings_before_encoders = 0;      // Clock times before the run's first encoder sample.
+  double plain_bearing_sigma_rad = 0.0;  // σβ of the fit before τ and jitter.
   std::string treatment = "stamps as sample times";  // What the estimate models.
   std::string statement;                             // One sentence for a person.
 };

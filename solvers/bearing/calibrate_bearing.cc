@@ -382,6 +382,11 @@ StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
   result.covariance_seconds = Seconds(clock);
   CALIB_RETURN_IF_ERROR(CheckDetermined(result, options).Prefixed(source + ": "));
   SummarizeRuns(log, final_problem, *inlier, &result);
+  if (options.timing.sensor_clock) {
+    CALIB_ASSIGN_OR_RETURN(
+        result, bearing_calibration::TrySensorClock(log, options, progress, final_problem, *inlier,
+                                                    std::move(result)));
+  }
   bearing_calibration::AddStreamTimingWarnings(log, &result);
   return result;
 }

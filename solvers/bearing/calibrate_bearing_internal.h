@@ -33,6 +33,17 @@ Status ApplyTimingModel(const BearingLog& log, const BearingCalibrationOptions& 
                         ceres::Solver::Summary* summary, BearingMask* inlier,
                         BearingCalibrationResult* result);
 
+// The free-running clock (bearing_clock.h) screened on the fit in `problem` (the stamps' final
+// fit, `inlier` its flags); when the screen finds it, the calibration re-run on the clock's times
+// (τ always modelled there) replaces `stamps` if its bearing noise confirms the clock. Records the
+// screen and the confirmation in the result's timing either way.
+StatusOr<BearingCalibrationResult> TrySensorClock(const BearingLog& log,
+                                                  const BearingCalibrationOptions& options,
+                                                  const Progress& progress,
+                                                  const BearingProblem& problem,
+                                                  const BearingMask& inlier,
+                                                  BearingCalibrationResult stamps);
+
 // A warning for each stream whose stamp diagnostics (log.stream_timing, from the reader) show that
 // its stamps cannot be the sample times.
 void AddStreamTimingWarnings(const BearingLog& log, BearingCalibrationResult* result);

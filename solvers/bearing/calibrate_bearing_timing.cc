@@ -52,7 +52,10 @@ Status TestTimeOffset(const BearingLog& log, const BearingCalibrationOptions& op
   progress("time offset: " + Num(timing.time_offset_free_s * 1e3, 3) + " ± " +
            Num(timing.time_offset_stddev_s * 1e3, 2) + " ms, LR " + Num(timing.time_offset_lr, 3) +
            ", p = " + Num(timing.time_offset_p_value, 2));
-  if (!(timing.time_offset_p_value <= options.timing.significance)) return Status::Ok();
+  if (!(timing.time_offset_p_value <= options.timing.significance) &&
+      !options.timing.keep_time_offset) {
+    return Status::Ok();
+  }
   timing.time_offset_modelled = true;
   *problem = std::move(with_offset);
   *summary = with_summary;
@@ -134,6 +137,7 @@ Status ApplyTimingModel(const BearingLog& log, const BearingCalibrationOptions& 
                         const Progress& progress, std::unique_ptr<BearingProblem>* problem,
                         ceres::Solver::Summary* summary, BearingMask* inlier,
                         BearingCalibrationResult* result) {
+  result->timing.plain_bearing_sigma_rad = (*problem)->noise().bearing_sigma_rad;
   if (options.timing.time_offset) {
     CALIB_RETURN_IF_ERROR(TestTimeOffset(log, options, progress, problem, summary, inlier, result));
   }
@@ -146,8 +150,27 @@ Status ApplyTimingModel(const BearingLog& log, const BearingCalibrationOptions& 
 }
 
 void AddStreamTimingWarnings(const BearingLog& log, BearingCalibrationResult* result) {
+  const BearingTiming& timing = result->timing;
+  const BearingClockEstimate& clock = timing.clock;
+  if (clock.free_running && !timing.clock_modelled) {
+    const std::string shown = std::to_string(clock.held_samples) + " samples picked up twice, " +
+                              std::to_string(clock.skipped_samples) + " missed";
+    result->warnings.push_back(
+        clock.period_determined
+            ? "the bearings come from a free-running sensor picked up by the logger (" + shown +
+                  ") but the calibration re-fitted on its clock did not explain them as well; "
+                  "the timing may bias the calibration"
+            : "the bearings come from a free-running sensor picked up by the logger (" + shown +
+                  ") whose period the log cannot fix: its stamps step by " +
+                  Num(clock.stamp_step_s * 1e3, 6) +
+                  " ms, and a sensor period off that by a fraction ε scales the time, hence the "
+                  "turn rate ξ, by ε (samples the logger missed do not show in its stamps); the "
+                  "calibration may be biased by that much beyond its sigmas");
+  }
   for (const StreamTiming& stream : log.stream_timing) {
     if (stream.stamps_are_sample_times) continue;
+    // The clock model is what those stamps need; the statement says so.
+    if (timing.clock_modelled && stream.stream == "bearings") continue;
     std::string why;
     if (stream.free_running_signature) {
       AppendReason(&why, "they show a free-running sensor picked up by the logger");

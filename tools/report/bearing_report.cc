@@ -39,6 +39,20 @@ void AddTimingJson(const BearingTiming& timing, nlohmann::ordered_json* out) {
   t["jitter_model"] =
       "bearing variance sigma_beta^2 + jitter^2 * (d beta/dt)^2; the jitter is the scatter of the "
       "bearing times against the encoder clock (bearing or encoder stamps)";
+  const BearingClockEstimate& c = timing.clock;
+  t["sensor_clock_modelled"] = timing.clock_modelled;
+  t["sensor_clock"] = {{"free_running", c.free_running},
+                       {"period_determined", c.period_determined},
+                       {"period_s", c.period_s},
+                       {"period_stddev_s", c.period_stddev_s},
+                       {"stamp_step_s", c.stamp_step_s},
+                       {"held_samples", c.held_samples},
+                       {"skipped_samples", c.skipped_samples},
+                       {"counted_steps", c.counted_steps},
+                       {"held_bearings_dropped", timing.held_bearings_dropped},
+                       {"bearings_before_encoders", timing.bearings_before_encoders},
+                       {"refit_lr_statistic", timing.clock_confirm_lr},
+                       {"refit_p_value", timing.clock_confirm_p_value}};
   t["statement"] = timing.statement;
 }
 
