@@ -197,23 +197,36 @@ TEST(BearingTimingTest, EncoderStampScatterShowsAsJitter) {
   EXPECT_LE(WorstSigmas(*aware, truth), 3.0);
 }
 
+// z of the stamps-as-times ("plain") and timing-aware estimates over a study's seeds.
+struct StudyTally {
+  double plain_z2 = 0, aware_z2 = 0;
+  int n = 0, plain_out = 0, aware_out = 0;
+  void Add(const BearingCalibrationResult& plain, const BearingCalibrationResult& aware,
+           const BearingSimTruth& truth) {
+    const BearingParamVector t = ToVector(truth.params);
+    for (int i = 0; i < kNumBearingParams; ++i) {
+      const double zp = ParamError(i, ToVector(plain.estimate)(i), t(i)) / plain.stddev(i);
+      const double za = ParamError(i, ToVector(aware.estimate)(i), t(i)) / aware.stddev(i);
+      plain_z2 += zp * zp, aware_z2 += za * za, ++n;
+      plain_out += std::abs(zp) > 2.0, aware_out += std::abs(za) > 2.0;
+    }
+  }
+  void Print(const char* what, double value) const {
+    std::printf("%s %.3f: mean z² plain %.2f aware %.2f; beyond 2σ plain %d aware %d of %d\n", what,
+                value, plain_z2 / n, aware_z2 / n, plain_out, aware_out, n);
+  }
+};
+
 TEST(BearingTimingTest, DISABLED_JitterStudy) {
   for (double jitter : {0.0, 0.05, 0.1}) {
-    double plain_z2 = 0, aware_z2 = 0;
-    int n = 0, plain_out = 0, aware_out = 0;
+    StudyTally tally;
     for (uint64_t seed = 1; seed <= 12; ++seed) {
       BearingSimTruth truth;
       const BearingLog log = JitteredLog(JitterScene(seed), jitter, seed, &truth);
       const StatusOr<BearingCalibrationResult> plain = CalibrateBearing(log, Plain());
       const StatusOr<BearingCalibrationResult> aware = CalibrateBearing(log);
       if (!plain.ok() || !aware.ok()) continue;
-      const BearingParamVector t = ToVector(truth.params);
-      for (int i = 0; i < kNumBearingParams; ++i) {
-        const double zp = ParamError(i, ToVector(plain->estimate)(i), t(i)) / plain->stddev(i);
-        const double za = ParamError(i, ToVector(aware->estimate)(i), t(i)) / aware->stddev(i);
-        plain_z2 += zp * zp, aware_z2 += za * za, ++n;
-        plain_out += std::abs(zp) > 2.0, aware_out += std::abs(za) > 2.0;
-      }
+      tally.Add(*plain, *aware, truth);
       std::printf(
           "jitter %.3f seed %d: plain worst %.2f σ, aware worst %.2f σ (%s, σt %.4f ± %.4f, p "
           "%.2g)\n",
@@ -221,8 +234,7 @@ TEST(BearingTimingTest, DISABLED_JitterStudy) {
           aware->timing.treatment.c_str(), aware->timing.jitter.jitter_s,
           aware->timing.jitter.jitter_stddev_s, aware->timing.jitter.p_value);
     }
-    std::printf("jitter %.3f: mean z² plain %.2f aware %.2f; beyond 2σ plain %d aware %d of %d\n",
-                jitter, plain_z2 / n, aware_z2 / n, plain_out, aware_out, n);
+    tally.Print("jitter", jitter);
   }
 }
 
@@ -281,8 +293,7 @@ TEST(BearingTimingTest, PeriodTheLogCannotFixIsAWarning) {
 
 TEST(BearingTimingTest, DISABLED_PickUpStudy) {
   for (double logger : {0.5, 1.0}) {
-    double plain_z2 = 0, aware_z2 = 0;
-    int n = 0, plain_out = 0, aware_out = 0;
+    StudyTally tally;
     for (uint64_t seed = 1; seed <= 12; ++seed) {
       BearingSimTruth truth;
       const BearingLog log = SimulateBearingLog(PickUpScene(seed, logger), &truth);
@@ -297,13 +308,7 @@ TEST(BearingTimingTest, DISABLED_PickUpStudy) {
                     aware.message().c_str());
         continue;
       }
-      const BearingParamVector t = ToVector(truth.params);
-      for (int i = 0; i < kNumBearingParams; ++i) {
-        const double zp = ParamError(i, ToVector(plain->estimate)(i), t(i)) / plain->stddev(i);
-        const double za = ParamError(i, ToVector(aware->estimate)(i), t(i)) / aware->stddev(i);
-        plain_z2 += zp * zp, aware_z2 += za * za, ++n;
-        plain_out += std::abs(zp) > 2.0, aware_out += std::abs(za) > 2.0;
-      }
+      tally.Add(*plain, *aware, truth);
       std::printf(
           "logger %.2f seed %d: plain worst %.2f σ, aware worst %.2f σ (%s, τ %.4f ± %.4f, "
           "σt %.4f)\n",
@@ -311,8 +316,7 @@ TEST(BearingTimingTest, DISABLED_PickUpStudy) {
           aware->timing.treatment.c_str(), aware->timing.time_offset_s,
           aware->timing.time_offset_stddev_s, aware->timing.jitter.jitter_s);
     }
-    std::printf("logger %.2f: mean z² plain %.2f aware %.2f; beyond 2σ plain %d aware %d of %d\n",
-                logger, plain_z2 / n, aware_z2 / n, plain_out, aware_out, n);
+    tally.Print("logger", logger);
   }
 }
 
