@@ -1,6 +1,6 @@
-// The free-running bearing clock in CalibrateBearing (solvers/bearing/bearing_clock.h): screened
+// The free-running bearing clock in CalibrateBearing (solvers/bearing/bearing_clock.h): estimated
 // on the fit that took the stamps as sample times, then the calibration re-run on the clock's
-// times and kept when its bearing noise confirms the clock.
+// times and kept unless its bearing noise is significantly worse.
 #include <calib/solvers/bearing/bearing_text.h>
 #include <calib/solvers/bearing/calibrate_bearing_internal.h>
 #include <calib/solvers/stats/score_test.h>

@@ -33,10 +33,10 @@ Status ApplyTimingModel(const BearingLog& log, const BearingCalibrationOptions& 
                         ceres::Solver::Summary* summary, BearingMask* inlier,
                         BearingCalibrationResult* result);
 
-// The free-running clock (bearing_clock.h) screened on the fit in `problem` (the stamps' final
-// fit, `inlier` its flags); when the screen finds it, the calibration re-run on the clock's times
-// (τ always modelled there) replaces `stamps` if its bearing noise confirms the clock. Records the
-// screen and the confirmation in the result's timing either way.
+// The free-running clock (bearing_clock.h) estimated on the fit in `problem` (the stamps' final
+// fit, `inlier` its flags); when the log shows the clock and fixes its period, the calibration
+// re-run on the clock's times (τ always modelled there) replaces `stamps` unless its bearing noise
+// is significantly worse. Records the estimate and the re-fit in the result's timing either way.
 StatusOr<BearingCalibrationResult> TrySensorClock(const BearingLog& log,
                                                   const BearingCalibrationOptions& options,
                                                   const Progress& progress,
