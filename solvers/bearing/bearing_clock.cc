@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace calib {
 namespace {
@@ -128,19 +129,27 @@ std::vector<double> BearingClockTimes(const std::vector<double>& stamps_s,
   return times;
 }
 
+bool IsHeldBearing(const BearingRun& run, size_t k) {
+  return k > 0 && k < run.bearings.size() &&
+         run.bearings[k].bearing_rad == run.bearings[k - 1].bearing_rad;
+}
+
 BearingLog DropHeldBearings(const BearingLog& log, int* dropped) {
-  BearingLog out = log;
+  BearingLog out;
+  out.source = log.source;
+  out.meta = log.meta;
+  out.stream_timing = log.stream_timing;
   *dropped = 0;
-  for (BearingRun& run : out.runs) {
-    std::vector<BearingSample> kept;
-    for (const BearingSample& b : run.bearings) {
-      if (!kept.empty() && b.bearing_rad == kept.back().bearing_rad) {
+  for (const BearingRun& run : log.runs) {
+    BearingRun kept{run.id, run.odometry, {}};
+    for (size_t k = 0; k < run.bearings.size(); ++k) {
+      if (IsHeldBearing(run, k)) {
         ++*dropped;
         continue;
       }
-      kept.push_back(b);
+      kept.bearings.push_back(run.bearings[k]);
     }
-    run.bearings = std::move(kept);
+    out.runs.push_back(std::move(kept));
   }
   return out;
 }

@@ -63,6 +63,9 @@ BearingClockEstimate EstimateBearingClock(const std::vector<BearingClockRun>& ru
 std::vector<double> BearingClockTimes(const std::vector<double>& stamps_s,
                                       const SampleClock& clock);
 
+// Bearing k of the run repeats its predecessor's value exactly: a held sample picked up again.
+bool IsHeldBearing(const BearingRun& run, size_t k);
+
 // The log with each bearing that repeats its predecessor's value exactly (a held sample picked up
 // again) removed; `dropped` counts them.
 BearingLog DropHeldBearings(const BearingLog& log, int* dropped);

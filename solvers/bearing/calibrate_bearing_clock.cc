@@ -12,10 +12,6 @@
 namespace calib::bearing_calibration {
 namespace {
 
-bool Held(const BearingRun& run, int bearing) {
-  return bearing > 0 && run.bearings[bearing].bearing_rad == run.bearings[bearing - 1].bearing_rad;
-}
-
 // The clock's input from the fit: per run the bearings that are not held repeats, with the
 // fit's rates and inlier flags. `held` counts the repeats.
 std::vector<BearingClockRun> ClockRunsAtFit(const BearingLog& log, const BearingProblem& problem,
@@ -26,7 +22,7 @@ std::vector<BearingClockRun> ClockRunsAtFit(const BearingLog& log, const Bearing
   *held = 0;
   for (size_t t = 0; t < terms.size(); ++t) {
     const int i = terms[t].run, k = terms[t].bearing;
-    if (Held(log.runs[i], k)) {
+    if (IsHeldBearing(log.runs[i], k)) {
       ++*held;
       continue;
     }
