@@ -310,12 +310,9 @@ double BandArrowProblem::ParameterNorm() const {
   return std::sqrt(sum);
 }
 
-}  // namespace
-
-Status SolveBandArrow(const BandArrowOptions& options, const std::vector<double*>& latents,
-                      const std::string& what, ceres::Problem* problem, BandArrowSummary* summary) {
-  BandArrowProblem arrow;
-  CALIB_RETURN_IF_ERROR(arrow.Build(latents, problem));
+// Levenberg–Marquardt on a built arrow.
+Status SolveArrow(const BandArrowOptions& options, const std::string& what,
+                  const BandArrowProblem& arrow, BandArrowSummary* summary) {
   BandArrowSummary out;
   out.band_width = arrow.width();
   ArrowSystem system;
@@ -383,6 +380,35 @@ Status SolveBandArrow(const BandArrowOptions& options, const std::vector<double*
   out.final_cost = cost;
   if (summary) *summary = out;
   return Status::Ok();
+}
+
+}  // namespace
+
+struct BandArrowSolver::Structure {
+  BandArrowProblem arrow;
+};
+
+BandArrowSolver::BandArrowSolver() = default;
+BandArrowSolver::~BandArrowSolver() = default;
+
+Status BandArrowSolver::Build(const std::vector<double*>& latents, ceres::Problem* problem) {
+  structure_ = std::make_unique<Structure>();
+  const Status built = structure_->arrow.Build(latents, problem);
+  if (!built.ok()) structure_.reset();
+  return built;
+}
+
+Status BandArrowSolver::Solve(const BandArrowOptions& options, const std::string& what,
+                              BandArrowSummary* summary) const {
+  if (!structure_) return Status::Internal(what + ": the band-arrow solver was not built");
+  return SolveArrow(options, what, structure_->arrow, summary);
+}
+
+Status SolveBandArrow(const BandArrowOptions& options, const std::vector<double*>& latents,
+                      const std::string& what, ceres::Problem* problem, BandArrowSummary* summary) {
+  BandArrowSolver solver;
+  CALIB_RETURN_IF_ERROR(solver.Build(latents, problem));
+  return solver.Solve(options, what, summary);
 }
 
 }  // namespace calib

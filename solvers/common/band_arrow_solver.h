@@ -4,6 +4,7 @@
 #include <calib/core/status.h>
 #include <ceres/ceres.h>
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,25 @@ struct BandArrowSummary {
 // equations cannot be evaluated.
 Status SolveBandArrow(const BandArrowOptions& options, const std::vector<double*>& latents,
                       const std::string& what, ceres::Problem* problem, BandArrowSummary* summary);
+
+// The same, with the arrow's structure (blocks, residuals, band order) read from the problem once
+// and kept for later solves: valid while no block or residual is added, removed or made
+// constant. A solve reads the block values and the cost functions afresh.
+class BandArrowSolver {
+ public:
+  BandArrowSolver();
+  ~BandArrowSolver();
+  BandArrowSolver(const BandArrowSolver&) = delete;
+  BandArrowSolver& operator=(const BandArrowSolver&) = delete;
+
+  Status Build(const std::vector<double*>& latents, ceres::Problem* problem);
+  Status Solve(const BandArrowOptions& options, const std::string& what,
+               BandArrowSummary* summary) const;
+
+ private:
+  struct Structure;
+  std::unique_ptr<Structure> structure_;
+};
 
 }  // namespace calib
 

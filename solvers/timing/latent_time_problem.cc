@@ -103,6 +103,7 @@ void LatentTimeProblem::AddIntervals() {
         end, std::move(left), std::move(right), sizes);
     interval_costs_.push_back(problem_->AddResidualBlock(cost, loss_.get(), blocks));
     interval_functions_.push_back(cost);
+    interval_blocks_.push_back(blocks);
     for (double* block : blocks) {
       if (block >= state_.sensor_latent.data() &&
           block < state_.sensor_latent.data() + state_.sensor_latent.size()) {
@@ -160,10 +161,28 @@ SolverSettings LatentTimeProblem::Settings(double cost_tolerance) const {
   return settings;
 }
 
+Status LatentTimeProblem::SetNoiseScales(const Eigen::Vector3d& noise_sigma, double sensor_sigma_s,
+                                         double encoder_sigma_s) {
+  if ((sensor_sigma_s > 0.0) != (state_.sensor_sigma_s > 0.0) ||
+      (encoder_sigma_s > 0.0) != (state_.encoder_sigma_s > 0.0) ||
+      !(noise_sigma.array() > 0.0).all()) {
+    return Status::Internal("the timing-aware problem cannot take these noise scales in place");
+  }
+  state_.noise_sigma = noise_sigma;
+  *sqrt_information_ = noise_sigma.cwiseInverse().asDiagonal();
+  state_.sensor_sigma_s = sensor_sigma_s;
+  state_.encoder_sigma_s = encoder_sigma_s;
+  return Status::Ok();
+}
+
 Status LatentTimeProblem::Solve(BandArrowSummary* summary, double cost_tolerance,
                                 double global_step_tolerance, int max_iterations) {
-  std::vector<double*> latents;
-  for (const LatentRef& latent : LatentOrder()) latents.push_back(latent.value);
+  if (!solver_built_) {
+    std::vector<double*> latents;
+    for (const LatentRef& latent : LatentOrder()) latents.push_back(latent.value);
+    CALIB_RETURN_IF_ERROR(solver_.Build(latents, problem_.get()));
+    solver_built_ = true;
+  }
   const SolverSettings settings = Settings(cost_tolerance);
   BandArrowOptions band;
   band.max_iterations = settings.max_iterations;
@@ -173,8 +192,7 @@ Status LatentTimeProblem::Solve(BandArrowSummary* summary, double cost_tolerance
   band.parameter_tolerance = settings.parameter_tolerance;
   band.global_step_tolerance = global_step_tolerance;
   if (max_iterations > 0) band.max_iterations = std::min(band.max_iterations, max_iterations);
-  CALIB_RETURN_IF_ERROR(
-      SolveBandArrow(band, latents, "the timing-aware refinement", problem_.get(), summary));
+  CALIB_RETURN_IF_ERROR(solver_.Solve(band, "the timing-aware refinement", summary));
   return CheckPositive();
 }
 

@@ -98,6 +98,11 @@ class LatentTimeProblem {
   // at most `max_iterations` when positive, else the refinement options' limit.
   Status Solve(BandArrowSummary* summary, double cost_tolerance = kLatentCostTolerance,
                double global_step_tolerance = 0.0, int max_iterations = 0);
+  // New noise scales for the next solve, in place (the residuals hold pointers to them): the scan
+  // noise, and the jitters of the latents the problem has (a jitter of 0 must stay 0 and a
+  // positive one positive, else the problem must be rebuilt).
+  Status SetNoiseScales(const Eigen::Vector3d& noise_sigma, double sensor_sigma_s,
+                        double encoder_sigma_s);
   // The same problem by Ceres' own LM and sparse Cholesky: the reference for the solver above.
   Status SolveWithCeres(ceres::Solver::Summary* summary,
                         double cost_tolerance = kLatentCostTolerance);
@@ -148,6 +153,9 @@ class LatentTimeProblem {
   std::vector<char> sensor_used_, encoder_used_;
   std::vector<ceres::ResidualBlockId> interval_costs_;
   std::vector<const ceres::CostFunction*> interval_functions_;
+  std::vector<std::vector<double*>> interval_blocks_;
+  BandArrowSolver solver_;  // Built at the first solve.
+  bool solver_built_ = false;
 };
 
 }  // namespace calib

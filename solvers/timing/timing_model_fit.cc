@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 namespace calib {
 namespace {
@@ -188,16 +189,23 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
   what.floor_s = kJitterFloor;
   what.ceiling_s = std::max({data.sensor_period_s, data.encoder_period_s, 2 * kJitterFloor});
   std::vector<NoiseScales> entered;  // The σ's each round was solved with.
+  // Rebuilt only when the brackets or the clock's indices change; new σ's are set in place.
+  std::unique_ptr<LatentTimeProblem> problem;
   for (int round = 0; round < std::max(1, options.max_rounds); ++round) {
-    LatentTimeProblem problem(data, model, fit.state, options.calibration.refinement,
-                              options.estimate_offset);
+    if (!problem) {
+      problem = std::make_unique<LatentTimeProblem>(
+          data, model, fit.state, options.calibration.refinement, options.estimate_offset);
+    } else {
+      CALIB_RETURN_IF_ERROR(problem->SetNoiseScales(fit.state.noise_sigma, fit.state.sensor_sigma_s,
+                                                    fit.state.encoder_sigma_s));
+    }
     // The rounds only re-estimate the σ's, which a looser optimum serves as well.
     BandArrowSummary summary;
-    CALIB_RETURN_IF_ERROR(problem.Solve(&summary, kLatentRoundCostTolerance, kLatentRoundGlobalStep,
-                                        kLatentRoundMaxIterations));
+    CALIB_RETURN_IF_ERROR(problem->Solve(&summary, kLatentRoundCostTolerance,
+                                         kLatentRoundGlobalStep, kLatentRoundMaxIterations));
     fit.iterations += summary.iterations;
     fit.rounds = round + 1;
-    CALIB_RETURN_IF_ERROR(CaptureFit(data, problem, &fit));
+    CALIB_RETURN_IF_ERROR(CaptureFit(data, *problem, &fit));
     const NoiseScales current = ScalesOf(fit.state);
     entered.push_back(current);
     // Scan noise and jitters together, by the evidence with the latents integrated out.
@@ -210,14 +218,18 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
       next.sensor_s = std::clamp(rms, kJitterFloor, what.ceiling_s);
     }
     bool settled = ScalesSettled(current, next);
+    if (!problem->BracketsHold()) {
+      fit.state.bracket = problem->Brackets();
+      problem.reset();
+    }
     if (model == SensorClockModel::kFreeRunning) {
       const std::vector<double> indices = ReassignClockIndices(data, fit.state);
       if (indices != fit.state.clock_index) {
         settled = false;
         fit.state.clock_index = indices;
+        problem.reset();
       }
     }
-    if (!problem.BracketsHold()) fit.state.bracket = problem.Brackets();
     if (settled) break;
     // Every other round, the σ's jump towards the fixed point the last two rounds head for.
     if (entered.size() % 2 == 0) next = ExtrapolateScales(entered.end()[-2], current, next, what);

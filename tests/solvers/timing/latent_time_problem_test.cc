@@ -10,7 +10,14 @@ namespace {
 
 // The band-arrow solve and Ceres' own LM (sparse Cholesky) reach the same optimum of the same
 // problem, for both sensor clock models.
-void ExpectSameOptimum(SensorClockModel model) {
+struct LatentScene {
+  StreamSamples data;
+  LatentTimeState state;
+};
+
+// 400 sensor periods with scattered encoder stamps (and sensor stamps for the stamp model), the
+// state at the truth.
+LatentScene MakeScene(SensorClockModel model) {
   LaserSimOptions o;
   o.num_intervals = 400;
   o.mean_interval_s = 0.0995;
@@ -24,9 +31,9 @@ void ExpectSameOptimum(SensorClockModel model) {
   if (model == SensorClockModel::kStamps) test::ScatterSensorStamps(&streams, 0.005, 0.01, 12);
   const StatusOr<StreamSamples> data =
       BuildStreamSamples(streams.odometry, streams.sensor_poses, "test");
-  ASSERT_TRUE(data.ok()) << data.message();
-
-  LatentTimeState state;
+  EXPECT_TRUE(data.ok()) << data.message();
+  LatentScene scene{data.ok() ? *data : StreamSamples{}, {}};
+  LatentTimeState& state = scene.state;
   state.calibration.odometry = truth.odometry;
   state.calibration.base_T_sensor = truth.base_T_sensor;
   state.noise_sigma = o.scan_noise_sigma;
@@ -42,10 +49,21 @@ void ExpectSameOptimum(SensorClockModel model) {
     state.clock = FitSampleClock(state.clock_index, stamps);
     state.sensor_sigma_s = 1e-4;
   }
+  return scene;
+}
+
+LaserRefinementOptions TwoThreads() {
   LaserRefinementOptions options;
   options.num_threads = 2;
-  LatentTimeProblem band(*data, model, state, options, true);
-  LatentTimeProblem reference(*data, model, state, options, true);
+  return options;
+}
+
+void ExpectSameOptimum(SensorClockModel model) {
+  const LatentScene scene = MakeScene(model);
+  const StreamSamples* data = &scene.data;
+  ASSERT_FALSE(data->samples.empty());
+  LatentTimeProblem band(*data, model, scene.state, TwoThreads(), true);
+  LatentTimeProblem reference(*data, model, scene.state, TwoThreads(), true);
   BandArrowSummary band_summary;
   ceres::Solver::Summary ceres_summary;
   ASSERT_TRUE(band.Solve(&band_summary, 1e-6).ok());
@@ -69,6 +87,37 @@ TEST(LatentTimeProblemTest, BandArrowSolveMatchesCeresStampModel) {
 
 TEST(LatentTimeProblemTest, BandArrowSolveMatchesCeresClockModel) {
   ExpectSameOptimum(SensorClockModel::kFreeRunning);
+}
+
+// The rounds keep one problem and set each round's σ's in place: solved again, it reaches the
+// optimum (and the linearisation) of a problem built with those σ's.
+TEST(LatentTimeProblemTest, NoiseScalesSetInPlaceMatchARebuiltProblem) {
+  const LatentScene scene = MakeScene(SensorClockModel::kStamps);
+  ASSERT_FALSE(scene.data.samples.empty());
+  LatentTimeProblem reused(scene.data, SensorClockModel::kStamps, scene.state, TwoThreads(), true);
+  BandArrowSummary summary;
+  ASSERT_TRUE(reused.Solve(&summary, 1e-6).ok());
+  LatentTimeState rescaled = reused.state();
+  rescaled.noise_sigma *= 1.5;
+  rescaled.sensor_sigma_s *= 0.5;
+  rescaled.encoder_sigma_s *= 2.0;
+  ASSERT_TRUE(
+      reused.SetNoiseScales(rescaled.noise_sigma, rescaled.sensor_sigma_s, rescaled.encoder_sigma_s)
+          .ok());
+  LatentTimeProblem rebuilt(scene.data, SensorClockModel::kStamps, rescaled, TwoThreads(), true);
+  ASSERT_TRUE(reused.Solve(&summary, 1e-6).ok());
+  ASSERT_TRUE(rebuilt.Solve(&summary, 1e-6).ok());
+  const LaserParamVector difference =
+      reused.state().calibration.ToVector() - rebuilt.state().calibration.ToVector();
+  EXPECT_LT(difference.cwiseAbs().maxCoeff(), 1e-9) << difference.transpose();
+  const StatusOr<LatentLinearization> a = reused.Linearize(), b = rebuilt.Linearize();
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_LT((a->h_gg - b->h_gg).cwiseAbs().maxCoeff(), 1e-6 * b->h_gg.cwiseAbs().maxCoeff());
+  EXPECT_LT((a->h_ll_band - b->h_ll_band).cwiseAbs().maxCoeff(),
+            1e-6 * b->h_ll_band.cwiseAbs().maxCoeff());
+  EXPECT_NEAR(a->data_cost, b->data_cost, 1e-6 * b->data_cost);
+  // A jitter cannot go from positive to 0 in place: the latents would have to go.
+  EXPECT_FALSE(reused.SetNoiseScales(rescaled.noise_sigma, 0.0, rescaled.encoder_sigma_s).ok());
 }
 
 }  // namespace
