@@ -50,8 +50,8 @@ enum class BoundaryChoice {
 // Sizes a wheel does not have: a refit beyond them is reported as a structure in the residuals
 // that follows the effect's covariate, not adopted as that physics (data/diagnose/README.md).
 struct LaserPlausibility {
-  double speed_radius_per_rad_s = 0.3;  // |γ| of the speed-dependent radius (3 % per 0.1 rad/s).
-  double radius_step = 0.05;            // |γ_l|, |γ_r| of a radius change (5 %).
+  double speed_radius_per_rad_s = 0.1;  // |γ| of the speed-dependent radius (1 % per 0.1 rad/s).
+  double radius_step = 0.015;           // |γ_l|, |γ_r| of a radius change (1.5 %).
   // The lateral slip's slip angle γ·ω at the log's 95th-percentile turn rate (rad).
   double lateral_slip_angle_rad = 0.1;
   double longitudinal_slip_s = 0.5;  // |γ| of the longitudinal slip.

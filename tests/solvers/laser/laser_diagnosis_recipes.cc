@@ -67,45 +67,50 @@ std::vector<Recipe> Recipes() {
     add(r);
   }
   {
-    // The left wheel grows by 4 % at 700 s; a realistic angular scan noise of 0.57°.
+    // The left wheel grows by 1.2 % at 700 s (inside the 1.5 % plausibility bound); a scan
+    // matcher of 0.3 mm and 0.17°, so that the step stands as far above the noise as 4 % does
+    // at 1 mm and 0.57°.
     Recipe r = Make("wheel_radius_change", cli);
     r.sim.seed = 6;
-    r.sim.scan_noise_sigma = Eigen::Vector3d(0.001, 0.001, 0.01);
+    r.sim.scan_noise_sigma = Eigen::Vector3d(0.0003, 0.0003, 0.003);
     r.sim.effects.radius_change_time_s = 700.0;
-    r.sim.effects.left_radius_after_m = 0.021424;
+    r.sim.effects.left_radius_after_m = 0.020847;
     r.sim.effects.right_radius_after_m = 0.0207;
     r.effects = {LaserEffect::kWheelRadiusChange};
     r.concealed = true;
     r.cli =
-        "--seed 6 --noise_theta 0.01 --radius_change_time 700 --r_l_after 0.021424 "
-        "--r_r_after 0.0207";
+        "--seed 6 --noise_xy 0.0003 --noise_theta 0.003 --radius_change_time 700 "
+        "--r_l_after 0.020847 --r_r_after 0.0207";
     add(r);
   }
   {
-    // Speeds constant within intervals, so that the speed-dependent radius is exact.
+    // Speeds constant within intervals, so that the speed-dependent radius is exact. 0.8 % per
+    // 0.1 rad/s, inside the plausibility bound (1 %), and a scan matcher three times as precise
+    // as elsewhere here: the effect's statistics scale with γ/σ.
     Recipe r = Make("speed_dependent_radius", cli);
     r.sim.seed = 6;
     r.sim.speed_time_constant_s = 0.0;
-    r.sim.scan_noise_sigma = Eigen::Vector3d(0.001, 0.001, 0.01);
-    r.speed_radius = -0.25;
+    r.sim.scan_noise_sigma = Eigen::Vector3d(0.00033, 0.00033, 0.0033);
+    r.speed_radius = -0.08;
     r.effects = {LaserEffect::kSpeedDependentRadius};
     r.concealed = true;
     add(r);
   }
   {
-    // Two effects: the radius change of wheel_radius_change and a 30 ms time offset.
+    // Two effects: the radius change of wheel_radius_change and a 9 ms time offset (scaled
+    // with the noise as the step is).
     Recipe r = Make("radius_change_and_time_offset", cli);
     r.sim.seed = 6;
-    r.sim.scan_noise_sigma = Eigen::Vector3d(0.001, 0.001, 0.01);
+    r.sim.scan_noise_sigma = Eigen::Vector3d(0.0003, 0.0003, 0.003);
     r.sim.effects.radius_change_time_s = 700.0;
-    r.sim.effects.left_radius_after_m = 0.021424;
+    r.sim.effects.left_radius_after_m = 0.020847;
     r.sim.effects.right_radius_after_m = 0.0207;
-    r.sim.effects.time_offset_s = 0.03;
+    r.sim.effects.time_offset_s = 0.009;
     r.effects = {LaserEffect::kWheelRadiusChange, LaserEffect::kTimeOffset};
     r.concealed = true;
     r.cli =
-        "--seed 6 --noise_theta 0.01 --radius_change_time 700 --r_l_after 0.021424 "
-        "--r_r_after 0.0207 --time_offset 0.03";
+        "--seed 6 --noise_xy 0.0003 --noise_theta 0.003 --radius_change_time 700 "
+        "--r_l_after 0.020847 --r_r_after 0.0207 --time_offset 0.009";
     add(r);
   }
   {
