@@ -29,22 +29,25 @@ struct Block {
   bool latent = false;
 };
 
+// A residual block; its per-block and per-column data sit in the problem's flat arrays.
 struct Term {
   const ceres::CostFunction* cost = nullptr;
   const ceres::LossFunction* loss = nullptr;
-  std::vector<double*> values;
-  std::vector<int> block;  // Index into the blocks, −1 for a constant block.
-  int columns = 0;         // Tangent columns of its non-constant blocks.
+  int first_block = 0, num_blocks = 0;  // Into term_values_, term_block_, term_offset_.
+  int first_column = 0;                 // Into term_column_.
+  int globals = 0, columns = 0;  // Tangent columns of its non-constant blocks, globals first.
+  int first_latent = 0;          // Its lowest latent index (the number of latents if none).
 };
 
 // The normal equations H = JᵀWJ, g = Jᵀρ′r, split as globals (g) and latents (l, banded).
 struct ArrowSystem {
-  Eigen::MatrixXd h_gg, h_lg, band;
+  Eigen::MatrixXd h_gg, band;
+  RowMatrix h_lg;  // Row-major: a residual adds to a few latents' rows.
   Eigen::VectorXd g_g, g_l;
   double cost = 0.0;
   void Reset(int globals, int latents, int width) {
     h_gg = Eigen::MatrixXd::Zero(globals, globals);
-    h_lg = Eigen::MatrixXd::Zero(latents, globals);
+    h_lg = RowMatrix::Zero(latents, globals);
     band = Eigen::MatrixXd::Zero(width + 1, latents);
     g_g = Eigen::VectorXd::Zero(globals);
     g_l = Eigen::VectorXd::Zero(latents);
@@ -61,6 +64,10 @@ class BandArrowProblem {
   // Cost (½Σρ) at the current values, with the normal equations when `system` is not null.
   bool Evaluate(ArrowSystem* system, int num_threads, double* cost) const;
   bool EvaluateRange(size_t begin, size_t end, ArrowSystem* system, double* cost) const;
+  // Adds one residual's reweighted share ρ′JᵀJ, ρ′Jᵀr to the system; `jt` is scratch.
+  void AccumulateTerm(const Term& term, int m, const double* r, double weight,
+                      double* const* jacobians, const std::vector<RowMatrix>& plus, double* jt,
+                      ArrowSystem* system) const;
   // Δ from (H + λD)Δ = −g; false when the damped system is not positive definite.
   // `global_step` is √(Δ_gᵀ S Δ_g), S the Schur complement of the latents.
   bool Step(const ArrowSystem& system, double lambda, Eigen::VectorXd* delta_g,
@@ -78,6 +85,10 @@ class BandArrowProblem {
   std::vector<Block> blocks_;
   std::vector<int> latent_blocks_;
   std::vector<Term> terms_;
+  std::vector<double*> term_values_;  // Per term and block: the values,
+  std::vector<int> term_block_;       // the index into blocks_ (−1: constant),
+  std::vector<int> term_offset_;      // its first tangent column in the term's Jacobian;
+  std::vector<int> term_column_;      // per term and tangent column: global column or latent.
   int globals_ = 0, width_ = 0;
   mutable std::vector<double> saved_;
   mutable std::vector<ArrowSystem> parts_;  // Per evaluation thread beyond the first.
@@ -113,30 +124,56 @@ Status BandArrowProblem::Build(const std::vector<double*>& latents, ceres::Probl
   }
   std::vector<ceres::ResidualBlockId> ids;
   problem->GetResidualBlocks(&ids);
+  terms_.reserve(ids.size());
+  std::vector<double*> values;
   for (const ceres::ResidualBlockId id : ids) {
     Term term;
     term.cost = problem->GetCostFunctionForResidualBlock(id);
     term.loss = problem->GetLossFunctionForResidualBlock(id);
-    problem->GetParameterBlocksForResidualBlock(id, &term.values);
-    int lo = static_cast<int>(latents.size()), hi = -1, columns = 0;
-    for (double* value : term.values) {
-      const auto it = index.find(value);
-      term.block.push_back(it == index.end() ? -1 : it->second);
-      if (it == index.end()) continue;
-      const Block& b = blocks_[it->second];
-      columns += b.tangent;
-      if (b.latent) lo = std::min(lo, b.column), hi = std::max(hi, b.column);
-    }
-    if (hi >= lo) width_ = std::max(width_, hi - lo);
-    term.columns = columns;
+    problem->GetParameterBlocksForResidualBlock(id, &values);
+    const std::vector<int32_t>& sizes = term.cost->parameter_block_sizes();
     int ambient = 0;
-    for (double* value : term.values) ambient += problem->ParameterBlockSize(value);
+    for (const int32_t size : sizes) ambient += size;
     if (term.cost->num_residuals() > kMaxResiduals || ambient > kMaxColumns ||
-        term.values.size() > static_cast<size_t>(kMaxBlocks)) {
+        values.size() > static_cast<size_t>(kMaxBlocks)) {
       return Status::Internal("a residual of the band-arrow solver is larger than it supports");
     }
-    terms_.push_back(std::move(term));
+    term.first_block = static_cast<int>(term_values_.size());
+    term.num_blocks = static_cast<int>(values.size());
+    term.first_column = static_cast<int>(term_column_.size());
+    for (double* value : values) {
+      const auto it = index.find(value);
+      const int block = it == index.end() ? -1 : it->second;
+      term_values_.push_back(value);
+      term_block_.push_back(block);
+      if (block >= 0 && !blocks_[block].latent) term.columns += blocks_[block].tangent;
+    }
+    term.globals = term.columns;
+    int lo = static_cast<int>(latents.size()), hi = -1;
+    term_column_.resize(term.first_column + ambient);
+    int global_at = 0;
+    for (int p = 0; p < term.num_blocks; ++p) {
+      const int block = term_block_[term.first_block + p];
+      if (block < 0) {
+        term_offset_.push_back(-1);
+        continue;
+      }
+      const Block& b = blocks_[block];
+      int& at = b.latent ? term.columns : global_at;
+      term_offset_.push_back(at);
+      for (int c = 0; c < b.tangent; ++c) term_column_[term.first_column + at + c] = b.column + c;
+      at += b.tangent;
+      if (b.latent) lo = std::min(lo, b.column), hi = std::max(hi, b.column);
+    }
+    term_column_.resize(term.first_column + term.columns);
+    if (hi >= lo) width_ = std::max(width_, hi - lo);
+    term.first_latent = hi >= lo ? lo : static_cast<int>(latents.size());
+    terms_.push_back(term);
   }
+  // In band order: the evaluation threads' contiguous ranges then share the costly residuals
+  // evenly (a problem adds its priors after its intervals) and each touches a stretch of the band.
+  std::stable_sort(terms_.begin(), terms_.end(),
+                   [](const Term& a, const Term& b) { return a.first_latent < b.first_latent; });
   return Status::Ok();
 }
 
@@ -167,76 +204,90 @@ bool BandArrowProblem::Evaluate(ArrowSystem* system, int num_threads, double* co
 
 bool BandArrowProblem::EvaluateRange(size_t begin, size_t end, ArrowSystem* system,
                                      double* cost) const {
-  using Jacobian = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor,
-                                 kMaxResiduals, kMaxColumns>;
-  using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxColumns, kMaxColumns>;
+  // Tangent Jacobian, column-major so that a column's m ≤ kMaxResiduals entries are contiguous.
+  double jt[kMaxResiduals * kMaxColumns];
   double r[kMaxResiduals];
   double ambient[kMaxResiduals * kMaxColumns];
   double* jacobians[kMaxBlocks];
-  double plus[kMaxColumns * kMaxColumns];
-  int column[kMaxColumns];
-  bool is_latent[kMaxColumns];
-  Jacobian jt;
-  Square h;
-  *cost = 0.0;
+  // The globals' manifold Jacobians, the same for every residual of this evaluation.
+  std::vector<RowMatrix> plus(blocks_.size());
+  if (system) {
+    for (size_t b = 0; b < blocks_.size(); ++b) {
+      if (!blocks_[b].manifold) continue;
+      plus[b].resize(blocks_[b].size, blocks_[b].tangent);
+      blocks_[b].manifold->PlusJacobian(blocks_[b].values, plus[b].data());
+    }
+  }
+  double sum = 0.0;  // Local: the threads' outputs share a cache line.
   for (size_t i = begin; i < end; ++i) {
     const Term& term = terms_[i];
     const int m = term.cost->num_residuals();
+    const int* block = term_block_.data() + term.first_block;
     if (system) {
       int at = 0;
-      for (size_t p = 0; p < term.values.size(); ++p) {
-        jacobians[p] = term.block[p] < 0 ? nullptr : ambient + at;
-        if (term.block[p] >= 0) at += m * blocks_[term.block[p]].size;
+      for (int p = 0; p < term.num_blocks; ++p) {
+        jacobians[p] = block[p] < 0 ? nullptr : ambient + at;
+        if (block[p] >= 0) at += m * blocks_[block[p]].size;
       }
     }
-    if (!term.cost->Evaluate(term.values.data(), r, system ? jacobians : nullptr)) return false;
-    const Eigen::Map<const Eigen::VectorXd> res(r, m);
-    const double s = res.squaredNorm();
+    if (!term.cost->Evaluate(term_values_.data() + term.first_block, r,
+                             system ? jacobians : nullptr)) {
+      return false;
+    }
+    double s = 0.0;
+    for (int k = 0; k < m; ++k) s += r[k] * r[k];
     double rho[3] = {s, 1.0, 0.0};
     if (term.loss) term.loss->Evaluate(s, rho);
     if (!std::isfinite(rho[0])) return false;
-    *cost += 0.5 * rho[0];
-    if (!system) continue;
-    // The tangent Jacobian, columns in the order of the term's blocks.
-    int columns = 0;
-    jt.resize(m, term.columns);
-    for (size_t p = 0; p < term.values.size(); ++p) {
-      if (term.block[p] < 0) continue;
-      const Block& b = blocks_[term.block[p]];
-      const Eigen::Map<const RowMatrix> j(jacobians[p], m, b.size);
-      if (b.manifold) {
-        b.manifold->PlusJacobian(b.values, plus);
-        jt.middleCols(columns, b.tangent) =
-            j * Eigen::Map<const RowMatrix>(plus, b.size, b.tangent);
-      } else {
-        jt.middleCols(columns, b.size) = j;
-      }
-      for (int c = 0; c < b.tangent; ++c) {
-        column[columns + c] = b.column + c;
-        is_latent[columns + c] = b.latent;
-      }
-      columns += b.tangent;
-    }
-    // Reweighted: H += ρ′JᵀJ, g += ρ′Jᵀr.
-    const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxColumns, 1> jr = jt.transpose() * res;
-    h.noalias() = rho[1] * (jt.transpose() * jt);
-    for (int a = 0; a < columns; ++a) {
-      const int ca = column[a];
-      (is_latent[a] ? system->g_l(ca) : system->g_g(ca)) += rho[1] * jr(a);
-      for (int b = 0; b < columns; ++b) {
-        const int cb = column[b];
-        if (!is_latent[a]) {
-          if (!is_latent[b]) system->h_gg(ca, cb) += h(a, b);
-        } else if (!is_latent[b]) {
-          system->h_lg(ca, cb) += h(a, b);
-        } else if (cb >= ca) {
-          system->band(cb - ca, ca) += h(a, b);
-        }
-      }
+    sum += 0.5 * rho[0];
+    if (system) AccumulateTerm(term, m, r, rho[1], jacobians, plus, jt, system);
+  }
+  *cost = sum;
+  if (system) system->cost = sum;
+  return true;
+}
+
+void BandArrowProblem::AccumulateTerm(const Term& term, int m, const double* r, double weight,
+                                      double* const* jacobians, const std::vector<RowMatrix>& plus,
+                                      double* jt, ArrowSystem* system) const {
+  // The tangent Jacobian, the globals' columns first.
+  for (int p = 0; p < term.num_blocks; ++p) {
+    const int index = term_block_[term.first_block + p];
+    if (index < 0) continue;
+    const Block& b = blocks_[index];
+    const Eigen::Map<const RowMatrix> j(jacobians[p], m, b.size);
+    Eigen::Map<Eigen::MatrixXd> out(jt + m * term_offset_[term.first_block + p], m, b.tangent);
+    if (b.manifold) {
+      out.noalias() = j * plus[index];
+    } else {
+      out = j;
     }
   }
-  if (system) system->cost = *cost;
-  return true;
+  // Reweighted: H += ρ′JᵀJ, g += ρ′Jᵀr, entry by entry into the arrow's pieces.
+  const int* column = term_column_.data() + term.first_column;
+  const auto dot = [&](int a, const double* v) {
+    double sum = 0.0;
+    for (int k = 0; k < m; ++k) sum += jt[m * a + k] * v[k];
+    return weight * sum;
+  };
+  for (int a = 0; a < term.columns; ++a) {
+    (a < term.globals ? system->g_g : system->g_l)(column[a]) += dot(a, r);
+  }
+  for (int a = 0; a < term.globals; ++a) {
+    for (int b = a; b < term.globals; ++b) {
+      const double v = dot(a, jt + m * b);
+      system->h_gg(column[a], column[b]) += v;
+      if (b != a) system->h_gg(column[b], column[a]) += v;
+    }
+  }
+  for (int a = term.globals; a < term.columns; ++a) {
+    const int ca = column[a];
+    for (int b = 0; b < term.globals; ++b) system->h_lg(ca, column[b]) += dot(a, jt + m * b);
+    for (int b = term.globals; b < term.columns; ++b) {
+      const int cb = column[b];
+      if (cb >= ca) system->band(cb - ca, ca) += dot(a, jt + m * b);
+    }
+  }
 }
 
 bool BandArrowProblem::Step(const ArrowSystem& system, double lambda, Eigen::VectorXd* delta_g,
@@ -254,7 +305,7 @@ bool BandArrowProblem::Step(const ArrowSystem& system, double lambda, Eigen::Vec
   if (latents() > 0) {
     BandedLdlt ldlt;
     if (!ldlt.Compute(std::move(band))) return false;
-    x = ldlt.Solve(system.h_lg);
+    x = ldlt.Solve(Eigen::MatrixXd(system.h_lg));
     y = ldlt.Solve(system.g_l);
   }
   *delta_g = Eigen::VectorXd::Zero(globals_);
