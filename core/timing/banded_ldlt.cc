@@ -25,18 +25,24 @@ bool BandedLdlt::Compute(Eigen::MatrixXd band) {
 Eigen::MatrixXd BandedLdlt::Solve(const Eigen::MatrixXd& b) const {
   const Eigen::Index w = bandwidth();
   const Eigen::Index n = size();
-  Eigen::MatrixXd x = b;
-  // Column by column: contiguous in memory.
-  for (Eigen::Index c = 0; c < x.cols(); ++c) {
-    double* v = x.col(c).data();
-    for (Eigen::Index j = 0; j < n; ++j) {
-      const double* l = &factor_(0, j);
-      for (Eigen::Index a = 1; a <= w && j + a < n; ++a) v[j + a] -= l[a] * v[j];
+  // Row-major: every column is carried through each step at once, contiguous in memory.
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> x = b;
+  const Eigen::Index m = x.cols();
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const double* l = &factor_(0, j);
+    const double* from = x.row(j).data();
+    for (Eigen::Index a = 1; a <= w && j + a < n; ++a) {
+      double* to = x.row(j + a).data();
+      for (Eigen::Index c = 0; c < m; ++c) to[c] -= l[a] * from[c];
     }
-    for (Eigen::Index j = 0; j < n; ++j) v[j] /= factor_(0, j);
-    for (Eigen::Index j = n - 1; j >= 0; --j) {
-      const double* l = &factor_(0, j);
-      for (Eigen::Index a = 1; a <= w && j + a < n; ++a) v[j] -= l[a] * v[j + a];
+  }
+  for (Eigen::Index j = 0; j < n; ++j) x.row(j) /= factor_(0, j);
+  for (Eigen::Index j = n - 1; j >= 0; --j) {
+    const double* l = &factor_(0, j);
+    double* to = x.row(j).data();
+    for (Eigen::Index a = 1; a <= w && j + a < n; ++a) {
+      const double* from = x.row(j + a).data();
+      for (Eigen::Index c = 0; c < m; ++c) to[c] -= l[a] * from[c];
     }
   }
   return x;

@@ -1,11 +1,11 @@
 #include <calib/core/timing/banded_ldlt.h>
 #include <calib/solvers/common/band_arrow_solver.h>
+#include <calib/solvers/common/parallel_chunks.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
-#include <thread>
 #include <unordered_map>
 
 namespace calib {
@@ -19,6 +19,10 @@ constexpr int kMaxResiduals = 4, kMaxColumns = 24, kMaxBlocks = 12;
 // Reweighting overstates the curvature of a robust loss (its model gains less than the step
 // does): after such a step, up to this many more of the same while the cost keeps falling.
 constexpr int kExtensions = 3;
+// How many residuals ahead the evaluation prefetches a cost function.
+constexpr size_t kPrefetchAhead = 4;
+// Residuals per evaluation thread, at least.
+constexpr size_t kMinChunk = 256;
 
 struct Block {
   double* values = nullptr;
@@ -179,24 +183,20 @@ Status BandArrowProblem::Build(const std::vector<double*>& latents, ceres::Probl
 
 bool BandArrowProblem::Evaluate(ArrowSystem* system, int num_threads, double* cost) const {
   const size_t n = terms_.size();
-  const int threads = std::max(1, std::min<int>(num_threads, static_cast<int>(n / 256)));
-  parts_.resize(threads);
-  std::vector<double> costs(threads, 0.0);
-  std::vector<char> ok(threads, 0);
-  const auto run = [&](int t) {
-    ArrowSystem* part = system ? (t == 0 ? system : &parts_[t]) : nullptr;
+  const int chunks = ChunkCount(n, num_threads, kMinChunk);
+  parts_.resize(chunks);
+  std::vector<double> costs(chunks, 0.0);
+  std::vector<char> ok(chunks, 0);
+  ParallelChunks(n, num_threads, kMinChunk, [&](int chunk, size_t begin, size_t end) {
+    ArrowSystem* part = system ? (chunk == 0 ? system : &parts_[chunk]) : nullptr;
     if (part) part->Reset(globals_, latents(), width_);
-    ok[t] = EvaluateRange(n * t / threads, n * (t + 1) / threads, part, &costs[t]);
-  };
-  std::vector<std::thread> workers;
-  for (int t = 1; t < threads; ++t) workers.emplace_back(run, t);
-  run(0);
-  for (std::thread& w : workers) w.join();
+    ok[chunk] = EvaluateRange(begin, end, part, &costs[chunk]);
+  });
   *cost = 0.0;
-  for (int t = 0; t < threads; ++t) {
-    if (!ok[t]) return false;
-    *cost += costs[t];
-    if (system && t > 0) system->Add(parts_[t]);
+  for (int c = 0; c < chunks; ++c) {
+    if (!ok[c]) return false;
+    *cost += costs[c];
+    if (system && c > 0) system->Add(parts_[c]);
   }
   if (system) system->cost = *cost;
   return true;
@@ -220,6 +220,11 @@ bool BandArrowProblem::EvaluateRange(size_t begin, size_t end, ArrowSystem* syst
   }
   double sum = 0.0;  // Local: the threads' outputs share a cache line.
   for (size_t i = begin; i < end; ++i) {
+    // The cost functions are scattered over the heap: fetch a later one's first lines now.
+    if (i + kPrefetchAhead < end) {
+      const char* ahead = reinterpret_cast<const char*>(terms_[i + kPrefetchAhead].cost);
+      for (int line = 0; line < 4; ++line) __builtin_prefetch(ahead + 64 * line);
+    }
     const Term& term = terms_[i];
     const int m = term.cost->num_residuals();
     const int* block = term_block_.data() + term.first_block;

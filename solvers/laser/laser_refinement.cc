@@ -1,5 +1,6 @@
 #include <calib/problems/laser/laser_residual.h>
 #include <calib/problems/positive_manifold.h>
+#include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/common/solver_options.h>
 #include <calib/solvers/laser/laser_refinement.h>
 
@@ -7,7 +8,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <thread>
 
 namespace calib {
 
@@ -17,18 +17,9 @@ constexpr char kSingular[] =
     "the information matrix is singular: the log does not determine all six parameters";
 constexpr char kTooFew[] = "too few intervals for a covariance";
 
-// Runs body(chunk, begin, end) over [0, n) split into `threads` contiguous chunks, in parallel:
-// the per-interval passes (errors, covariance) are a noticeable share of a million-interval run.
-template <typename Body>
-void ParallelChunks(size_t n, int threads, const Body& body) {
-  const size_t chunks = std::max<size_t>(1, std::min<size_t>(threads, n / 10000 + 1));
-  std::vector<std::thread> workers;
-  for (size_t c = 1; c < chunks; ++c) {
-    workers.emplace_back([&, c]() { body(c, n * c / chunks, n * (c + 1) / chunks); });
-  }
-  body(0, 0, n / chunks);
-  for (std::thread& worker : workers) worker.join();
-}
+// The per-interval passes (errors, covariance) are a noticeable share of a million-interval run:
+// they run in parallel chunks of at least this many intervals.
+constexpr size_t kMinChunk = 5000;
 
 }  // namespace
 
@@ -117,11 +108,12 @@ Status LaserProblem::SetIntervalSqrtInformation(size_t dataset,
 std::vector<Eigen::Vector3d> LaserProblem::Errors(size_t dataset) const {
   const std::vector<LaserInterval>& intervals = *datasets_[dataset].intervals;
   std::vector<Eigen::Vector3d> errors(intervals.size());
-  ParallelChunks(intervals.size(), options_.num_threads, [&](size_t, size_t begin, size_t end) {
-    for (size_t k = begin; k < end; ++k) {
-      errors[k] = LaserResidual::Error(intervals[k], odometry_, base_T_sensor_);
-    }
-  });
+  ParallelChunks(intervals.size(), options_.num_threads, kMinChunk,
+                 [&](size_t, size_t begin, size_t end) {
+                   for (size_t k = begin; k < end; ++k) {
+                     errors[k] = LaserResidual::Error(intervals[k], odometry_, base_T_sensor_);
+                   }
+                 });
   return errors;
 }
 
@@ -137,7 +129,10 @@ std::vector<double> LaserProblem::WhitenedSquaredNorms(size_t dataset) const {
 double LaserProblem::LossWeight(double s) const { return EvaluateLoss(loss_.get(), s).rho1; }
 
 StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::Covariance() const {
-  ceres::Covariance covariance(MakeCovarianceOptions(options_.num_threads));
+  ceres::Covariance::Options covariance_options = MakeCovarianceOptions(options_.num_threads);
+  // Six parameters: the SVD of the dense 3N × 6 Jacobian is cheaper than a sparse QR.
+  covariance_options.algorithm_type = ceres::DENSE_SVD;
+  ceres::Covariance covariance(covariance_options);
   const std::vector<const double*> blocks = {odometry_, base_T_sensor_};
   if (!covariance.Compute(blocks, problem_.get())) return Status::NotObservable(kSingular);
   LaserParamMatrix cov;
@@ -160,21 +155,22 @@ StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::SandwichCovariance
   const int threads = std::max(1, options_.num_threads);
   std::vector<SandwichSums<kNumLaserParams>> sums(threads);
   std::atomic<bool> failed{false};
-  ParallelChunks(cost_functions_.size(), threads, [&](size_t chunk, size_t begin, size_t end) {
-    const double* parameters[2] = {odometry_, base_T_sensor_};
-    Eigen::Matrix<double, 3, 3, Eigen::RowMajor> j_odometry, j_sensor;
-    double* jacobians[2] = {j_odometry.data(), j_sensor.data()};
-    Eigen::Matrix<double, 3, kNumLaserParams> j;
-    Eigen::Vector3d r;
-    for (size_t k = begin; k < end; ++k) {
-      if (!cost_functions_[k]->Evaluate(parameters, r.data(), jacobians)) {
-        failed = true;
-        return;
-      }
-      j << j_odometry, j_sensor;
-      sums[chunk].Add(j, r, EvaluateLoss(loss_.get(), r.squaredNorm()));
-    }
-  });
+  ParallelChunks(cost_functions_.size(), threads, kMinChunk,
+                 [&](size_t chunk, size_t begin, size_t end) {
+                   const double* parameters[2] = {odometry_, base_T_sensor_};
+                   Eigen::Matrix<double, 3, 3, Eigen::RowMajor> j_odometry, j_sensor;
+                   double* jacobians[2] = {j_odometry.data(), j_sensor.data()};
+                   Eigen::Matrix<double, 3, kNumLaserParams> j;
+                   Eigen::Vector3d r;
+                   for (size_t k = begin; k < end; ++k) {
+                     if (!cost_functions_[k]->Evaluate(parameters, r.data(), jacobians)) {
+                       failed = true;
+                       return;
+                     }
+                     j << j_odometry, j_sensor;
+                     sums[chunk].Add(j, r, EvaluateLoss(loss_.get(), r.squaredNorm()));
+                   }
+                 });
   if (failed) return Status::Internal("a residual could not be evaluated at the estimate");
   for (int c = 1; c < threads; ++c) sums[0] += sums[c];
   const double n = 3.0 * cost_functions_.size();

@@ -1,9 +1,11 @@
 // LatentTimeProblem::Linearize: the Jacobian of the interval residuals, robustified as Ceres does,
 // folded into the information blocks of the globals and of the time-ordered (banded) latents.
+#include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/timing/latent_time_problem.h>
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -11,10 +13,16 @@ namespace calib {
 
 namespace {
 
+// Intervals per thread, at least.
+constexpr size_t kMinChunk = 1000;
+
 // One interval's residual and Jacobian as Ceres' Problem::Evaluate gives them with the loss
 // applied: in tangent columns (a manifold's Plus Jacobian), with Triggs' correction of the
 // robust loss (residual and Jacobian scaled by √ρ′, and a rank-one term where ρ″ > 0).
 struct RobustRow {
+  // An interval touches the six parameters, the clock (3) and at most two sample times and four
+  // encoder times.
+  static constexpr int kMaxEntries = 16;
   struct Entry {
     int column;
     double value[3];  // Per residual component.
@@ -22,23 +30,27 @@ struct RobustRow {
   double residual[3];
   double squared_norm = 0.0;  // Of the uncorrected residual.
   double cost = 0.0;          // ½ρ.
-  std::vector<Entry> entries;
+  std::array<Entry, kMaxEntries> entries;
+  int num_entries = 0;
 };
 
+// `column_of` gives a block's first tangent column (−1: constant); `manifold_block` is the one
+// block with a manifold (the odometry's, 3 → 3), `plus` its Plus Jacobian.
 template <typename ColumnOf>
 bool EvaluateRobustRow(const ceres::CostFunction& function, const std::vector<double*>& blocks,
                        const ColumnOf& column_of, const ceres::LossFunction* loss,
-                       const ceres::Problem& problem, RobustRow* row) {
-  constexpr int kMaxAmbient = 3;
+                       const double* manifold_block, const Eigen::Matrix3d& plus, RobustRow* row) {
+  constexpr int kMaxAmbient = 3, kMaxBlocks = 12;
   const std::vector<int32_t>& sizes = function.parameter_block_sizes();
-  std::vector<double> storage(3 * kMaxAmbient * blocks.size(), 0.0);
-  std::vector<double*> jacobians(blocks.size(), nullptr);
+  if (blocks.size() > static_cast<size_t>(kMaxBlocks)) return false;
+  double storage[3 * kMaxAmbient * kMaxBlocks];
+  double* jacobians[kMaxBlocks];
   for (size_t b = 0; b < blocks.size(); ++b) {
     if (sizes[b] > kMaxAmbient) return false;
-    if (column_of(blocks[b]) >= 0) jacobians[b] = storage.data() + 3 * kMaxAmbient * b;
+    jacobians[b] = column_of(blocks[b]) >= 0 ? storage + 3 * kMaxAmbient * b : nullptr;
   }
   double r[3];
-  if (!function.Evaluate(blocks.data(), r, jacobians.data())) return false;
+  if (!function.Evaluate(blocks.data(), r, jacobians)) return false;
   const double s = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
   double rho[3] = {s, 1.0, 0.0};
   if (loss) loss->Evaluate(s, rho);
@@ -52,32 +64,22 @@ bool EvaluateRobustRow(const ceres::CostFunction& function, const std::vector<do
     residual_scale = sqrt_rho1 / (1.0 - alpha);
     alpha_over_s = alpha / s;
   }
-  row->entries.clear();
+  row->num_entries = 0;
+  const Eigen::Map<const Eigen::Vector3d> rv(r);
   for (size_t b = 0; b < blocks.size(); ++b) {
     if (!jacobians[b]) continue;
     const int size = sizes[b];
+    if (row->num_entries + size > RobustRow::kMaxEntries) return false;
     // J ← √ρ′ (I − α r rᵀ/s) J, then to tangent columns.
     Eigen::Matrix<double, 3, kMaxAmbient> j = Eigen::Matrix<double, 3, kMaxAmbient>::Zero();
     for (int c = 0; c < 3; ++c) {
       for (int i = 0; i < size; ++i) j(c, i) = jacobians[b][c * size + i];
     }
-    const Eigen::Map<const Eigen::Vector3d> rv(r);
     j = (sqrt_rho1 * (j - alpha_over_s * rv * (rv.transpose() * j))).eval();
-    int tangent = size;
-    if (const ceres::Manifold* manifold = problem.GetManifold(blocks[b])) {
-      tangent = manifold->TangentSize();
-      Eigen::Matrix<double, kMaxAmbient, kMaxAmbient, Eigen::RowMajor> plus =
-          Eigen::Matrix<double, kMaxAmbient, kMaxAmbient, Eigen::RowMajor>::Zero();
-      double plus_values[kMaxAmbient * kMaxAmbient];
-      if (tangent > kMaxAmbient || !manifold->PlusJacobian(blocks[b], plus_values)) return false;
-      for (int i = 0; i < size; ++i) {
-        for (int t = 0; t < tangent; ++t) plus(i, t) = plus_values[i * tangent + t];
-      }
-      j = (j * plus).eval();
-    }
+    if (blocks[b] == manifold_block) j = (j * plus).eval();
     const int first = column_of(blocks[b]);
-    for (int t = 0; t < tangent; ++t) {
-      row->entries.push_back({first + t, {j(0, t), j(1, t), j(2, t)}});
+    for (int t = 0; t < size; ++t) {
+      row->entries[row->num_entries++] = {first + t, {j(0, t), j(1, t), j(2, t)}};
     }
   }
   for (int c = 0; c < 3; ++c) row->residual[c] = residual_scale * r[c];
@@ -89,22 +91,31 @@ void AddRow(const RobustRow& row, const ceres::LossFunction* loss, LatentLineari
   const int g = lin->num_globals;
   lin->data_cost += row.cost;
   lin->loss_sums.Add(row.squared_norm, loss, 3);
+  const RobustRow::Entry* entries = row.entries.data();
+  const int n = row.num_entries;
   for (int component = 0; component < 3; ++component) {
     const double r = row.residual[component];
     lin->rr_c(component) += r * r;
-    for (const RobustRow::Entry& a : row.entries) {
-      const int ca = a.column;
-      const double va = a.value[component];
-      if (ca >= g) lin->b_l_c[component](ca - g) += va * r;
-      for (const RobustRow::Entry& b : row.entries) {
-        const int cb = b.column;
-        const double product = va * b.value[component];
-        if (ca < g && cb < g) {
-          lin->h_gg(ca, cb) += product;
-        } else if (ca >= g && cb < g) {
+    Eigen::MatrixXd& band = lin->h_ll_band_c[component];
+    for (int a = 0; a < n; ++a) {
+      const int ca = entries[a].column;
+      const double va = entries[a].value[component];
+      if (ca < g) {
+        for (int b = 0; b < n; ++b) {
+          if (entries[b].column < g) {
+            lin->h_gg(ca, entries[b].column) += va * entries[b].value[component];
+          }
+        }
+        continue;
+      }
+      lin->b_l_c[component](ca - g) += va * r;
+      for (int b = 0; b < n; ++b) {
+        const int cb = entries[b].column;
+        const double product = va * entries[b].value[component];
+        if (cb < g) {
           lin->h_lg(ca - g, cb) += product;
-        } else if (ca >= g && cb >= ca) {
-          lin->h_ll_band_c[component](cb - ca, ca - g) += product;
+        } else if (cb >= ca) {
+          band(cb - ca, ca - g) += product;
         }
       }
     }
@@ -148,19 +159,36 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize() const {
     }
     return -1;
   };
-  std::vector<RobustRow> rows(interval_costs_.size());
-  int width = 0;
-  for (size_t i = 0; i < interval_costs_.size(); ++i) {
-    if (!EvaluateRobustRow(*interval_functions_[i], interval_blocks_[i], column_of, loss_.get(),
-                           *problem_, &rows[i])) {
-      return Status::Internal("the timing-aware problem could not be evaluated");
+  // The odometry's manifold (the only one): its Plus Jacobian is the same for every row.
+  Eigen::Matrix3d plus = Eigen::Matrix3d::Identity();
+  if (const ceres::Manifold* manifold = problem_->GetManifold(odometry_)) {
+    Eigen::Matrix<double, 3, 3, Eigen::RowMajor> values;
+    if (manifold->AmbientSize() != 3 || manifold->TangentSize() != 3 ||
+        !manifold->PlusJacobian(odometry_, values.data())) {
+      return Status::Internal("the timing-aware problem's odometry manifold is not 3 × 3");
     }
-    int lo = num_latents, hi = -1;
-    for (const RobustRow::Entry& e : rows[i].entries) {
-      if (e.column >= g) lo = std::min(lo, e.column - g), hi = std::max(hi, e.column - g);
-    }
-    if (hi >= lo) width = std::max(width, hi - lo);
+    plus = values;
   }
+  std::vector<RobustRow> rows(interval_costs_.size());
+  std::vector<int> widths(ChunkCount(rows.size(), options_.num_threads, kMinChunk), 0);
+  std::vector<char> ok(widths.size(), 1);
+  ParallelChunks(
+      rows.size(), options_.num_threads, kMinChunk, [&](int chunk, size_t begin, size_t end) {
+        for (size_t i = begin; i < end && ok[chunk]; ++i) {
+          ok[chunk] = EvaluateRobustRow(*interval_functions_[i], interval_blocks_[i], column_of,
+                                        loss_.get(), odometry_, plus, &rows[i]);
+          int lo = num_latents, hi = -1;
+          for (int e = 0; e < rows[i].num_entries; ++e) {
+            const int column = rows[i].entries[e].column;
+            if (column >= g) lo = std::min(lo, column - g), hi = std::max(hi, column - g);
+          }
+          if (hi >= lo) widths[chunk] = std::max(widths[chunk], hi - lo);
+        }
+      });
+  if (std::find(ok.begin(), ok.end(), 0) != ok.end()) {
+    return Status::Internal("the timing-aware problem could not be evaluated");
+  }
+  const int width = *std::max_element(widths.begin(), widths.end());
   lin.h_gg = Eigen::MatrixXd::Zero(g, g);
   lin.h_lg = Eigen::MatrixXd::Zero(num_latents, g);
   lin.h_ll_band = Eigen::MatrixXd::Zero(width + 1, num_latents);

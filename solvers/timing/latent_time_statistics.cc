@@ -1,4 +1,5 @@
 #include <calib/core/timing/banded_ldlt.h>
+#include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/timing/latent_time_statistics.h>
 
 #include <Eigen/Dense>
@@ -120,10 +121,11 @@ NoiseScales ScalesFromLog(const Vector5d& theta) {
 
 // One projected Newton step's direction on the free coordinates not held at a bound: the Hessian
 // by forward differences of the analytic gradient, damped until positive definite.
+// The columns' gradients are independent: they run on up to `threads` threads.
 template <typename Gradient>
 std::optional<Vector5d> NewtonDirection(const Vector5d& theta, const Vector5d& gradient,
                                         const std::array<bool, 5>& active,
-                                        const Gradient& gradient_at) {
+                                        const Gradient& gradient_at, int threads) {
   std::vector<int> index;
   for (int i = 0; i < 5; ++i) {
     if (active[i]) index.push_back(i);
@@ -131,11 +133,17 @@ std::optional<Vector5d> NewtonDirection(const Vector5d& theta, const Vector5d& g
   const int m = static_cast<int>(index.size());
   if (m == 0) return std::nullopt;
   constexpr double kStep = 1e-4;
+  std::vector<std::optional<Vector5d>> shifted_gradient(m);
+  ParallelChunks(m, threads, 1, [&](int, size_t begin, size_t end) {
+    for (size_t a = begin; a < end; ++a) {
+      Vector5d shifted = theta;
+      shifted(index[a]) += kStep;
+      shifted_gradient[a] = gradient_at(shifted);
+    }
+  });
   Eigen::MatrixXd hessian(m, m);
   for (int a = 0; a < m; ++a) {
-    Vector5d shifted = theta;
-    shifted(index[a]) += kStep;
-    const std::optional<Vector5d> g = gradient_at(shifted);
+    const std::optional<Vector5d>& g = shifted_gradient[a];
     if (!g) return std::nullopt;
     for (int b = 0; b < m; ++b) hessian(b, a) = ((*g)(index[b]) - gradient(index[b])) / kStep;
   }
@@ -201,7 +209,7 @@ NoiseScales MaximizeLatentEvidence(const LatentLinearization& lin, double offset
       }
     }
     std::optional<Vector5d> direction =
-        NewtonDirection(theta, current->gradient, active, gradient_at);
+        NewtonDirection(theta, current->gradient, active, gradient_at, fit.num_threads);
     if (!direction) break;
     // At most a factor e per step in any σ.
     const double longest = direction->cwiseAbs().maxCoeff();

@@ -50,6 +50,7 @@ StatusOr<LatentEvidence> LatentEvidenceWithGradient(const LatentLinearization& l
 struct NoiseScaleFit {
   bool scan = true, sensor = true, encoder = true;
   double floor_s = 1e-4, ceiling_s = 1.0;
+  int num_threads = 1;  // For the Hessian's columns.
 };
 NoiseScales MaximizeLatentEvidence(const LatentLinearization& lin, double offset_s,
                                    NoiseScales initial, const NoiseScaleFit& fit);

@@ -188,6 +188,7 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
   what.encoder = !options.encoder_jitter_s;
   what.floor_s = kJitterFloor;
   what.ceiling_s = std::max({data.sensor_period_s, data.encoder_period_s, 2 * kJitterFloor});
+  what.num_threads = options.calibration.refinement.num_threads;
   std::vector<NoiseScales> entered;  // The σ's each round was solved with.
   // Rebuilt only when the brackets or the clock's indices change; new σ's are set in place.
   std::unique_ptr<LatentTimeProblem> problem;
