@@ -28,6 +28,8 @@ LatentTimeProblem::LatentTimeProblem(const StreamSamples& data, SensorClockModel
   ceres::Problem::Options problem_options;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.enable_fast_removal = false;
+  // Every block is built here with matching sizes (as in LaserProblem): skip Ceres' checks.
+  problem_options.disable_all_safety_checks = true;
   problem_ = std::make_unique<ceres::Problem>(problem_options);
   sqrt_information_ =
       std::make_unique<Eigen::Matrix3d>(state.noise_sigma.cwiseInverse().asDiagonal());
