@@ -3,25 +3,12 @@
 #include <calib/tools/commands/commands.h>
 #include <calib/tools/commands/flags.h>
 #include <calib/tools/commands/help.h>
+#include <calib/tools/process_memory.h>
 
 #include <cstdio>
 #include <string>
 
-#ifdef __GLIBC__
-#include <malloc.h>
-#endif
-
 namespace {
-
-// The timing-aware solve allocates and frees matrices of megabytes every round; glibc would hand
-// each back to the kernel and fault it in again (a tenth of a 10⁴-scan run). Keep them.
-void KeepFreedMemory() {
-#ifdef __GLIBC__
-  mallopt(M_MMAP_THRESHOLD, 256 << 20);
-  mallopt(M_TRIM_THRESHOLD, 1 << 30);
-  mallopt(M_TOP_PAD, 64 << 20);
-#endif
-}
 
 constexpr char kUsage[] =
     "calib <command> [flags]\n"
@@ -33,7 +20,7 @@ constexpr char kUsage[] =
 }  // namespace
 
 int main(int argc, char** argv) {
-  KeepFreedMemory();
+  calib::KeepFreedMemory();
   int exit_code = 0;
   if (calib::cli::HandleHelpOrVersion(argc, argv, kUsage, &exit_code)) return exit_code;
   calib::cli::ParseFlags(kUsage, &argc, &argv);
