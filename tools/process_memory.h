@@ -15,6 +15,9 @@ inline void KeepFreedMemory() {
   mallopt(M_MMAP_THRESHOLD, 256 << 20);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
   mallopt(M_TOP_PAD, 64 << 20);
+  // One arena: the worker threads' large blocks would otherwise live in per-thread heaps that
+  // are unmapped and faulted in again with every short-lived thread.
+  mallopt(M_ARENA_MAX, 1);
 #endif
 }
 

@@ -23,29 +23,32 @@ bool BandedLdlt::Compute(Eigen::MatrixXd band) {
 }
 
 Eigen::MatrixXd BandedLdlt::Solve(const Eigen::MatrixXd& b) const {
+  RowMajorMatrix x = b;
+  SolveInPlace(&x);
+  return x;
+}
+
+void BandedLdlt::SolveInPlace(RowMajorMatrix* x) const {
   const Eigen::Index w = bandwidth();
   const Eigen::Index n = size();
-  // Row-major: every column is carried through each step at once, contiguous in memory.
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> x = b;
-  const Eigen::Index m = x.cols();
+  const Eigen::Index m = x->cols();
   for (Eigen::Index j = 0; j < n; ++j) {
     const double* l = &factor_(0, j);
-    const double* from = x.row(j).data();
+    const double* from = x->row(j).data();
     for (Eigen::Index a = 1; a <= w && j + a < n; ++a) {
-      double* to = x.row(j + a).data();
+      double* to = x->row(j + a).data();
       for (Eigen::Index c = 0; c < m; ++c) to[c] -= l[a] * from[c];
     }
   }
-  for (Eigen::Index j = 0; j < n; ++j) x.row(j) /= factor_(0, j);
+  for (Eigen::Index j = 0; j < n; ++j) x->row(j) /= factor_(0, j);
   for (Eigen::Index j = n - 1; j >= 0; --j) {
     const double* l = &factor_(0, j);
-    double* to = x.row(j).data();
+    double* to = x->row(j).data();
     for (Eigen::Index a = 1; a <= w && j + a < n; ++a) {
-      const double* from = x.row(j + a).data();
+      const double* from = x->row(j + a).data();
       for (Eigen::Index c = 0; c < m; ++c) to[c] -= l[a] * from[c];
     }
   }
-  return x;
 }
 
 double BandedLdlt::LogDeterminant() const { return factor_.row(0).array().log().sum(); }

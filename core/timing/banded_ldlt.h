@@ -18,8 +18,11 @@ class BandedLdlt {
   Eigen::Index size() const { return factor_.cols(); }
   Eigen::Index bandwidth() const { return factor_.rows() - 1; }
 
+  using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   // A⁻¹·B.
   Eigen::MatrixXd Solve(const Eigen::MatrixXd& b) const;
+  // X ← A⁻¹·X, row-major: every column goes through each step at once, contiguous in memory.
+  void SolveInPlace(RowMajorMatrix* x) const;
   // log det A.
   double LogDeterminant() const;
   // diag(A⁻¹).

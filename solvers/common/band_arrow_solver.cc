@@ -305,14 +305,16 @@ bool BandArrowProblem::Step(const ArrowSystem& system, double lambda, Eigen::Vec
   band.row(0) += lambda * d_l.transpose();
   Eigen::MatrixXd c = system.h_gg;
   c.diagonal() += lambda * d_g;
-  Eigen::MatrixXd x(latents(), globals_);
-  Eigen::VectorXd y(latents());
+  // [X | y] = H_ll⁻¹·[H_lg | g_l], one banded solve.
+  RowMatrix xy(latents(), globals_ + 1);
   if (latents() > 0) {
     BandedLdlt ldlt;
     if (!ldlt.Compute(std::move(band))) return false;
-    x = ldlt.Solve(Eigen::MatrixXd(system.h_lg));
-    y = ldlt.Solve(system.g_l);
+    xy << system.h_lg, system.g_l;
+    ldlt.SolveInPlace(&xy);
   }
+  const auto x = xy.leftCols(globals_);
+  const auto y = xy.col(globals_);
   *delta_g = Eigen::VectorXd::Zero(globals_);
   *global_step = 0.0;
   if (globals_ > 0) {

@@ -13,8 +13,8 @@ namespace calib {
 
 namespace {
 
-// Intervals per thread, at least.
-constexpr size_t kMinChunk = 1000;
+// Intervals per thread, at least, and per batch of rows.
+constexpr size_t kMinChunk = 1000, kBatch = 4096;
 
 // One interval's residual and Jacobian as Ceres' Problem::Evaluate gives them with the loss
 // applied: in tangent columns (a manifold's Plus Jacobian), with Triggs' correction of the
@@ -169,26 +169,16 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize() const {
     }
     plus = values;
   }
-  std::vector<RobustRow> rows(interval_costs_.size());
-  std::vector<int> widths(ChunkCount(rows.size(), options_.num_threads, kMinChunk), 0);
-  std::vector<char> ok(widths.size(), 1);
-  ParallelChunks(
-      rows.size(), options_.num_threads, kMinChunk, [&](int chunk, size_t begin, size_t end) {
-        for (size_t i = begin; i < end && ok[chunk]; ++i) {
-          ok[chunk] = EvaluateRobustRow(*interval_functions_[i], interval_blocks_[i], column_of,
-                                        loss_.get(), odometry_, plus, &rows[i]);
-          int lo = num_latents, hi = -1;
-          for (int e = 0; e < rows[i].num_entries; ++e) {
-            const int column = rows[i].entries[e].column;
-            if (column >= g) lo = std::min(lo, column - g), hi = std::max(hi, column - g);
-          }
-          if (hi >= lo) widths[chunk] = std::max(widths[chunk], hi - lo);
-        }
-      });
-  if (std::find(ok.begin(), ok.end(), 0) != ok.end()) {
-    return Status::Internal("the timing-aware problem could not be evaluated");
+  // The band's width from the blocks alone (the rows are evaluated in batches below).
+  int width = 0;
+  for (const std::vector<double*>& blocks : interval_blocks_) {
+    int lo = num_latents, hi = -1;
+    for (const double* block : blocks) {
+      const int column = column_of(block);
+      if (column >= g) lo = std::min(lo, column - g), hi = std::max(hi, column - g);
+    }
+    if (hi >= lo) width = std::max(width, hi - lo);
   }
-  const int width = *std::max_element(widths.begin(), widths.end());
   lin.h_gg = Eigen::MatrixXd::Zero(g, g);
   lin.h_lg = Eigen::MatrixXd::Zero(num_latents, g);
   lin.h_ll_band = Eigen::MatrixXd::Zero(width + 1, num_latents);
@@ -197,7 +187,24 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize() const {
     lin.h_ll_band_c[c] = Eigen::MatrixXd::Zero(width + 1, num_latents);
     lin.b_l_c[c] = Eigen::VectorXd::Zero(num_latents);
   }
-  for (const RobustRow& row : rows) AddRow(row, loss_.get(), &lin);
+  // Rows evaluated in parallel a batch at a time (a buffer that stays in cache), added in order.
+  std::vector<RobustRow> rows(std::min(interval_costs_.size(), kBatch));
+  for (size_t first = 0; first < interval_costs_.size(); first += kBatch) {
+    const size_t count = std::min(kBatch, interval_costs_.size() - first);
+    std::vector<char> ok(ChunkCount(count, options_.num_threads, kMinChunk), 1);
+    ParallelChunks(
+        count, options_.num_threads, kMinChunk, [&](int chunk, size_t begin, size_t end) {
+          for (size_t i = begin; i < end && ok[chunk]; ++i) {
+            ok[chunk] =
+                EvaluateRobustRow(*interval_functions_[first + i], interval_blocks_[first + i],
+                                  column_of, loss_.get(), odometry_, plus, &rows[i]);
+          }
+        });
+    if (std::find(ok.begin(), ok.end(), 0) != ok.end()) {
+      return Status::Internal("the timing-aware problem could not be evaluated");
+    }
+    for (size_t i = 0; i < count; ++i) AddRow(rows[i], loss_.get(), &lin);
+  }
   if (model_ == SensorClockModel::kFreeRunning) {
     lin.h_gg(8, 8) += 1.0 / (kClockDriftSigmaS * kClockDriftSigmaS);  // The curvature's prior.
     if (state_.sensor_sigma_s > 0.0) {
