@@ -1,0 +1,297 @@
+#include <calib/core/timing/banded_ldlt.h>
+#include <calib/solvers/common/band_arrow_problem.h>
+#include <calib/solvers/common/parallel_chunks.h>
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+namespace calib {
+namespace band_arrow_internal {
+namespace {
+
+// The largest residual block it takes (the timing-aware interval: 3 residuals, at most 16
+// parameters in at most 10 blocks).
+constexpr int kMaxResiduals = 4, kMaxColumns = 24, kMaxBlocks = 12;
+// How many residuals ahead the evaluation prefetches a cost function.
+constexpr size_t kPrefetchAhead = 4;
+// Residuals per evaluation thread, at least.
+constexpr size_t kMinChunk = 256;
+
+}  // namespace
+
+Status BandArrowProblem::Build(const std::vector<double*>& latents, ceres::Problem* problem) {
+  std::unordered_map<const double*, int> index;
+  for (double* value : latents) {
+    if (problem->ParameterBlockSize(value) != 1 || problem->GetManifold(value) != nullptr) {
+      return Status::Internal("a latent of the band-arrow solver is not a plain scalar block");
+    }
+    Block b;
+    b.values = value, b.size = b.tangent = 1, b.latent = true;
+    b.column = static_cast<int>(latent_blocks_.size());
+    if (problem->IsParameterBlockConstant(value)) continue;
+    index[value] = static_cast<int>(blocks_.size());
+    latent_blocks_.push_back(static_cast<int>(blocks_.size()));
+    blocks_.push_back(b);
+  }
+  std::vector<double*> all;
+  problem->GetParameterBlocks(&all);
+  for (double* value : all) {
+    if (index.count(value) || problem->IsParameterBlockConstant(value)) continue;
+    Block b;
+    b.values = value;
+    b.size = problem->ParameterBlockSize(value);
+    b.manifold = problem->GetManifold(value);
+    b.tangent = b.manifold ? b.manifold->TangentSize() : b.size;
+    b.column = globals_;
+    globals_ += b.tangent;
+    index[value] = static_cast<int>(blocks_.size());
+    blocks_.push_back(b);
+  }
+  std::vector<ceres::ResidualBlockId> ids;
+  problem->GetResidualBlocks(&ids);
+  terms_.reserve(ids.size());
+  std::vector<double*> values;
+  for (const ceres::ResidualBlockId id : ids) {
+    Term term;
+    term.cost = problem->GetCostFunctionForResidualBlock(id);
+    term.loss = problem->GetLossFunctionForResidualBlock(id);
+    problem->GetParameterBlocksForResidualBlock(id, &values);
+    const std::vector<int32_t>& sizes = term.cost->parameter_block_sizes();
+    int ambient = 0;
+    for (const int32_t size : sizes) ambient += size;
+    if (term.cost->num_residuals() > kMaxResiduals || ambient > kMaxColumns ||
+        values.size() > static_cast<size_t>(kMaxBlocks)) {
+      return Status::Internal("a residual of the band-arrow solver is larger than it supports");
+    }
+    term.first_block = static_cast<int>(term_values_.size());
+    term.num_blocks = static_cast<int>(values.size());
+    term.first_column = static_cast<int>(term_column_.size());
+    for (double* value : values) {
+      const auto it = index.find(value);
+      const int block = it == index.end() ? -1 : it->second;
+      term_values_.push_back(value);
+      term_block_.push_back(block);
+      if (block >= 0 && !blocks_[block].latent) term.columns += blocks_[block].tangent;
+    }
+    term.globals = term.columns;
+    int lo = static_cast<int>(latents.size()), hi = -1;
+    term_column_.resize(term.first_column + ambient);
+    int global_at = 0;
+    for (int p = 0; p < term.num_blocks; ++p) {
+      const int block = term_block_[term.first_block + p];
+      if (block < 0) {
+        term_offset_.push_back(-1);
+        continue;
+      }
+      const Block& b = blocks_[block];
+      int& at = b.latent ? term.columns : global_at;
+      term_offset_.push_back(at);
+      for (int c = 0; c < b.tangent; ++c) term_column_[term.first_column + at + c] = b.column + c;
+      at += b.tangent;
+      if (b.latent) lo = std::min(lo, b.column), hi = std::max(hi, b.column);
+    }
+    term_column_.resize(term.first_column + term.columns);
+    if (hi >= lo) width_ = std::max(width_, hi - lo);
+    term.first_latent = hi >= lo ? lo : static_cast<int>(latents.size());
+    terms_.push_back(term);
+  }
+  // In band order: the evaluation threads' contiguous ranges then share the costly residuals
+  // evenly (a problem adds its priors after its intervals) and each touches a stretch of the band.
+  std::stable_sort(terms_.begin(), terms_.end(),
+                   [](const Term& a, const Term& b) { return a.first_latent < b.first_latent; });
+  return Status::Ok();
+}
+
+bool BandArrowProblem::Evaluate(ArrowSystem* system, int num_threads, double* cost) const {
+  const size_t n = terms_.size();
+  const int chunks = ChunkCount(n, num_threads, kMinChunk);
+  parts_.resize(chunks);
+  std::vector<double> costs(chunks, 0.0);
+  std::vector<char> ok(chunks, 0);
+  ParallelChunks(n, num_threads, kMinChunk, [&](int chunk, size_t begin, size_t end) {
+    ArrowSystem* part = system ? (chunk == 0 ? system : &parts_[chunk]) : nullptr;
+    if (part) part->Reset(globals_, latents(), width_);
+    ok[chunk] = EvaluateRange(begin, end, part, &costs[chunk]);
+  });
+  *cost = 0.0;
+  for (int c = 0; c < chunks; ++c) {
+    if (!ok[c]) return false;
+    *cost += costs[c];
+    if (system && c > 0) system->Add(parts_[c]);
+  }
+  if (system) system->cost = *cost;
+  return true;
+}
+
+bool BandArrowProblem::EvaluateRange(size_t begin, size_t end, ArrowSystem* system,
+                                     double* cost) const {
+  // Tangent Jacobian, column-major so that a column's m ≤ kMaxResiduals entries are contiguous.
+  double jt[kMaxResiduals * kMaxColumns];
+  double r[kMaxResiduals];
+  double ambient[kMaxResiduals * kMaxColumns];
+  double* jacobians[kMaxBlocks];
+  // The globals' manifold Jacobians, the same for every residual of this evaluation.
+  std::vector<RowMatrix> plus(blocks_.size());
+  if (system) {
+    for (size_t b = 0; b < blocks_.size(); ++b) {
+      if (!blocks_[b].manifold) continue;
+      plus[b].resize(blocks_[b].size, blocks_[b].tangent);
+      blocks_[b].manifold->PlusJacobian(blocks_[b].values, plus[b].data());
+    }
+  }
+  double sum = 0.0;  // Local: the threads' outputs share a cache line.
+  for (size_t i = begin; i < end; ++i) {
+    // The cost functions are scattered over the heap: fetch a later one's first lines now.
+    if (i + kPrefetchAhead < end) {
+      const char* ahead = reinterpret_cast<const char*>(terms_[i + kPrefetchAhead].cost);
+      for (int line = 0; line < 4; ++line) __builtin_prefetch(ahead + 64 * line);
+    }
+    const Term& term = terms_[i];
+    const int m = term.cost->num_residuals();
+    const int* block = term_block_.data() + term.first_block;
+    if (system) {
+      int at = 0;
+      for (int p = 0; p < term.num_blocks; ++p) {
+        jacobians[p] = block[p] < 0 ? nullptr : ambient + at;
+        if (block[p] >= 0) at += m * blocks_[block[p]].size;
+      }
+    }
+    if (!term.cost->Evaluate(term_values_.data() + term.first_block, r,
+                             system ? jacobians : nullptr)) {
+      return false;
+    }
+    double s = 0.0;
+    for (int k = 0; k < m; ++k) s += r[k] * r[k];
+    double rho[3] = {s, 1.0, 0.0};
+    if (term.loss) term.loss->Evaluate(s, rho);
+    if (!std::isfinite(rho[0])) return false;
+    sum += 0.5 * rho[0];
+    if (system) AccumulateTerm(term, m, r, rho[1], jacobians, plus, jt, system);
+  }
+  *cost = sum;
+  if (system) system->cost = sum;
+  return true;
+}
+
+void BandArrowProblem::AccumulateTerm(const Term& term, int m, const double* r, double weight,
+                                      double* const* jacobians, const std::vector<RowMatrix>& plus,
+                                      double* jt, ArrowSystem* system) const {
+  // The tangent Jacobian, the globals' columns first.
+  for (int p = 0; p < term.num_blocks; ++p) {
+    const int index = term_block_[term.first_block + p];
+    if (index < 0) continue;
+    const Block& b = blocks_[index];
+    const Eigen::Map<const RowMatrix> j(jacobians[p], m, b.size);
+    Eigen::Map<Eigen::MatrixXd> out(jt + m * term_offset_[term.first_block + p], m, b.tangent);
+    if (b.manifold) {
+      out.noalias() = j * plus[index];
+    } else {
+      out = j;
+    }
+  }
+  // Reweighted: H += ρ′JᵀJ, g += ρ′Jᵀr, entry by entry into the arrow's pieces.
+  const int* column = term_column_.data() + term.first_column;
+  const auto dot = [&](int a, const double* v) {
+    double sum = 0.0;
+    for (int k = 0; k < m; ++k) sum += jt[m * a + k] * v[k];
+    return weight * sum;
+  };
+  for (int a = 0; a < term.columns; ++a) {
+    (a < term.globals ? system->g_g : system->g_l)(column[a]) += dot(a, r);
+  }
+  for (int a = 0; a < term.globals; ++a) {
+    for (int b = a; b < term.globals; ++b) {
+      const double v = dot(a, jt + m * b);
+      system->h_gg(column[a], column[b]) += v;
+      if (b != a) system->h_gg(column[b], column[a]) += v;
+    }
+  }
+  for (int a = term.globals; a < term.columns; ++a) {
+    const int ca = column[a];
+    for (int b = 0; b < term.globals; ++b) system->h_lg(ca, column[b]) += dot(a, jt + m * b);
+    for (int b = term.globals; b < term.columns; ++b) {
+      const int cb = column[b];
+      if (cb >= ca) system->band(cb - ca, ca) += dot(a, jt + m * b);
+    }
+  }
+}
+
+bool BandArrowProblem::Step(const ArrowSystem& system, double lambda, Eigen::VectorXd* delta_g,
+                            Eigen::VectorXd* delta_l, double* model_decrease,
+                            double* global_step) const {
+  // Marquardt's scaling, clamped as Ceres does.
+  const Eigen::VectorXd d_g = system.h_gg.diagonal().cwiseMax(1e-6).cwiseMin(1e32);
+  const Eigen::VectorXd d_l = system.band.row(0).transpose().cwiseMax(1e-6).cwiseMin(1e32);
+  Eigen::MatrixXd band = system.band;
+  band.row(0) += lambda * d_l.transpose();
+  Eigen::MatrixXd c = system.h_gg;
+  c.diagonal() += lambda * d_g;
+  // [X | y] = H_ll⁻¹·[H_lg | g_l], one banded solve.
+  RowMatrix xy(latents(), globals_ + 1);
+  if (latents() > 0) {
+    BandedLdlt ldlt;
+    if (!ldlt.Compute(std::move(band))) return false;
+    xy << system.h_lg, system.g_l;
+    ldlt.SolveInPlace(&xy);
+  }
+  const auto x = xy.leftCols(globals_);
+  const auto y = xy.col(globals_);
+  *delta_g = Eigen::VectorXd::Zero(globals_);
+  *global_step = 0.0;
+  if (globals_ > 0) {
+    const Eigen::MatrixXd s = c - system.h_lg.transpose() * x;
+    const Eigen::LDLT<Eigen::MatrixXd> schur(s);
+    if (schur.info() != Eigen::Success || !(schur.vectorD().array() > 0.0).all()) return false;
+    *delta_g = -schur.solve(system.g_g - system.h_lg.transpose() * y);
+    *global_step = std::sqrt(std::max(0.0, delta_g->dot(s * *delta_g)));
+  }
+  *delta_l = -(y + x * *delta_g);
+  if (!delta_g->allFinite() || !delta_l->allFinite()) return false;
+  // With (H + λD)Δ = −g, the undamped model's decrease −gᵀΔ − ½ΔᵀHΔ is ½(−gᵀΔ + λΔᵀDΔ).
+  const double gd = system.g_g.dot(*delta_g) + system.g_l.dot(*delta_l);
+  const double dd = delta_g->cwiseAbs2().dot(d_g) + delta_l->cwiseAbs2().dot(d_l);
+  *model_decrease = 0.5 * (-gd + lambda * dd);
+  return true;
+}
+
+void BandArrowProblem::Save() const {
+  saved_.clear();
+  for (const Block& b : blocks_) saved_.insert(saved_.end(), b.values, b.values + b.size);
+}
+
+void BandArrowProblem::Restore() const {
+  size_t at = 0;
+  for (const Block& b : blocks_) {
+    std::copy(saved_.begin() + at, saved_.begin() + at + b.size, b.values);
+    at += b.size;
+  }
+}
+
+void BandArrowProblem::Apply(const Eigen::VectorXd& delta_g, const Eigen::VectorXd& delta_l) const {
+  std::vector<double> x;
+  for (const Block& b : blocks_) {
+    if (b.latent) {
+      b.values[0] += delta_l(b.column);
+    } else if (b.manifold) {
+      x.assign(b.values, b.values + b.size);
+      b.manifold->Plus(x.data(), delta_g.data() + b.column, b.values);
+    } else {
+      for (int i = 0; i < b.size; ++i) b.values[i] += delta_g(b.column + i);
+    }
+  }
+}
+
+double BandArrowProblem::ParameterNorm() const {
+  double sum = 0.0;
+  for (const Block& b : blocks_) {
+    for (int i = 0; i < b.size; ++i) sum += b.values[i] * b.values[i];
+  }
+  return std::sqrt(sum);
+}
+
+// Levenberg–Marquardt on a built arrow.
+
+}  // namespace band_arrow_internal
+}  // namespace calib
