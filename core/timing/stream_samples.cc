@@ -43,6 +43,7 @@ Status AddSensorSamples(const std::vector<StampedPose>& poses, const std::string
   const std::vector<EncoderSample>& enc = out->encoders;
   const Pose2d* last = nullptr;
   double last_stamp = -INFINITY;
+  bool last_kept = false;
   for (size_t k = 0; k < poses.size(); ++k) {
     const StampedPose& p = poses[k];
     if (!std::isfinite(p.t_s) || !p.world_T_sensor.allFinite()) {
@@ -59,7 +60,12 @@ Status AddSensorSamples(const std::vector<StampedPose>& poses, const std::string
     }
     if (same_values) {
       // The logger picked up the same sample again: it was taken before the first pick-up.
-      ++(p.t_s == last_stamp ? out->exact_duplicates_dropped : out->held_repeats_dropped);
+      if (p.t_s == last_stamp) {
+        ++out->exact_duplicates_dropped;
+      } else {
+        ++out->held_repeats_dropped;
+        if (last_kept) out->held_stamp_s.push_back(p.t_s - out->origin_s);
+      }
       continue;
     }
     last = &p.world_T_sensor;
@@ -67,7 +73,8 @@ Status AddSensorSamples(const std::vector<StampedPose>& poses, const std::string
     const double stamp = p.t_s - out->origin_s;
     const auto after = std::upper_bound(enc.begin(), enc.end(), stamp,
                                         [](double t, const EncoderSample& s) { return t < s.t_s; });
-    if (after == enc.begin() || after == enc.end()) {  // Outside the encoder span.
+    last_kept = after != enc.begin() && after != enc.end();
+    if (!last_kept) {  // Outside the encoder span.
       ++out->outside_encoder_span;
       continue;
     }

@@ -28,10 +28,13 @@ struct StreamSamples {
   std::vector<StreamSample> samples;    // Distinct sensor samples inside the encoder span.
   std::vector<int> interval_start;      // k: (samples[k], samples[k + 1]) is an interval.
   int held_repeats_dropped = 0;         // Sensor records repeating the previous one's values.
-  int exact_duplicates_dropped = 0;     // Records repeating the previous one's stamp and values.
-  int outside_encoder_span = 0;         // Sensor samples stamped before or after every encoder.
-  double encoder_period_s = 0.0;        // Median stamp step.
-  double sensor_period_s = 0.0;         // Median stamp step of the distinct samples.
+  // The stamps (relative to origin_s) of the held repeats of samples that were kept: a logger
+  // picked that sample up again.
+  std::vector<double> held_stamp_s;
+  int exact_duplicates_dropped = 0;  // Records repeating the previous one's stamp and values.
+  int outside_encoder_span = 0;      // Sensor samples stamped before or after every encoder.
+  double encoder_period_s = 0.0;     // Median stamp step.
+  double sensor_period_s = 0.0;      // Median stamp step of the distinct samples.
 };
 
 // Fails (InvalidInput, naming `source`, the stream and the record) on too few samples, non-finite

@@ -221,12 +221,14 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
     if (clock.ok()) {
       result.free_running_score = clock->score;
       result.rounds += clock->rounds;
-      // The clock's sample indices are inferred, and a wrong one shifts every later time: in
-      // auto mode the clock model must also agree with the stamp model's six parameters.
+      // Where the motion inferred the clock's sample indices, a wrong one shifts every later
+      // time: in auto mode the clock model must then also agree with the stamp model's six
+      // parameters. Indices named by pick-up stamps are exact.
       const double shift = ParameterShift(best, *clock);
       if (!try_stamps) {
         best = std::move(clock).value();
-      } else if (clock->score < best.score && shift > kClockAgreement) {
+      } else if (clock->score < best.score && shift > kClockAgreement &&
+                 !clock->state.clock_indices_named) {
         result.warnings.push_back(
             "the free-running clock model fits better but moves a parameter by " +
             FormatDouble(shift, 1) +
@@ -251,7 +253,8 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
   // Stamps on the clock's grid (a stamp prior within 5 % of the period) name every sample.
   const bool indices_from_stamps = best.state.sensor_sigma_s > 0.0 &&
                                    best.state.sensor_sigma_s < 0.05 * best.state.clock.period_s;
-  if (best.model == SensorClockModel::kFreeRunning && !indices_from_stamps) {
+  if (best.model == SensorClockModel::kFreeRunning && !indices_from_stamps &&
+      !best.state.clock_indices_named) {
     result.warnings.push_back(
         "the free-running sensor's sample indices are inferred from the motion and the stamps: "
         "across stretches where the robot stood still a sample time may be whole periods off, "

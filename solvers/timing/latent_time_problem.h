@@ -54,6 +54,8 @@ struct LatentTimeState {
   double sensor_sigma_s = 0.0;         // Prior σ of δ_k − τ.
   double encoder_sigma_s = 0.0;        // Prior σ of η_j; 0: encoder stamps are times.
   std::vector<int> bracket;            // Per sample: the encoder samples j, j + 1 around it.
+  // The clock's indices were named by pick-up stamps (FitPickUpClock): exact, never re-assigned.
+  bool clock_indices_named = false;
 };
 
 // The Gauss–Newton information of the interval residuals (robustified) at the current point,

@@ -2,15 +2,20 @@
 #include <calib/core/timing/stamp_timing.h>
 #include <calib/solvers/common/solver_options.h>
 #include <calib/solvers/timing/clock_indices.h>
+#include <calib/solvers/timing/pick_up_clock.h>
 #include <calib/solvers/timing/timing_model_fit.h>
 
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 
 namespace calib {
 namespace {
 
+// Pick-up stamps name the clock's indices (FitPickUpClock) when at most this share of their
+// constraints is broken.
+constexpr double kNamedViolationShare = 0.001;
 // Jitter σ's are searched in [kJitterFloor, period]: below 0.1 ms no log can tell them from 0.
 constexpr double kJitterFloor = 1e-4;
 
@@ -149,6 +154,17 @@ LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModel
     const double ratio = on_grid ? stamp_ratio[k] : stamp_ratio[k] * motion_ratio[k];
     steps[k] = std::max(1.0, std::round(ratio));
   }
+  // Pick-up stamps with held repeats name their samples exactly once the period is known: the
+  // motion ratios miss skips where the robot stands still or the match is poor.
+  s.clock_indices_named = false;
+  if (!on_grid) {
+    if (const std::optional<PickUpClock> pick_up = FitPickUpClock(data)) {
+      for (size_t k = 1; k < n; ++k) steps[k] = pick_up->indices[k] - pick_up->indices[k - 1];
+      // A broken constraint puts one sample a period off, not every later one (the indices are
+      // absolute): a few are left to the robust loss.
+      s.clock_indices_named = pick_up->violations <= kNamedViolationShare * pick_up->constraints;
+    }
+  }
   s.clock_index.assign(data.samples.size(), 0.0);
   std::vector<double> stamps_s = {data.samples.front().stamp_s};
   for (size_t k = 1; k < data.samples.size(); ++k) {
@@ -156,7 +172,7 @@ LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModel
     stamps_s.push_back(data.samples[k].stamp_s);
   }
   s.clock = FitSampleClock(s.clock_index, stamps_s);
-  for (int round = 0; round < 2; ++round) {
+  for (int round = 0; round < 2 && !s.clock_indices_named; ++round) {
     s.clock_index = ReassignClockIndices(data, s);
     s.clock = FitSampleClock(s.clock_index, stamps_s);
   }
@@ -223,7 +239,7 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
       fit.state.bracket = problem->Brackets();
       problem.reset();
     }
-    if (model == SensorClockModel::kFreeRunning) {
+    if (model == SensorClockModel::kFreeRunning && !fit.state.clock_indices_named) {
       const std::vector<double> indices = ReassignClockIndices(data, fit.state);
       if (indices != fit.state.clock_index) {
         settled = false;

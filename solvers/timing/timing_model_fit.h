@@ -46,8 +46,10 @@ Status PolishTimingModel(const StreamSamples& data, const LaserTimingOptions& op
 double StartingJitter(const std::vector<double>& stamps_s, double period_s);
 
 // The clock model's starting point from a fit of the stamp model: whole periods per interval
-// (from the stamps where they sit on the period's grid and the motion agrees, else from the ratio
-// of measured to wheel motion), the clock fitted to the stamps, indices re-assigned from them, and
+// (from the stamps where they sit on the period's grid and the motion agrees; pick-up stamps with
+// held repeats name them exactly through FitPickUpClock, and are then never re-assigned; else
+// from the ratio of measured to wheel motion), the clock fitted to the stamps, indices
+// re-assigned from them, and
 // for stamps on the grid a stamp prior (τ, σ_s) from their scatter about the clock.
 LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModelFit& stamps);
 

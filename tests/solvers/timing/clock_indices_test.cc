@@ -1,6 +1,9 @@
 #include <calib/core/timing/stream_samples.h>
 #include <calib/solvers/timing/clock_indices.h>
+#include <calib/solvers/timing/pick_up_clock.h>
 #include <gtest/gtest.h>
+
+#include <optional>
 
 #include "tests/solvers/timing/timing_data_recipes.h"
 
@@ -49,6 +52,47 @@ TEST(ClockIndices, MotionPlacesTheSkipsTheLagsLeaveAmbiguous) {
   EXPECT_GT(by_lags, 50) << by_motion;
   EXPECT_LT(by_motion, by_lags / 4) << by_lags;
   EXPECT_LT(by_motion, 0.005 * static_cast<double>(truth.size()));
+}
+
+// The same log from its stamps alone: the held repeats and the distinct samples pin the period to
+// a fraction of a microsecond, and every index follows from floor((stamp − c)/P).
+TEST(PickUpClock, StampsAndHoldsNameEverySample) {
+  const auto recipes = testing::TimingRecipes();
+  const auto recipe = std::find_if(recipes.begin(), recipes.end(),
+                                   [](const auto& r) { return r.name == "robot_like"; });
+  ASSERT_NE(recipe, recipes.end());
+  const testing::TimingGenerated generated = testing::Generate(*recipe);
+  const StatusOr<StreamSamples> data =
+      BuildStreamSamples(generated.streams.odometry, generated.streams.sensor_poses, "robot_like");
+  ASSERT_TRUE(data.ok()) << data.message();
+  ASSERT_GE(data->held_stamp_s.size(), 10u);
+  std::vector<double> truth;
+  for (const StreamSample& s : data->samples) {
+    truth.push_back(static_cast<double>(generated.timing.sensor_sample_index[s.record - 1]));
+  }
+  const std::optional<PickUpClock> clock = FitPickUpClock(*data);
+  ASSERT_TRUE(clock.has_value());
+  const LoggingModel& logging = recipe->logging;
+  EXPECT_NEAR(clock->period_s, logging.sensor_period_s * (1.0 + logging.sensor_clock_drift), 1e-6);
+  EXPECT_EQ(clock->violations, 0);
+  // Where the feasible phases end close to a sample's lag, the middle one chosen can put that one
+  // sample a period off (the last sample of this log).
+  EXPECT_LE(StepMismatches(clock->indices, truth), 0.001 * static_cast<double>(truth.size()));
+}
+
+// Without held repeats the logger's own period (no skip at all) fits the stamps as well as the
+// sensor's: nothing is named.
+TEST(PickUpClock, NoHoldsNoClock) {
+  const auto recipes = testing::TimingRecipes();
+  const auto recipe = std::find_if(recipes.begin(), recipes.end(),
+                                   [](const auto& r) { return r.name == "robot_like"; });
+  ASSERT_NE(recipe, recipes.end());
+  const testing::TimingGenerated generated = testing::Generate(*recipe);
+  StatusOr<StreamSamples> data =
+      BuildStreamSamples(generated.streams.odometry, generated.streams.sensor_poses, "robot_like");
+  ASSERT_TRUE(data.ok()) << data.message();
+  data->held_stamp_s.clear();
+  EXPECT_FALSE(FitPickUpClock(*data).has_value());
 }
 
 }  // namespace

@@ -1,0 +1,34 @@
+#ifndef CALIB_SOLVERS_TIMING_PICK_UP_CLOCK_H_
+#define CALIB_SOLVERS_TIMING_PICK_UP_CLOCK_H_
+
+#include <calib/core/timing/stream_samples.h>
+
+#include <optional>
+#include <vector>
+
+// The clock of a free-running sensor read from pick-up stamps alone. A logger that stamps, at its
+// own ticks, the latest sample holds sample floor((stamp − c)/P) for the sensor's period P and a
+// phase c (the first sample's time plus the pick-up delay). So two distinct samples in a row must
+// get increasing indices, and a held repeat (the same sample picked up again) the same one. Only
+// the true (P, c) satisfy all of these: one microsecond off in P breaks them at dozens of samples
+// of a 10⁴-sample log. The holds are needed: without them P = the logger's period, which never
+// skips a sample, satisfies every constraint too.
+namespace calib {
+
+struct PickUpClock {
+  double period_s = 0.0;
+  double phase_s = 0.0;         // c, on the stamps' clock (relative to StreamSamples::origin_s).
+  int violations = 0;           // Constraints the best (P, c) breaks,
+  int constraints = 0;          // of this many (one per record after the first).
+  std::vector<double> indices;  // floor((stamp − c)/P) − that of the first sample, per sample.
+};
+
+// Searches P within ±50 % of the stamps' median step, coarse to fine on growing prefixes of the
+// log; for each P the best c comes from a sweep over the arcs of c each constraint forbids.
+// Empty when there are fewer than 10 held repeats or more than 1 % of the constraints are broken
+// (stamps that are not pick-up times of one free-running sensor).
+std::optional<PickUpClock> FitPickUpClock(const StreamSamples& data);
+
+}  // namespace calib
+
+#endif  // CALIB_SOLVERS_TIMING_PICK_UP_CLOCK_H_
