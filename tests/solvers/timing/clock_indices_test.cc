@@ -19,36 +19,54 @@ int StepMismatches(const std::vector<double>& indices, const std::vector<double>
   return count;
 }
 
+// The data/timing/robot_like recipe, its generated streams and their samples.
+struct RobotLike {
+  testing::TimingRecipe recipe;
+  testing::TimingGenerated generated;
+  StatusOr<StreamSamples> data = Status::Internal("not built");
+};
+
+RobotLike MakeRobotLike() {
+  RobotLike out;
+  for (const testing::TimingRecipe& r : testing::TimingRecipes()) {
+    if (r.name == "robot_like") out.recipe = r;
+  }
+  out.generated = testing::Generate(out.recipe);
+  out.data = BuildStreamSamples(out.generated.streams.odometry, out.generated.streams.sensor_poses,
+                                "robot_like");
+  return out;
+}
+
+// The true sample index of every sample.
+std::vector<double> TrueIndices(const RobotLike& log) {
+  std::vector<double> truth;
+  for (const StreamSample& s : log.data->samples) {
+    truth.push_back(static_cast<double>(log.generated.timing.sensor_sample_index[s.record - 1]));
+  }
+  return truth;
+}
+
 // data/timing/robot_like: a scanner free-running at 99.5 ms picked up by a 100 ms logger with
 // 5 ms jitter, so the pick-up lag sweeps across the period every ~20 s. With the clock 4 ms off
 // (about its error on such a log), the lags alone put a skip a few samples early or late at every
 // sweep; the motion puts almost all of them back.
 TEST(ClockIndices, MotionPlacesTheSkipsTheLagsLeaveAmbiguous) {
-  const auto recipes = testing::TimingRecipes();
-  const auto recipe = std::find_if(recipes.begin(), recipes.end(),
-                                   [](const auto& r) { return r.name == "robot_like"; });
-  ASSERT_NE(recipe, recipes.end());
-  const testing::TimingGenerated generated = testing::Generate(*recipe);
-  const StatusOr<StreamSamples> data =
-      BuildStreamSamples(generated.streams.odometry, generated.streams.sensor_poses, "robot_like");
-  ASSERT_TRUE(data.ok()) << data.message();
-
+  const RobotLike log = MakeRobotLike();
+  ASSERT_TRUE(log.data.ok()) << log.data.message();
   LatentTimeState state;
-  state.calibration.odometry = generated.truth.odometry;
-  state.calibration.base_T_sensor = generated.truth.base_T_sensor;
-  state.noise_sigma = recipe->sim.scan_noise_sigma;
-  std::vector<double> truth, stamps;
-  for (const StreamSample& s : data->samples) {
-    truth.push_back(static_cast<double>(generated.timing.sensor_sample_index[s.record - 1]));
-    stamps.push_back(s.stamp_s);
-  }
-  const LoggingModel& logging = recipe->logging;
+  state.calibration.odometry = log.generated.truth.odometry;
+  state.calibration.base_T_sensor = log.generated.truth.base_T_sensor;
+  state.noise_sigma = log.recipe.sim.scan_noise_sigma;
+  const std::vector<double> truth = TrueIndices(log);
+  std::vector<double> stamps;
+  for (const StreamSample& s : log.data->samples) stamps.push_back(s.stamp_s);
+  const LoggingModel& logging = log.recipe.logging;
   state.clock.period_s = logging.sensor_period_s * (1.0 + logging.sensor_clock_drift);
-  state.clock.t0_s = logging.sensor_phase_s - data->origin_s + 0.004;
+  state.clock.t0_s = logging.sensor_phase_s - log.data->origin_s + 0.004;
   state.clock_index = truth;
 
   const int by_lags = StepMismatches(ClockIndicesFromStamps(stamps, state.clock), truth);
-  const int by_motion = StepMismatches(ReassignClockIndices(*data, state), truth);
+  const int by_motion = StepMismatches(ReassignClockIndices(*log.data, state), truth);
   EXPECT_GT(by_lags, 50) << by_motion;
   EXPECT_LT(by_motion, by_lags / 4) << by_lags;
   EXPECT_LT(by_motion, 0.005 * static_cast<double>(truth.size()));
@@ -57,22 +75,13 @@ TEST(ClockIndices, MotionPlacesTheSkipsTheLagsLeaveAmbiguous) {
 // The same log from its stamps alone: the held repeats and the distinct samples pin the period to
 // a fraction of a microsecond, and every index follows from floor((stamp − c)/P).
 TEST(PickUpClock, StampsAndHoldsNameEverySample) {
-  const auto recipes = testing::TimingRecipes();
-  const auto recipe = std::find_if(recipes.begin(), recipes.end(),
-                                   [](const auto& r) { return r.name == "robot_like"; });
-  ASSERT_NE(recipe, recipes.end());
-  const testing::TimingGenerated generated = testing::Generate(*recipe);
-  const StatusOr<StreamSamples> data =
-      BuildStreamSamples(generated.streams.odometry, generated.streams.sensor_poses, "robot_like");
-  ASSERT_TRUE(data.ok()) << data.message();
-  ASSERT_GE(data->held_stamp_s.size(), 10u);
-  std::vector<double> truth;
-  for (const StreamSample& s : data->samples) {
-    truth.push_back(static_cast<double>(generated.timing.sensor_sample_index[s.record - 1]));
-  }
-  const std::optional<PickUpClock> clock = FitPickUpClock(*data);
+  const RobotLike log = MakeRobotLike();
+  ASSERT_TRUE(log.data.ok()) << log.data.message();
+  ASSERT_GE(log.data->held_stamp_s.size(), 10u);
+  const std::vector<double> truth = TrueIndices(log);
+  const std::optional<PickUpClock> clock = FitPickUpClock(*log.data);
   ASSERT_TRUE(clock.has_value());
-  const LoggingModel& logging = recipe->logging;
+  const LoggingModel& logging = log.recipe.logging;
   EXPECT_NEAR(clock->period_s, logging.sensor_period_s * (1.0 + logging.sensor_clock_drift), 1e-6);
   EXPECT_EQ(clock->violations, 0);
   // Where the feasible phases end close to a sample's lag, the middle one chosen can put that one
@@ -83,16 +92,10 @@ TEST(PickUpClock, StampsAndHoldsNameEverySample) {
 // Without held repeats the logger's own period (no skip at all) fits the stamps as well as the
 // sensor's: nothing is named.
 TEST(PickUpClock, NoHoldsNoClock) {
-  const auto recipes = testing::TimingRecipes();
-  const auto recipe = std::find_if(recipes.begin(), recipes.end(),
-                                   [](const auto& r) { return r.name == "robot_like"; });
-  ASSERT_NE(recipe, recipes.end());
-  const testing::TimingGenerated generated = testing::Generate(*recipe);
-  StatusOr<StreamSamples> data =
-      BuildStreamSamples(generated.streams.odometry, generated.streams.sensor_poses, "robot_like");
-  ASSERT_TRUE(data.ok()) << data.message();
-  data->held_stamp_s.clear();
-  EXPECT_FALSE(FitPickUpClock(*data).has_value());
+  RobotLike log = MakeRobotLike();
+  ASSERT_TRUE(log.data.ok()) << log.data.message();
+  log.data->held_stamp_s.clear();
+  EXPECT_FALSE(FitPickUpClock(*log.data).has_value());
 }
 
 }  // namespace
