@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace calib {
 namespace {
@@ -100,6 +101,13 @@ StatusOr<StreamSamples> BuildStreamSamples(const std::vector<EncoderSample>& odo
   }
   out.encoder_period_s = MedianStep(encoder_stamps);
   CALIB_RETURN_IF_ERROR(AddSensorSamples(sensor_poses, source + " (sensor poses)", &out));
+  if (out.samples.size() < 2) {
+    return Status::InvalidInput(
+        source + " (sensor poses): " + std::to_string(out.samples.size()) +
+        " distinct sample(s) inside the encoders' time span (" +
+        std::to_string(out.held_repeats_dropped) + " rows repeat the values before them, " +
+        std::to_string(out.outside_encoder_span) + " lie outside the span); needs at least 2");
+  }
   std::vector<double> stamps;
   for (const StreamSample& s : out.samples) stamps.push_back(s.stamp_s);
   out.sensor_period_s = MedianStep(stamps);

@@ -120,5 +120,19 @@ TEST(LaserTimingCalibration, SamplesOutsideTheEncoderSpanAreNamed) {
   EXPECT_LT(r->intervals, 320);
 }
 
+// A sensor stream whose rows all repeat one sample's values (a logger stuck on a dead sensor) is
+// an error that says so, with the counts.
+TEST(LaserTimingCalibration, AStreamOfOneHeldSampleIsAnError) {
+  LaserStreams streams = SimulateLaserStreams(ScanningRobot(200, 4), 50.0);
+  for (StampedPose& p : streams.sensor_poses)
+    p.world_T_sensor = streams.sensor_poses[0].world_T_sensor;
+  const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(streams);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.message().find("1 distinct sample(s)"), std::string::npos) << r.message();
+  EXPECT_NE(r.message().find(std::to_string(streams.sensor_poses.size() - 1) + " rows repeat"),
+            std::string::npos)
+      << r.message();
+}
+
 }  // namespace
 }  // namespace calib
