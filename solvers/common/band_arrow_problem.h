@@ -2,6 +2,7 @@
 #define CALIB_SOLVERS_COMMON_BAND_ARROW_PROBLEM_H_
 
 #include <calib/core/status.h>
+#include <calib/core/timing/banded_ldlt.h>
 #include <ceres/ceres.h>
 
 #include <Eigen/Core>
@@ -12,7 +13,7 @@
 namespace calib {
 namespace band_arrow_internal {
 
-using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using RowMatrix = BandedLdlt::RowMajorMatrix;  // What the banded solves work on.
 
 struct Block {
   double* values = nullptr;
