@@ -4,6 +4,7 @@
 #include <calib/core/text_file.h>
 #include <calib/core/text_number.h>
 #include <calib/core/timing/stamp_timing.h>
+#include <calib/core/timing/wheel_angle_spline.h>
 
 #include <algorithm>
 #include <cmath>
@@ -91,21 +92,6 @@ void DropUnknownLines(StreamRecords* records) {
   if (std::count(records->lines.begin(), records->lines.end(), 0) > 0) records->lines.clear();
 }
 
-// Cumulative wheel angles at time t inside segment [s, s + 1] (or exactly at sample s).
-void Interpolate(const std::vector<EncoderSample>& odometry, size_t s, double t, double* left,
-                 double* right) {
-  const EncoderSample& a = odometry[s];
-  if (t == a.t_s || s + 1 >= odometry.size()) {
-    *left = a.left_rad;
-    *right = a.right_rad;
-    return;
-  }
-  const EncoderSample& b = odometry[s + 1];
-  const double fraction = (t - a.t_s) / (b.t_s - a.t_s);
-  *left = a.left_rad + (b.left_rad - a.left_rad) * fraction;
-  *right = a.right_rad + (b.right_rad - a.right_rad) * fraction;
-}
-
 // " (line 12)" when the line is known.
 std::string LineNote(int line) {
   return line > 0 ? " (line " + std::to_string(line) + ")" : std::string();
@@ -184,12 +170,12 @@ Status UsablePoses(const std::vector<EncoderSample>& odometry,
 
 // The wheel motion over [ta, tb], where j is the last sample at or before ta and m the first at or
 // after tb (samples j+1..m-1 lie strictly inside): mean speeds, and constant-speed steps when
-// samples lie inside.
+// samples lie inside. The angles at ta and tb lie on the cubic between polls or on the line.
 void SetWheelMotion(const std::vector<EncoderSample>& odometry, size_t j, size_t m, double ta,
-                    double tb, LaserInterval* interval) {
+                    double tb, bool cubic, LaserInterval* interval) {
   double left_a, right_a, left_b, right_b;
-  Interpolate(odometry, j, ta, &left_a, &right_a);
-  Interpolate(odometry, odometry[m].t_s == tb ? m : m - 1, tb, &left_b, &right_b);
+  WheelAnglesInSegment(odometry, j, ta, cubic, &left_a, &right_a);
+  WheelAnglesInSegment(odometry, odometry[m].t_s == tb ? m : m - 1, tb, cubic, &left_b, &right_b);
   interval->left_speed = (left_b - left_a) / interval->duration_s;
   interval->right_speed = (right_b - right_a) / interval->duration_s;
   if (m > j + 1) {
@@ -252,6 +238,7 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
   size_t first = 0;
   size_t last = 0;
   CALIB_RETURN_IF_ERROR(UsablePoses(odometry, poses, names, &first, &last));
+  const bool cubic = CubicBetweenPolls(gap_limit / 5.0);
 
   const auto by_time = [](const EncoderSample& s, double t) { return s.t_s < t; };
   LaserLog log;
@@ -287,7 +274,7 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
     pending_gap = false;
     interval.record = static_cast<int>(k) + 1;
     interval.line = poses[k].line;
-    SetWheelMotion(odometry, j, m, ta, tb, &interval);
+    SetWheelMotion(odometry, j, m, ta, tb, cubic, &interval);
     log.intervals.push_back(std::move(interval));
   }
   if (log.intervals.empty()) {

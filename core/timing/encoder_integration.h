@@ -16,7 +16,9 @@
 // first-order covariance; the bearing odometry terms and the laser latent-time calibration use it.
 namespace calib {
 
-// Cumulative wheel rotations at t by linear interpolation (clamped to the samples' span).
+// Cumulative wheel rotations at t by linear interpolation (clamped to the samples' span): exact
+// where the speeds change only at the polls (the bearing simulator, a dense encoder stream); the
+// laser streams, polled more slowly than their scans, use the cubic of wheel_angle_spline.h.
 // `odometry` must be sorted by time and non-empty. Time is a double or any scalar ordered
 // against doubles (a ceres::Jet: the rotations then carry d/dt, the step's wheel speeds).
 template <typename Time>
@@ -145,14 +147,6 @@ inline Eigen::Matrix3d EncoderDisplacementCovariance(const std::vector<EncoderSa
   }
   step(left_end - left, right_end - right);
   return cov;
-}
-
-// Cumulative wheel angle at time t on the line through two encoder samples (t0, a0) and (t1, a1):
-// interpolation inside, linear extrapolation outside, so that it stays smooth in t, t0 and t1 when
-// latent times cross a sample (the caller re-brackets after the fit).
-template <typename T>
-T WheelAngleOnSegment(const T& t_s, const T& t0_s, const T& t1_s, double a0_rad, double a1_rad) {
-  return T(a0_rad) + (t_s - t0_s) / (t1_s - t0_s) * T(a1_rad - a0_rad);
 }
 
 // The robot displacement through a sequence of cumulative wheel angles (left, right), each step a

@@ -1,6 +1,7 @@
 #ifndef CALIB_PROBLEMS_LASER_LASER_LATENT_TIME_COST_H_
 #define CALIB_PROBLEMS_LASER_LASER_LATENT_TIME_COST_H_
 
+#include <calib/core/timing/wheel_angle_spline.h>
 #include <calib/problems/laser/laser_latent_time_residual.h>
 #include <ceres/cost_function.h>
 #include <ceres/jet.h>
@@ -12,11 +13,10 @@ namespace calib {
 
 // LaserLatentTimeResidual with its time chain differentiated by hand: automatic differentiation
 // runs once, on the ten inputs r(o, ℓ, α) really has (odometry, mounting, the four end angles), and
-// each end angle α = α_j + (t − e_j)/(e_{j+1} − e_j)·Δα passes on to its time blocks
-//   ∂α/∂t = Δα/Δe,  ∂α/∂e_j = Δα·(t − e_{j+1})/Δe²,  ∂α/∂e_{j+1} = −Δα·(t − e_j)/Δe²,
-// with t = stamp + δ (∂t/∂δ = 1) or t0 + P·n + a·u² (∂t/∂(t0, P, a) = (1, n, u²)). Dynamic
-// automatic differentiation over every block instead takes two passes of eight-wide jets, and this
-// residual is the timing-aware solve's main cost.
+// each end angle α(t; e_j, e_{j+1}) passes on to its time blocks ∂α/∂t, ∂α/∂e_j, ∂α/∂e_{j+1}
+// (HermiteWheelAnglePartials), with t = stamp + δ (∂t/∂δ = 1) or t0 + P·n + a·u² (∂t/∂(t0, P, a) =
+// (1, n, u²)). Dynamic automatic differentiation over every block instead takes two passes of
+// eight-wide jets, and this residual is the timing-aware solve's main cost.
 class LaserLatentTimeCost : public ceres::CostFunction {
  public:
   LaserLatentTimeCost(LaserLatentTimeResidual residual, const std::vector<int>& block_sizes)
@@ -113,14 +113,11 @@ class LaserLatentTimeCost : public ceres::CostFunction {
       if (end.encoder_block[i] >= 0) e[i] += parameters[end.encoder_block[i]][0];
     }
     const double t = LaserLatentTimeResidual::Time(end, parameters);
-    const double span = e[1] - e[0];
-    const double delta[2] = {end.left_rad[1] - end.left_rad[0],
-                             end.right_rad[1] - end.right_rad[0]};
-    for (int w = 0; w < 2; ++w) {
-      partials->t[w] = delta[w] / span;
-      partials->e[0][w] = delta[w] * (t - e[1]) / (span * span);
-      partials->e[1][w] = -delta[w] * (t - e[0]) / (span * span);
-    }
+    const HermitePartials left = HermiteWheelAnglePartials(
+        t, e[0], e[1], end.left_rad[0], end.left_rad[1], end.left_rate[0], end.left_rate[1]);
+    const HermitePartials right = HermiteWheelAnglePartials(
+        t, e[0], e[1], end.right_rad[0], end.right_rad[1], end.right_rate[0], end.right_rate[1]);
+    *partials = EndPartials{{left.t, right.t}, {{left.e0, right.e0}, {left.e1, right.e1}}};
   }
 
   LaserLatentTimeResidual residual_;

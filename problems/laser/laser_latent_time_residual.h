@@ -27,11 +27,15 @@ struct LatentTimeEnd {
   std::array<double, 2> encoder_stamp_s = {0.0, 0.0};
   std::array<double, 2> left_rad = {0.0, 0.0};
   std::array<double, 2> right_rad = {0.0, 0.0};
+  // Their wheel rates (WheelRatesAt), held fixed while the times move.
+  std::array<double, 2> left_rate = {0.0, 0.0};
+  std::array<double, 2> right_rate = {0.0, 0.0};
 };
 
 // Laser interval residual with latent sample times. The wheel angles at the ends t_a, t_b lie on
-// the lines through their bracketing encoder samples (at their latent times e_j):
-//   α(t) = α_j + (t − e_j)/(e_{j+1} − e_j)·(α_{j+1} − α_j),
+// the cubic through their bracketing encoder samples (at their latent times e_j) with the samples'
+// wheel rates m_j (HermiteWheelAngle): with Δ = e_{j+1} − e_j and s = (t − e_j)/Δ,
+//   α(t) = α_j + (3s² − 2s³)·(α_{j+1} − α_j) + Δ·[(s³ − 2s² + s)·m_j + (s³ − s²)·m_{j+1}],
 // the robot displacement o chains constant-speed arcs α(t_a) → α_{j_a+1} → … → α_{j_b} → α(t_b),
 // and, as in LaserResidual, r = L·SensorMotionError(ℓ⁻¹ ∘ o ∘ ℓ, ŝ).
 // Blocks: 0 odometry (r_l, r_r, b), 1 base_T_sensor (x, y, θ), then the time blocks the ends name.
@@ -123,8 +127,10 @@ class LaserLatentTimeResidual {
       if (end.encoder_block[i] >= 0) e[i] += parameters[end.encoder_block[i]][0];
     }
     const T t = Time(end, parameters);
-    *left = WheelAngleOnSegment(t, e[0], e[1], end.left_rad[0], end.left_rad[1]);
-    *right = WheelAngleOnSegment(t, e[0], e[1], end.right_rad[0], end.right_rad[1]);
+    *left = HermiteWheelAngle(t, e[0], e[1], end.left_rad[0], end.left_rad[1], end.left_rate[0],
+                              end.left_rate[1]);
+    *right = HermiteWheelAngle(t, e[0], e[1], end.right_rad[0], end.right_rad[1], end.right_rate[0],
+                               end.right_rate[1]);
   }
 
  private:

@@ -46,6 +46,15 @@ LatentTimeProblem::LatentTimeProblem(const StreamSamples& data, SensorClockModel
   problem_->AddParameterBlock(base_T_sensor_, 3);
   sensor_used_.assign(data.samples.size(), 0);
   encoder_used_.assign(data.encoders.size(), 0);
+  // The wheel rates at each encoder sample, at the encoder times this problem starts from: held
+  // fixed while it is solved (the polish builds the problem again from the rounds' times).
+  if (CubicBetweenPolls(data.encoder_period_s)) {
+    const auto time_s = [&](size_t j) { return data.encoders[j].t_s + state_.encoder_latent[j]; };
+    encoder_rates_.reserve(data.encoders.size());
+    for (size_t j = 0; j < data.encoders.size(); ++j) {
+      encoder_rates_.push_back(WheelRatesAt(data.encoders, j, time_s));
+    }
+  }
   AddIntervals();
 }
 
@@ -82,6 +91,16 @@ LatentTimeEnd LatentTimeProblem::MakeEnd(int k, std::vector<double*>* blocks,
       end.encoder_block[i] =
           block_index(const_cast<double*>(&state_.encoder_latent[state_.bracket[k] + i]), 1);
     }
+  }
+  // Without rates (dense polls), both ends of the segment take its secant between the stamps: the
+  // line, up to the few % the latent encoder times move it.
+  const double secant_s = end.encoder_stamp_s[1] - end.encoder_stamp_s[0];
+  for (int i = 0; i < 2; ++i) {
+    const int j = state_.bracket[k] + i;
+    end.left_rate[i] = encoder_rates_.empty() ? (end.left_rad[1] - end.left_rad[0]) / secant_s
+                                              : encoder_rates_[j].left;
+    end.right_rate[i] = encoder_rates_.empty() ? (end.right_rad[1] - end.right_rad[0]) / secant_s
+                                               : encoder_rates_[j].right;
   }
   return end;
 }

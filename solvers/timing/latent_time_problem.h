@@ -5,6 +5,7 @@
 #include <calib/core/status.h>
 #include <calib/core/timing/sample_clock.h>
 #include <calib/core/timing/stream_samples.h>
+#include <calib/core/timing/wheel_angle_spline.h>
 #include <calib/problems/laser/laser_latent_time_residual.h>
 #include <calib/solvers/common/band_arrow_solver.h>
 #include <calib/solvers/common/robust_covariance.h>
@@ -153,6 +154,7 @@ class LatentTimeProblem {
   double offset_ = 0.0;
   double clock_[3] = {0.0, 0.0, 0.0};
   std::vector<char> sensor_used_, encoder_used_;
+  std::vector<WheelRates> encoder_rates_;
   std::vector<ceres::ResidualBlockId> interval_costs_;
   std::vector<const ceres::CostFunction*> interval_functions_;
   std::vector<std::vector<double*>> interval_blocks_;

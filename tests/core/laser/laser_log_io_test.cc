@@ -1,5 +1,4 @@
 #include <calib/core/laser/laser_log_io.h>
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -475,46 +474,32 @@ TEST_F(LaserLogIoTest, WritersReportErrors) {
 // Raw streams.
 
 // Wheel speeds constant over blocks of encoder periods; the angles are their exact integral.
+// Wheels at constant accelerations, encoders polled at 10 Hz: the stream reader's cubic between
+// polls reproduces the angles exactly (the speeds never change sign).
 struct WheelSignal {
   std::vector<double> times;
-  std::vector<double> left_speed;  // Over [times[i], times[i+1]).
-  std::vector<double> right_speed;
+  double left_speed = 1.0, left_acceleration = 0.15;  // rad/s, rad/s².
+  double right_speed = -0.4, right_acceleration = -0.08;
 
-  // ∫ speed over [a, b], summed segment by segment, independent of the reader's code.
-  double Rotation(double a, double b, bool left) const {
-    double total = 0.0;
-    for (size_t i = 0; i + 1 < times.size(); ++i) {
-      const double lo = std::max(a, times[i]);
-      const double hi = std::min(b, times[i + 1]);
-      if (hi > lo) total += (left ? left_speed[i] : right_speed[i]) * (hi - lo);
-    }
-    return total;
+  double Angle(double t, bool left) const {
+    return left ? left_speed * t + 0.5 * left_acceleration * t * t
+                : right_speed * t + 0.5 * right_acceleration * t * t;
   }
+  // ∫ speed over [a, b], independent of the reader's code.
+  double Rotation(double a, double b, bool left) const { return Angle(b, left) - Angle(a, left); }
 
   std::vector<EncoderSample> Samples() const {
-    std::vector<EncoderSample> samples(times.size());
-    for (size_t i = 0; i < times.size(); ++i) {
-      samples[i].t_s = times[i];
-      if (i > 0) {
-        const double dt = times[i] - times[i - 1];
-        samples[i].left_rad = samples[i - 1].left_rad + left_speed[i - 1] * dt;
-        samples[i].right_rad = samples[i - 1].right_rad + right_speed[i - 1] * dt;
-      }
-    }
+    std::vector<EncoderSample> samples;
+    for (double t : times) samples.push_back(EncoderSample{t, Angle(t, true), Angle(t, false)});
     return samples;
   }
 };
 
-// 50 Hz over [0, duration], speeds changing every 0.3 s.
+// 10 Hz over [0, duration].
 WheelSignal MakeWheelSignal(double duration) {
   WheelSignal signal;
-  const int n = static_cast<int>(std::lround(duration * 50.0));
-  for (int i = 0; i <= n; ++i) {
-    signal.times.push_back(i / 50.0);
-    const int block = i / 15;
-    signal.left_speed.push_back(1.0 + 0.7 * (block % 4) - 0.4 * (block % 3));
-    signal.right_speed.push_back(-0.5 + 0.9 * (block % 5));
-  }
+  const int n = static_cast<int>(std::lround(duration * 10.0));
+  for (int i = 0; i <= n; ++i) signal.times.push_back(i / 10.0);
   return signal;
 }
 
@@ -572,7 +557,7 @@ TEST(LaserStreamTest, IntegratesEncoderSamplesIntoSteps) {
   std::vector<StampedPose> poses = IrregularPoses(-0.3, 10.35, &rng);
   // One pose exactly on an encoder sample, one interval shorter than an encoder period (pose
   // periods are at least 0.05 s, so the order is kept).
-  poses[10].t_s = std::round(poses[10].t_s * 50.0) / 50.0;
+  poses[10].t_s = std::round(poses[10].t_s * 10.0) / 10.0;
   poses[11].t_s = poses[10].t_s + 0.005;
   ASSERT_GT(poses.back().t_s, 10.0);
   const StatusOr<LaserLog> log = LaserLogFromStreams(signal.Samples(), poses, "sim");
@@ -601,7 +586,7 @@ TEST(LaserStreamTest, EncoderGapDropsIntervalsAndMarksTheNext) {
   const WheelSignal signal = MakeWheelSignal(8.0);
   std::vector<EncoderSample> odometry;
   for (const EncoderSample& s : signal.Samples()) {
-    if (!(s.t_s > 3.0 && s.t_s < 3.6)) odometry.push_back(s);  // 0.6 s > 5 × 0.02 s.
+    if (!(s.t_s > 3.0 && s.t_s < 3.6)) odometry.push_back(s);  // 0.6 s > 5 × 0.1 s.
   }
   std::vector<StampedPose> poses;
   for (int k = 0; k < 30; ++k) {

@@ -35,6 +35,9 @@ Case StampCase() {
   c.end.encoder_block = {4, 6};
   c.end.encoder_stamp_s = {10.05, 10.15};
   c.end.left_rad = {1.3, 1.55}, c.end.right_rad = {2.1, 2.25};
+  // Wheel rates off the secants: the cubic between polls (the sample shared by the ends has one).
+  c.start.left_rate = {2.6, 2.8}, c.start.right_rate = {0.9, 1.2};
+  c.end.left_rate = {2.8, 2.3}, c.end.right_rate = {1.2, 1.6};
   return c;
 }
 
