@@ -10,7 +10,11 @@ namespace {
 constexpr int kMinHolds = 10;
 constexpr double kMaxViolationShare = 0.01;
 constexpr double kSearchSpan = 0.5;  // P within (1 ± this)·median step.
-constexpr int kCoarseSteps = 2000, kFineSteps = 80, kFineHalfWidth = 4;  // Grid steps.
+constexpr int kCoarseSteps = 10000;  // Over the span, on the first kFirstPairs pairs.
+constexpr size_t kFirstPairs = 50;
+constexpr size_t kMaxRuns = 400;      // Candidate basins refined.
+constexpr int kPointsPerWindow = 16;  // Periods tried in a candidate's window per round.
+constexpr int kMaxRounds = 40;
 
 // Consecutive records (distinct samples and held repeats, in stamp order): the earlier stamp,
 // the later one, and whether the later one is a new sample.
@@ -73,6 +77,44 @@ std::pair<int, double> BestPhase(const std::vector<Pair>& pairs, size_t count, d
   return {best + always, phase};
 }
 
+// A period's search window, the fewest constraints broken in it and the periods that break them.
+struct Candidate {
+  double lo_s, hi_s, period_s;
+  int broken;
+  double first_s = 0.0, last_s = 0.0;
+};
+
+// Each window searched on `count` pairs at kPointsPerWindow + 1 periods or more, at most
+// `spacing` apart, then shrunk to the periods that break the fewest and one spacing either side;
+// the windows within one of the fewest kept.
+std::vector<Candidate> Narrow(const std::vector<Pair>& pairs, size_t count, double max_spacing,
+                              std::vector<Candidate> candidates) {
+  int fewest = static_cast<int>(count) + 1;
+  for (Candidate& c : candidates) {
+    c.broken = static_cast<int>(count) + 1;
+    const int n = !(c.hi_s > c.lo_s)
+                      ? 0
+                      : std::max(kPointsPerWindow,
+                                 static_cast<int>(std::ceil((c.hi_s - c.lo_s) / max_spacing)));
+    const double spacing = n > 0 ? (c.hi_s - c.lo_s) / n : 0.0;
+    for (int i = 0; i <= n; ++i) {
+      const double period = c.lo_s + spacing * i;
+      const int broken = BestPhase(pairs, count, period).first;
+      if (broken < c.broken) c.broken = broken, c.first_s = period;
+      if (broken == c.broken) c.last_s = period;
+    }
+    c.period_s = 0.5 * (c.first_s + c.last_s);
+    c.lo_s = c.first_s - spacing;
+    c.hi_s = c.last_s + spacing;
+    fewest = std::min(fewest, c.broken);
+  }
+  std::vector<Candidate> kept;
+  for (const Candidate& c : candidates) {
+    if (c.broken <= fewest + 1) kept.push_back(c);
+  }
+  return kept;
+}
+
 }  // namespace
 
 std::optional<PickUpClock> FitPickUpClock(const StreamSamples& data) {
@@ -81,25 +123,46 @@ std::optional<PickUpClock> FitPickUpClock(const StreamSamples& data) {
     return std::nullopt;
   }
   const std::vector<Pair> pairs = Pairs(data);
-  double lo = (1.0 - kSearchSpan) * data.sensor_period_s;
-  double hi = (1.0 + kSearchSpan) * data.sensor_period_s;
-  int steps = kCoarseSteps;
-  double best_period = 0.0;
-  // The basin of the true P narrows as 1/(samples used): grow the prefix as the grid refines.
-  for (size_t count = 100;; count *= 4) {
-    count = std::min(count, pairs.size());
-    int best = static_cast<int>(count) + 1;
-    for (int i = 0; i <= steps; ++i) {
-      const double period = lo + (hi - lo) * i / steps;
-      const int broken = BestPhase(pairs, count, period).first;
-      if (broken < best) best = broken, best_period = period;
-    }
-    const double step = (hi - lo) / steps;
-    lo = best_period - kFineHalfWidth * step;
-    hi = best_period + kFineHalfWidth * step;
-    steps = kFineSteps;
-    if (count == pairs.size() && step < 1e-7 * best_period) break;
+  // The first pairs hold few held repeats, so fractions and neighbours of P break as few of them
+  // as P does: every run of the coarse grid within one of the fewest is a candidate. Longer
+  // prefixes narrow the basin of the true P as 1/(pairs used), and the candidates with it.
+  size_t count = std::min<size_t>(kFirstPairs, pairs.size());
+  const double step = 2.0 * kSearchSpan * data.sensor_period_s / kCoarseSteps;
+  const double lo = (1.0 - kSearchSpan) * data.sensor_period_s;
+  std::vector<Candidate> candidates;
+  for (int i = 0; i <= kCoarseSteps; ++i) {
+    candidates.push_back({lo + step * i, lo + step * i, lo + step * i, 0});
   }
+  candidates = Narrow(pairs, count, step, std::move(candidates));
+  std::vector<Candidate> runs;  // Neighbouring grid points merged, one step of margin.
+  for (const Candidate& c : candidates) {
+    if (!runs.empty() && c.period_s - runs.back().hi_s < 1.5 * step) {
+      runs.back().hi_s = c.period_s + step;
+    } else {
+      runs.push_back({c.period_s - step, c.period_s + step, c.period_s, c.broken});
+    }
+  }
+  if (runs.size() > kMaxRuns) return std::nullopt;
+  candidates = std::move(runs);
+  // On all pairs, until no window shrinks by half: the least-broken range is then resolved.
+  const auto width = [&] {
+    double total = 0.0;
+    for (const Candidate& c : candidates) total += c.hi_s - c.lo_s;
+    return total;
+  };
+  // The basin narrows as 1/(pairs used): twice the pairs each round, half the spacing.
+  double spacing = 0.5 * step;
+  for (int round = 0; round < kMaxRounds; ++round, spacing *= 0.5) {
+    const bool all = count == pairs.size();
+    const double before = width();
+    count = std::min(2 * count, pairs.size());
+    candidates = Narrow(pairs, count, spacing, std::move(candidates));
+    if (all && width() > 0.5 * before) break;
+  }
+  const Candidate best =
+      *std::min_element(candidates.begin(), candidates.end(),
+                        [](const Candidate& a, const Candidate& b) { return a.broken < b.broken; });
+  const double best_period = best.period_s;
   PickUpClock clock;
   clock.period_s = best_period;
   std::tie(clock.violations, clock.phase_s) = BestPhase(pairs, pairs.size(), best_period);
