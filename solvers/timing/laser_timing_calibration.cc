@@ -1,6 +1,7 @@
 #include <calib/core/timing/stream_samples.h>
 #include <calib/solvers/laser/laser_consistency.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
+#include <calib/solvers/timing/pick_up_clock.h>
 #include <calib/solvers/timing/timing_model_fit.h>
 
 #include <algorithm>
@@ -198,16 +199,27 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
       options.sensor_jitter_s.value_or(StartingJitter(sensor_stamps, data.sensor_period_s));
   initial.encoder_sigma_s =
       options.encoder_jitter_s.value_or(StartingJitter(encoder_stamps, data.encoder_period_s));
-  const bool try_stamps = options.sensor_clock != "free_running";
   const bool try_clock = options.sensor_clock == "free_running" ||
                          (options.sensor_clock == "auto" && ClockCandidate(data));
-  // The stamp model always runs first: its latent times seed the clock model.
-  CALIB_ASSIGN_OR_RETURN(TimingModelFit best,
-                         FitTimingModel(data, SensorClockModel::kStamps, initial, options));
-  result.stamps_score = best.score;
-  result.rounds = best.rounds;
+  // Held repeats under distinct stamps that a pick-up clock names every sample from: the stamps
+  // are pick-up times, not sample times, and in auto mode the stamp model is not fitted (it took
+  // most of the time on such logs); the clock starts from the stamp-as-truth fit.
+  std::optional<PickUpClock> pick_up;
+  if (options.sensor_clock == "auto" && try_clock && data.held_repeats_dropped > 0) {
+    pick_up = FitPickUpClock(data);
+  }
+  const bool named = pick_up && pick_up->NamesEverySample();
+  const bool try_stamps = options.sensor_clock != "free_running" && !named;
+  // Otherwise the stamp model runs first: its latent times seed the clock model.
+  TimingModelFit best;
+  best.state = initial;
+  if (!named) {
+    CALIB_ASSIGN_OR_RETURN(best, FitTimingModel(data, SensorClockModel::kStamps, initial, options));
+    result.stamps_score = best.score;
+    result.rounds = best.rounds;
+  }
   if (try_clock) {
-    LatentTimeState clock_start = ClockStartFromTimes(data, best);
+    LatentTimeState clock_start = ClockStartFromTimes(data, best, pick_up);
     StatusOr<TimingModelFit> clock =
         FitTimingModel(data, SensorClockModel::kFreeRunning, clock_start, options);
     // The rounds' looser optimum ranks the two models unless their scores are close; then both
@@ -224,10 +236,10 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
       // Where the motion inferred the clock's sample indices, a wrong one shifts every later
       // time: in auto mode the clock model must then also agree with the stamp model's six
       // parameters. Indices named by pick-up stamps are exact.
-      const double shift = ParameterShift(best, *clock);
       if (!try_stamps) {
         best = std::move(clock).value();
-      } else if (clock->score < best.score && shift > kClockAgreement &&
+      } else if (const double shift = ParameterShift(best, *clock);
+                 clock->score < best.score && shift > kClockAgreement &&
                  !clock->state.clock_indices_named) {
         result.warnings.push_back(
             "the free-running clock model fits better but moves a parameter by " +
@@ -237,6 +249,12 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
       } else if (clock->score < best.score) {
         best = std::move(clock).value();
       }
+    } else if (named) {
+      result.warnings.push_back("the free-running clock model failed (" + clock.message() +
+                                ") although the pick-up stamps name every sample: the stamp "
+                                "model is used");
+      CALIB_ASSIGN_OR_RETURN(best,
+                             FitTimingModel(data, SensorClockModel::kStamps, initial, options));
     } else if (!try_stamps) {
       return clock.status();
     } else {

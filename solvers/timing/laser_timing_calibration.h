@@ -47,7 +47,7 @@ struct LaserTimingResult {
   int held_repeats_dropped = 0;
   int intervals = 0;
   // −2 log evidence (Laplace) + 2·globals of each model tried; lower is better.
-  double stamps_score = 0.0;
+  std::optional<double> stamps_score;  // Empty when pick-up stamps ruled the stamp model out.
   std::optional<double> free_running_score;
   int rounds = 0;
   std::vector<std::string> warnings;

@@ -21,6 +21,10 @@ struct PickUpClock {
   int violations = 0;           // Constraints the best (P, c) breaks,
   int constraints = 0;          // of this many (one per record after the first).
   std::vector<double> indices;  // floor((stamp − c)/P) − that of the first sample, per sample.
+
+  // At most 0.1 % of the constraints broken: the indices are taken as named (a broken one puts
+  // one sample a period off, not every later one, and is left to the robust loss).
+  bool NamesEverySample() const { return violations <= 0.001 * constraints; }
 };
 
 // Searches P within ±50 % of the stamps' median step, coarse to fine on growing prefixes of the

@@ -13,9 +13,6 @@
 namespace calib {
 namespace {
 
-// Pick-up stamps name the clock's indices (FitPickUpClock) when at most this share of their
-// constraints is broken.
-constexpr double kNamedViolationShare = 0.001;
 // Jitter σ's are searched in [kJitterFloor, period]: below 0.1 ms no log can tell them from 0.
 constexpr double kJitterFloor = 1e-4;
 
@@ -98,7 +95,8 @@ double StartingJitter(const std::vector<double>& stamps_s, double period_s) {
   return std::clamp(2.0 * timing.jitter_s, kJitterFloor, std::max(kJitterFloor, 0.25 * period_s));
 }
 
-LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModelFit& stamps) {
+LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModelFit& stamps,
+                                    const std::optional<PickUpClock>& pick_up_known) {
   LatentTimeState s = stamps.state;
   // Whole sensor periods per interval: where the robot moves, the ratio of the measured motion to
   // the motion the wheels made between the two stamps (a sample the logger skipped doubles it);
@@ -158,11 +156,10 @@ LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModel
   // motion ratios miss skips where the robot stands still or the match is poor.
   s.clock_indices_named = false;
   if (!on_grid) {
-    if (const std::optional<PickUpClock> pick_up = FitPickUpClock(data)) {
+    const std::optional<PickUpClock> pick_up = pick_up_known ? pick_up_known : FitPickUpClock(data);
+    if (pick_up) {
       for (size_t k = 1; k < n; ++k) steps[k] = pick_up->indices[k] - pick_up->indices[k - 1];
-      // A broken constraint puts one sample a period off, not every later one (the indices are
-      // absolute): a few are left to the robust loss.
-      s.clock_indices_named = pick_up->violations <= kNamedViolationShare * pick_up->constraints;
+      s.clock_indices_named = pick_up->NamesEverySample();
     }
   }
   s.clock_index.assign(data.samples.size(), 0.0);

@@ -5,8 +5,10 @@
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/solvers/timing/latent_time_problem.h>
 #include <calib/solvers/timing/latent_time_statistics.h>
+#include <calib/solvers/timing/pick_up_clock.h>
 
 #include <Eigen/Core>
+#include <optional>
 #include <vector>
 
 // One timing model fitted to the streams: rounds of solve → re-estimate scan noise and jitter →
@@ -51,7 +53,9 @@ double StartingJitter(const std::vector<double>& stamps_s, double period_s);
 // from the ratio of measured to wheel motion), the clock fitted to the stamps, indices
 // re-assigned from them, and
 // for stamps on the grid a stamp prior (τ, σ_s) from their scatter about the clock.
-LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModelFit& stamps);
+// `pick_up`: FitPickUpClock's result when the caller has it already.
+LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModelFit& stamps,
+                                    const std::optional<PickUpClock>& pick_up = std::nullopt);
 
 }  // namespace calib
 

@@ -34,7 +34,8 @@ nlohmann::ordered_json LatentTimingJson(const LaserTimingResult& r) {
   out["sensor_period_s"] = r.sensor_period_s;
   out["sensor_period_stddev_s"] = r.sensor_period_stddev_s;
   out["clock_drift_s"] = r.clock_drift_s;
-  out["scores"] = {{"stamps", r.stamps_score}};
+  out["scores"] = nlohmann::ordered_json::object();
+  if (r.stamps_score) out["scores"]["stamps"] = *r.stamps_score;
   if (r.free_running_score) out["scores"]["free_running"] = *r.free_running_score;
   out["intervals"] = r.intervals;
   out["held_repeats_dropped"] = r.held_repeats_dropped;

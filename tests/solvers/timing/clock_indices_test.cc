@@ -1,5 +1,6 @@
 #include <calib/core/timing/stream_samples.h>
 #include <calib/solvers/timing/clock_indices.h>
+#include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/solvers/timing/pick_up_clock.h>
 #include <gtest/gtest.h>
 
@@ -109,6 +110,27 @@ TEST(PickUpClock, NamesEverySampleOfLongLogs) {
     EXPECT_EQ(clock->violations, 0);
     EXPECT_LE(StepMismatches(clock->indices, TrueIndices(log)), 2);
   }
+}
+
+// Pick-up stamps that name every sample rule the stamp model out: in auto mode it is not fitted
+// (no score), and the clock model is within 3 σ in every parameter.
+TEST(PickUpClock, NamedSamplesSkipTheStampModel) {
+  const RobotLike log = MakeRobotLike();
+  ASSERT_TRUE(log.data.ok()) << log.data.message();
+  const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(log.generated.streams);
+  ASSERT_TRUE(r.ok()) << r.message();
+  EXPECT_EQ(r->sensor_clock, "free_running");
+  EXPECT_FALSE(r->stamps_score.has_value());
+  EXPECT_TRUE(r->free_running_score.has_value());
+  const LoggingModel& logging = log.recipe.logging;
+  EXPECT_NEAR(r->sensor_period_s, logging.sensor_period_s * (1.0 + logging.sensor_clock_drift),
+              3.0 * r->sensor_period_stddev_s);
+  LaserCalibration truth;
+  truth.odometry = log.generated.truth.odometry;
+  truth.base_T_sensor = log.generated.truth.base_T_sensor;
+  const LaserParamVector z =
+      (r->calibration.estimate.ToVector() - truth.ToVector()).cwiseQuotient(r->calibration.stddev);
+  EXPECT_LT(z.cwiseAbs().maxCoeff(), 3.0) << z.transpose();
 }
 
 // Without held repeats the logger's own period (no skip at all) fits the stamps as well as the
