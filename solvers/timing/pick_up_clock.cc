@@ -14,6 +14,9 @@ constexpr int kCoarseSteps = 10000;  // Over the span, on the first kFirstPairs 
 constexpr size_t kFirstPairs = 50;
 constexpr size_t kMaxRuns = 400;      // Candidate basins refined.
 constexpr int kPointsPerWindow = 16;  // Periods tried in a candidate's window per round.
+// At most this many (period, pair) tests per window: a window that does not narrow with the prefix
+// holds no basin of a pick-up clock (and would take ever more periods at the halving spacing).
+constexpr double kMaxTestsPerWindow = 5e7;
 constexpr int kMaxRounds = 40;
 
 // Consecutive records (distinct samples and held repeats, in stamp order): the earlier stamp,
@@ -86,16 +89,16 @@ struct Candidate {
 
 // Each window searched on `count` pairs at kPointsPerWindow + 1 periods or more, at most
 // `spacing` apart, then shrunk to the periods that break the fewest and one spacing either side;
-// the windows within one of the fewest kept.
+// the windows within one of the fewest kept (those that would need more than kMaxTestsPerWindow
+// dropped).
 std::vector<Candidate> Narrow(const std::vector<Pair>& pairs, size_t count, double max_spacing,
                               std::vector<Candidate> candidates) {
   int fewest = static_cast<int>(count) + 1;
   for (Candidate& c : candidates) {
     c.broken = static_cast<int>(count) + 1;
-    const int n = !(c.hi_s > c.lo_s)
-                      ? 0
-                      : std::max(kPointsPerWindow,
-                                 static_cast<int>(std::ceil((c.hi_s - c.lo_s) / max_spacing)));
+    const double needed = std::ceil((c.hi_s - c.lo_s) / max_spacing);
+    if (needed * static_cast<double>(count) > kMaxTestsPerWindow) continue;
+    const int n = !(c.hi_s > c.lo_s) ? 0 : std::max(kPointsPerWindow, static_cast<int>(needed));
     const double spacing = n > 0 ? (c.hi_s - c.lo_s) / n : 0.0;
     for (int i = 0; i <= n; ++i) {
       const double period = c.lo_s + spacing * i;
@@ -110,7 +113,7 @@ std::vector<Candidate> Narrow(const std::vector<Pair>& pairs, size_t count, doub
   }
   std::vector<Candidate> kept;
   for (const Candidate& c : candidates) {
-    if (c.broken <= fewest + 1) kept.push_back(c);
+    if (c.broken <= fewest + 1 && c.broken <= static_cast<int>(count)) kept.push_back(c);
   }
   return kept;
 }
@@ -159,6 +162,7 @@ std::optional<PickUpClock> FitPickUpClock(const StreamSamples& data) {
     candidates = Narrow(pairs, count, spacing, std::move(candidates));
     if (all && width() > 0.5 * before) break;
   }
+  if (candidates.empty()) return std::nullopt;
   const Candidate best =
       *std::min_element(candidates.begin(), candidates.end(),
                         [](const Candidate& a, const Candidate& b) { return a.broken < b.broken; });

@@ -1,9 +1,11 @@
+#include <calib/core/random.h>
 #include <calib/core/timing/stream_samples.h>
 #include <calib/solvers/timing/clock_indices.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/solvers/timing/pick_up_clock.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <optional>
 
 #include "tests/solvers/timing/timing_data_recipes.h"
@@ -131,6 +133,28 @@ TEST(PickUpClock, NamedSamplesSkipTheStampModel) {
   const LaserParamVector z =
       (r->calibration.estimate.ToVector() - truth.ToVector()).cwiseQuotient(r->calibration.stddev);
   EXPECT_LT(z.cwiseAbs().maxCoeff(), 3.0) << z.transpose();
+}
+
+// Stamps of no clock at all (steps uniform in 60–140 ms, held repeats anywhere): no period
+// satisfies them, nothing is named, and the search ends within its work bound on 10⁵ records.
+TEST(PickUpClock, StampsOfNoClockNameNothing) {
+  Random random(17);
+  StreamSamples data;
+  double t = 0.0;
+  for (int k = 0; k < 100000; ++k) {
+    t += 0.06 + 0.08 * random.Uniform();
+    if (random.Uniform() < 0.02) {
+      data.held_stamp_s.push_back(t);
+    } else {
+      StreamSample sample;
+      sample.stamp_s = t;
+      data.samples.push_back(sample);
+    }
+  }
+  data.sensor_period_s = 0.1;
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_FALSE(FitPickUpClock(data).has_value());
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 20.0);
 }
 
 // Without held repeats the logger's own period (no skip at all) fits the stamps as well as the
