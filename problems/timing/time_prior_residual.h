@@ -87,6 +87,27 @@ class ClockDriftPrior : public ceres::SizedCostFunction<1, 3> {
   double sigma_;
 };
 
+// The period P of a free-running clock (the block (t0, P, a)) as pick-up stamps pin it:
+// r = (P − P0)/σ_P. The motion alone leaves P a few σ_P·10³ loose and bends it with what the
+// wheel angles between polls miss.
+class ClockPeriodPrior : public ceres::SizedCostFunction<1, 3> {
+ public:
+  ClockPeriodPrior(double period_s, double sigma_s) : period_(period_s), sigma_(sigma_s) {}
+  bool Evaluate(double const* const* parameters, double* residual,
+                double** jacobians) const override {
+    residual[0] = (parameters[0][1] - period_) / sigma_;
+    if (jacobians != nullptr && jacobians[0] != nullptr) {
+      jacobians[0][0] = 0.0;
+      jacobians[0][1] = 1.0 / sigma_;
+      jacobians[0][2] = 0.0;
+    }
+    return true;
+  }
+
+ private:
+  double period_, sigma_;
+};
+
 }  // namespace calib
 
 #endif  // CALIB_PROBLEMS_TIMING_TIME_PRIOR_RESIDUAL_H_

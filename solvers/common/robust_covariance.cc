@@ -33,4 +33,25 @@ StatusOr<double> LossCorrection(const LossCorrectionSums& sums, double component
   return mean_weight * mean_meat / (mean_bread * mean_bread) * components / redundancy;
 }
 
+DominatingCovarianceResult DominatingCovariance(const Eigen::MatrixXd& model,
+                                                const Eigen::MatrixXd& sandwich) {
+  DominatingCovarianceResult out{model, 1.0};
+  const Eigen::LLT<Eigen::MatrixXd> llt(model);
+  if (model.rows() == 0 || llt.info() != Eigen::Success || sandwich.rows() != model.rows() ||
+      !sandwich.allFinite()) {
+    return out;
+  }
+  const Eigen::MatrixXd l = llt.matrixL();
+  const Eigen::MatrixXd whitened =
+      llt.matrixL().solve(llt.matrixL().solve(sandwich).transpose().eval());
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(0.5 *
+                                                             (whitened + whitened.transpose()));
+  if (eigen.info() != Eigen::Success) return out;
+  const Eigen::VectorXd ratio = eigen.eigenvalues().cwiseMax(1.0);
+  out.largest_ratio = ratio.maxCoeff();
+  const Eigen::MatrixXd lv = l * eigen.eigenvectors();
+  out.covariance = lv * ratio.asDiagonal() * lv.transpose();
+  return out;
+}
+
 }  // namespace calib

@@ -119,6 +119,18 @@ StatusOr<CorrectedCovariance<Eigen::Matrix<double, P, P>>> SandwichCovariance(
   return SandwichCovariance(sums.bread, sums.meat, components, redundancy);
 }
 
+// The smallest-looking covariance that holds two estimates of one: `model` (κ·H⁻¹, exact when
+// the model is) and `sandwich` (honest when it is not): with model = L·Lᵀ and the eigenvalues λ_i
+// of L⁻¹·sandwich·L⁻ᵀ (eigenvectors v_i), L·V·diag(max(λ_i, 1))·Vᵀ·Lᵀ. Every linear combination's
+// variance is then at least the larger of its two. `largest_ratio`: max λ_i, how much more a
+// combination varies than the model says. `model` when it is not positive definite.
+struct DominatingCovarianceResult {
+  Eigen::MatrixXd covariance;
+  double largest_ratio = 1.0;
+};
+DominatingCovarianceResult DominatingCovariance(const Eigen::MatrixXd& model,
+                                                const Eigen::MatrixXd& sandwich);
+
 }  // namespace calib
 
 #endif  // CALIB_SOLVERS_COMMON_ROBUST_COVARIANCE_H_

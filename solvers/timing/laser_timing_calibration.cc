@@ -31,7 +31,7 @@ bool ClockCandidate(const StreamSamples& data) {
 LaserParamMatrix ParameterCovariance(const TimingModelFit& fit) {
   Eigen::Matrix<double, 6, 6> plus = Eigen::Matrix<double, 6, 6>::Identity();
   plus.topLeftCorner<3, 3>() = fit.lin.odometry_plus_jacobian;
-  return fit.kappa * plus * fit.covariance.globals.topLeftCorner<6, 6>() * plus.transpose();
+  return plus * fit.globals_covariance.topLeftCorner<6, 6>() * plus.transpose();
 }
 
 // The free-running clock model is adopted in auto mode only within this many σ of the stamp
@@ -109,7 +109,7 @@ void FillCalibration(const TimingModelFit& fit, const LaserCalibrationOptions& o
 
 // τ, the period and the per-sample times with their σ.
 void FillTiming(const StreamSamples& data, const TimingModelFit& fit, LaserTimingResult* out) {
-  const Eigen::MatrixXd& cov = fit.covariance.globals;
+  const Eigen::MatrixXd& cov = fit.globals_covariance;  // κ included.
   const int n = static_cast<int>(data.samples.size());
   out->sample_time_s.assign(n, 0.0);
   out->sample_time_stddev_s.assign(n, 0.0);
@@ -133,8 +133,7 @@ void FillTiming(const StreamSamples& data, const TimingModelFit& fit, LaserTimin
       const double index = fit.state.clock_index[k];
       const Eigen::Vector3d g(1.0, index, fit.state.clock.Curvature(index));
       mean_gradient += g / n;
-      out->sample_time_stddev_s[k] =
-          std::sqrt(std::max(0.0, fit.kappa * g.dot(cov.block<3, 3>(6, 6) * g)));
+      out->sample_time_stddev_s[k] = std::sqrt(std::max(0.0, g.dot(cov.block<3, 3>(6, 6) * g)));
     } else {
       out->sample_time_stddev_s[k] = latent_sd(k);
     }
@@ -142,18 +141,18 @@ void FillTiming(const StreamSamples& data, const TimingModelFit& fit, LaserTimin
   if (fit.model == SensorClockModel::kFreeRunning) {
     out->sensor_clock = "free_running";
     out->time_offset_s = mean_lag;
-    out->time_offset_stddev_s = std::sqrt(
-        std::max(0.0, fit.kappa * mean_gradient.dot(cov.block<3, 3>(6, 6) * mean_gradient)));
+    out->time_offset_stddev_s =
+        std::sqrt(std::max(0.0, mean_gradient.dot(cov.block<3, 3>(6, 6) * mean_gradient)));
     out->sensor_jitter_s = fit.state.sensor_sigma_s;  // The stamps' scatter about the clock.
     out->sensor_period_s = fit.state.clock.period_s;
-    out->sensor_period_stddev_s = std::sqrt(std::max(0.0, fit.kappa * cov(7, 7)));
+    out->sensor_period_stddev_s = std::sqrt(std::max(0.0, cov(7, 7)));
     out->clock_drift_s = fit.state.clock.drift_s;
   } else {
     out->sensor_clock = "stamps";
     out->time_offset_s = fit.state.offset_s;
     if (fit.lin.offset_global >= 0) {
       const int i = fit.lin.offset_global;
-      out->time_offset_stddev_s = std::sqrt(std::max(0.0, fit.kappa * cov(i, i)));
+      out->time_offset_stddev_s = std::sqrt(std::max(0.0, cov(i, i)));
     }
     out->sensor_period_s = data.sensor_period_s;
     out->sensor_jitter_s = fit.state.sensor_sigma_s;

@@ -122,9 +122,29 @@ void AddRow(const RobustRow& row, const ceres::LossFunction* loss, LatentLineari
   }
 }
 
+// The row's gradient contribution Jᵀr (the loss applied: J′ᵀr′ = ρ′Jᵀr) into the interval's
+// scores; a latent the scores have not met yet takes this row
+// for its prior (`latent_row`).
+void AddScores(const RobustRow& row, int g, int interval, LatentLinearization* lin) {
+  auto& latents = lin->score_latents[interval];
+  int used = 0;
+  for (int a = 0; a < row.num_entries; ++a) {
+    const RobustRow::Entry& e = row.entries[a];
+    const double score =
+        e.value[0] * row.residual[0] + e.value[1] * row.residual[1] + e.value[2] * row.residual[2];
+    if (e.column < g) {
+      lin->score_globals(interval, e.column) += score;
+      continue;
+    }
+    const int latent = e.column - g;
+    if (used < LatentLinearization::kMaxIntervalLatents) latents[used++] = {latent, score};
+    if (lin->latent_row[latent] < 0) lin->latent_row[latent] = interval;
+  }
+}
+
 }  // namespace
 
-StatusOr<LatentLinearization> LatentTimeProblem::Linearize() const {
+StatusOr<LatentLinearization> LatentTimeProblem::Linearize(bool with_scores) const {
   LatentLinearization lin;
   lin.num_globals = 6;
   if (model_ == SensorClockModel::kFreeRunning) lin.num_globals += 3;  // t0, P, a.
@@ -187,6 +207,11 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize() const {
     lin.h_ll_band_c[c] = Eigen::MatrixXd::Zero(width + 1, num_latents);
     lin.b_l_c[c] = Eigen::VectorXd::Zero(num_latents);
   }
+  if (with_scores) {
+    lin.score_globals = Eigen::MatrixXd::Zero(interval_costs_.size(), g);
+    lin.score_latents.resize(interval_costs_.size());
+    lin.latent_row.assign(num_latents, -1);
+  }
   // Rows evaluated in parallel a batch at a time (a buffer that stays in cache), added in order.
   std::vector<RobustRow> rows(std::min(interval_costs_.size(), kBatch));
   for (size_t first = 0; first < interval_costs_.size(); first += kBatch) {
@@ -203,13 +228,27 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize() const {
     if (std::find(ok.begin(), ok.end(), 0) != ok.end()) {
       return Status::Internal("the timing-aware problem could not be evaluated");
     }
-    for (size_t i = 0; i < count; ++i) AddRow(rows[i], loss_.get(), &lin);
+    for (size_t i = 0; i < count; ++i) {
+      AddRow(rows[i], loss_.get(), &lin);
+      if (with_scores) {
+        AddScores(rows[i], g, static_cast<int>(first + i), &lin);
+      }
+    }
   }
   if (model_ == SensorClockModel::kFreeRunning) {
     lin.h_gg(8, 8) += 1.0 / (kClockDriftSigmaS * kClockDriftSigmaS);  // The curvature's prior.
+    if (state_.period_prior_sigma_s > 0.0) {
+      lin.h_gg(7, 7) += 1.0 / (state_.period_prior_sigma_s * state_.period_prior_sigma_s);
+    }
     if (state_.sensor_sigma_s > 0.0) {
       // The stamp prior: gradient (1, n, u², −1)/σ_s in (t0, P, a, τ).
       const double w = 1.0 / state_.sensor_sigma_s;
+      std::vector<int> sample_row(data_.samples.size(), -1);  // An interval at the sample.
+      for (size_t i = 0; i < data_.interval_start.size(); ++i) {
+        for (const int k : {data_.interval_start[i], data_.interval_start[i] + 1}) {
+          if (sample_row[k] < 0) sample_row[k] = static_cast<int>(i);
+        }
+      }
       for (const int k : ClockSamples()) {
         const double n = state_.clock_index[k];
         Eigen::Vector4d g(w, w * n, w * state_.clock.Curvature(n), -w);
@@ -218,6 +257,9 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize() const {
         ++lin.stamp_prior_count;
         if (lin.offset_global < 0) g(3) = 0.0;
         const int index[4] = {6, 7, 8, lin.offset_global};
+        for (int a = 0; with_scores && a < 4; ++a) {
+          if (index[a] >= 0) lin.score_globals(sample_row[k], index[a]) += g(a) * r;
+        }
         for (int a = 0; a < 4; ++a) {
           for (int b = 0; b < 4; ++b) {
             if (index[a] >= 0 && index[b] >= 0) lin.h_gg(index[a], index[b]) += g(a) * g(b);

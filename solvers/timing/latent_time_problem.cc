@@ -147,6 +147,11 @@ void LatentTimeProblem::AddIntervals() {
   }
   if (model_ == SensorClockModel::kFreeRunning) {
     problem_->AddResidualBlock(new ClockDriftPrior(kClockDriftSigmaS), nullptr, clock_);
+    if (state_.period_prior_sigma_s > 0.0) {
+      problem_->AddResidualBlock(
+          new ClockPeriodPrior(state_.period_prior_s, state_.period_prior_sigma_s), nullptr,
+          clock_);
+    }
     // The stamps: each sample's clock time lies τ from its stamp, with the pick-up scatter σ_s.
     if (state_.sensor_sigma_s > 0.0) {
       problem_->AddParameterBlock(&offset_, 1);

@@ -57,6 +57,9 @@ struct LatentTimeState {
   std::vector<int> bracket;            // Per sample: the encoder samples j, j + 1 around it.
   // The clock's indices were named by pick-up stamps (FitPickUpClock): exact, never re-assigned.
   bool clock_indices_named = false;
+  // Their period as a prior N(P0, σ²) on the clock's P (σ = 0: none).
+  double period_prior_s = 0.0;
+  double period_prior_sigma_s = 0.0;
 };
 
 // The Gauss–Newton information of the interval residuals (robustified) at the current point,
@@ -85,6 +88,18 @@ struct LatentLinearization {
   // the latents' does not hold (the stamp model has it in its sensor latents' prior).
   double stamp_prior_chi2 = 0.0;
   int stamp_prior_count = 0;
+  // Linearize(true) only: each interval's gradient contribution Jᵀr (loss applied), for a
+  // sandwich covariance. Its globals' part (intervals × G; the clock model's stamp priors added to
+  // the row of their sample's interval) and its latents' (column among the latents and value, −1
+  // past the last); `latent_row`: the interval whose row takes each latent's prior.
+  static constexpr int kMaxIntervalLatents = 8;
+  struct LatentScore {
+    int latent = -1;
+    double value = 0.0;
+  };
+  Eigen::MatrixXd score_globals;
+  std::vector<std::array<LatentScore, kMaxIntervalLatents>> score_latents;
+  std::vector<int> latent_row;
 };
 
 class LatentTimeProblem {
@@ -120,7 +135,8 @@ class LatentTimeProblem {
   std::vector<int> Brackets() const;
   // Unwhitened errors of the intervals, in data.interval_start order.
   std::vector<Eigen::Vector3d> Errors() const;
-  StatusOr<LatentLinearization> Linearize() const;
+  // `with_scores`: also each interval's gradient contribution (LatentLinearization::score_*).
+  StatusOr<LatentLinearization> Linearize(bool with_scores = false) const;
   size_t num_intervals() const { return interval_costs_.size(); }
   const ceres::LossFunction* loss() const { return loss_.get(); }
 

@@ -1,5 +1,6 @@
 #include <calib/core/timing/banded_ldlt.h>
 #include <calib/solvers/common/parallel_chunks.h>
+#include <calib/solvers/stats/score_test.h>
 #include <calib/solvers/timing/latent_time_statistics.h>
 
 #include <Eigen/Dense>
@@ -275,7 +276,44 @@ StatusOr<LatentCovariance> MarginalLatentCovariance(const LatentLinearization& l
   for (Eigen::Index i = 0; i < n; ++i) {
     out.effective_latents += 1.0 - z(i) / (prior.sigma(i) * prior.sigma(i));
   }
+  out.latent_gain = std::move(x);
   return out;
+}
+
+StatusOr<Eigen::MatrixXd> LatentProfileScores(const LatentLinearization& lin,
+                                              const LatentPrior& prior,
+                                              const LatentCovariance& covariance) {
+  const Eigen::Index rows = lin.score_globals.rows(), n = lin.latent_value.size();
+  if (rows == 0 || static_cast<Eigen::Index>(lin.score_latents.size()) != rows ||
+      static_cast<Eigen::Index>(lin.latent_row.size()) != n || covariance.latent_gain.rows() != n) {
+    return Status::Internal("the profile scores need the intervals' scores (Linearize(true))");
+  }
+  const Eigen::MatrixXd& x = covariance.latent_gain;
+  Eigen::MatrixXd u = lin.score_globals;
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    for (const LatentLinearization::LatentScore& l : lin.score_latents[i]) {
+      if (l.latent >= 0) u.row(i) -= l.value * x.row(l.latent);
+    }
+  }
+  // A prior ½((v − m)/σ)² adds λ(v − m) to its latent's score, and −λ(v − m) to τ's where m = τ.
+  for (Eigen::Index a = 0; a < n; ++a) {
+    const int row = lin.latent_row[a];
+    if (row < 0 || !(prior.sigma(a) > 0.0)) continue;
+    const double score = (lin.latent_value(a) - prior.mean(a)) / (prior.sigma(a) * prior.sigma(a));
+    u.row(row) -= score * x.row(a);
+    if (lin.latent_is_sensor[a] && lin.offset_global >= 0) u(row, lin.offset_global) -= score;
+  }
+  return u;
+}
+
+StatusOr<Eigen::MatrixXd> LatentSandwichCovariance(const LatentLinearization& lin,
+                                                   const LatentPrior& prior,
+                                                   const LatentCovariance& covariance, int lag,
+                                                   double components, double redundancy) {
+  if (!(redundancy > 0.0)) return Status::NotObservable("too few residuals for a covariance");
+  CALIB_ASSIGN_OR_RETURN(const Eigen::MatrixXd u, LatentProfileScores(lin, prior, covariance));
+  const Eigen::MatrixXd& c = covariance.globals;
+  return Eigen::MatrixXd(c * LongRunCovariance(u, lag) * c * (components / redundancy));
 }
 
 }  // namespace calib

@@ -60,9 +60,29 @@ struct LatentCovariance {
   Eigen::VectorXd latent_variance;  // Marginal variance of each latent.
   double effective_latents = 0.0;   // Σ(1 − Var_i/σ_i²): the latents' share of the fit.
   double log_det = 0.0;             // log det(H_ll + Λ).
+  Eigen::MatrixXd latent_gain;  // X = (H_ll + Λ)⁻¹H_lg (L × G): the latents' share of a step.
 };
 StatusOr<LatentCovariance> MarginalLatentCovariance(const LatentLinearization& lin,
                                                     const LatentPrior& prior);
+
+// Each interval's profile score u_i = g_i − Xᵀl_i (intervals × G): its gradient contribution to
+// the globals (g_i) and to the latents (l_i), through X = latent_gain (how the latents follow the
+// globals), the latents' priors counted in the row of their first interval. They sum to the
+// gradient of the globals with the latents optimised: 0 at the optimum. `lin` from
+// Linearize(true).
+StatusOr<Eigen::MatrixXd> LatentProfileScores(const LatentLinearization& lin,
+                                              const LatentPrior& prior,
+                                              const LatentCovariance& covariance);
+
+// The globals' cluster-robust (sandwich) covariance C·V·C·n/r, C = covariance.globals (the
+// inverse of their information with the latents marginalised), V the long-run covariance
+// (Bartlett, `lag` intervals) of the profile scores. It stays honest where the residuals hold
+// structure the model leaves out that follows a global; n residual components, r > 0 their
+// redundancy.
+StatusOr<Eigen::MatrixXd> LatentSandwichCovariance(const LatentLinearization& lin,
+                                                   const LatentPrior& prior,
+                                                   const LatentCovariance& covariance, int lag,
+                                                   double components, double redundancy);
 
 }  // namespace calib
 

@@ -7,7 +7,7 @@
 namespace calib {
 namespace {
 
-constexpr int kMinHolds = 10;
+constexpr int kMinHolds = 3;
 constexpr double kMaxViolationShare = 0.01;
 constexpr double kSearchSpan = 0.5;  // P within (1 ± this)·median step.
 constexpr int kCoarseSteps = 10000;  // Over the span, on the first kFirstPairs pairs.
@@ -169,6 +169,7 @@ std::optional<PickUpClock> FitPickUpClock(const StreamSamples& data) {
   const double best_period = best.period_s;
   PickUpClock clock;
   clock.period_s = best_period;
+  clock.period_stddev_s = (best.hi_s - best.lo_s) / std::sqrt(12.0);
   std::tie(clock.violations, clock.phase_s) = BestPhase(pairs, pairs.size(), best_period);
   clock.constraints = static_cast<int>(pairs.size());
   if (clock.violations > kMaxViolationShare * clock.constraints) return std::nullopt;

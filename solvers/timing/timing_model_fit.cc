@@ -1,5 +1,6 @@
 #include <calib/core/timing/encoder_integration.h>
 #include <calib/core/timing/stamp_timing.h>
+#include <calib/solvers/common/robust_covariance.h>
 #include <calib/solvers/common/solver_options.h>
 #include <calib/solvers/timing/clock_indices.h>
 #include <calib/solvers/timing/pick_up_clock.h>
@@ -57,6 +58,14 @@ NoiseScales ExtrapolateScales(const NoiseScales& x0, const NoiseScales& x1, cons
   return out;
 }
 
+// The Bartlett lag of the sandwich's scores, in intervals: the wheel angles between two polls
+// come from a cubic whose rates use the neighbouring polls, so an error of it spans three polls.
+int ScoreLag(const StreamSamples& data) {
+  if (!(data.sensor_period_s > 0.0)) return 1;
+  return std::clamp(static_cast<int>(std::ceil(3.0 * data.encoder_period_s / data.sensor_period_s)),
+                    1, 50);
+}
+
 // −2 log evidence (Laplace, latents integrated out) + 2·(timing globals + 1).
 double Score(const TimingModelFit& fit, const NoiseScales& scales) {
   const int timing_globals = fit.model == SensorClockModel::kFreeRunning ? 3 : 1;
@@ -71,14 +80,15 @@ double Score(const TimingModelFit& fit, const NoiseScales& scales) {
 }
 
 // The fit's state, errors and statistics at the problem's current point (σ's as they were).
-Status CaptureFit(const StreamSamples& data, const LatentTimeProblem& problem,
-                  TimingModelFit* fit) {
+Status CaptureFit(const StreamSamples& data, const LatentTimeProblem& problem, TimingModelFit* fit,
+                  bool with_scores = false) {
   fit->state = problem.state();
   fit->errors = problem.Errors();
-  CALIB_ASSIGN_OR_RETURN(fit->lin, problem.Linearize());
+  CALIB_ASSIGN_OR_RETURN(fit->lin, problem.Linearize(with_scores));
   const LatentPrior prior = MakeLatentPrior(fit->lin, fit->state.offset_s,
                                             fit->state.sensor_sigma_s, fit->state.encoder_sigma_s);
   CALIB_ASSIGN_OR_RETURN(fit->covariance, MarginalLatentCovariance(fit->lin, prior));
+  fit->globals_covariance = fit->kappa * fit->covariance.globals;
   fit->sample_time_s.clear();
   for (size_t k = 0; k < data.samples.size(); ++k) {
     fit->sample_time_s.push_back(problem.SampleTime(static_cast<int>(k)));
@@ -155,11 +165,16 @@ LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModel
   // Pick-up stamps with held repeats name their samples exactly once the period is known: the
   // motion ratios miss skips where the robot stands still or the match is poor.
   s.clock_indices_named = false;
+  s.period_prior_s = s.period_prior_sigma_s = 0.0;
   if (!on_grid) {
     const std::optional<PickUpClock> pick_up = pick_up_known ? pick_up_known : FitPickUpClock(data);
     if (pick_up) {
       for (size_t k = 1; k < n; ++k) steps[k] = pick_up->indices[k] - pick_up->indices[k - 1];
       s.clock_indices_named = pick_up->NamesEverySample();
+      if (s.clock_indices_named) {
+        s.period_prior_s = pick_up->period_s;
+        s.period_prior_sigma_s = std::max(pick_up->period_stddev_s, 1e-9);
+      }
     }
   }
   s.clock_index.assign(data.samples.size(), 0.0);
@@ -263,11 +278,22 @@ Status PolishTimingModel(const StreamSamples& data, const LaserTimingOptions& op
   fit->iterations += summary.iterations;
   fit->converged = summary.converged;
   fit->polished = true;
-  CALIB_RETURN_IF_ERROR(CaptureFit(data, problem, fit));
+  CALIB_RETURN_IF_ERROR(CaptureFit(data, problem, fit, /*with_scores=*/true));
   const double components = 3.0 * fit->errors.size();
   const double redundancy = components - fit->lin.num_globals - fit->covariance.effective_latents;
   if (!(redundancy > 0.0)) return Status::NotObservable("too few intervals for the timing model");
   CALIB_ASSIGN_OR_RETURN(fit->kappa, LossCorrection(fit->lin.loss_sums, components, redundancy));
+  const LatentPrior prior = MakeLatentPrior(fit->lin, fit->state.offset_s,
+                                            fit->state.sensor_sigma_s, fit->state.encoder_sigma_s);
+  const StatusOr<Eigen::MatrixXd> sandwich = LatentSandwichCovariance(
+      fit->lin, prior, fit->covariance, ScoreLag(data), components, redundancy);
+  const DominatingCovarianceResult reported =
+      DominatingCovariance(fit->kappa * fit->covariance.globals,
+                           sandwich.ok() ? *sandwich : fit->kappa * fit->covariance.globals);
+  fit->globals_covariance = reported.covariance;
+  fit->sandwich_ratio = reported.largest_ratio;
+  fit->lin.score_globals.resize(0, 0);
+  fit->lin.score_latents.clear();
   return Status::Ok();
 }
 

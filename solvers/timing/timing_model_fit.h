@@ -23,6 +23,10 @@ struct TimingModelFit {
   std::vector<Eigen::Vector3d> errors;
   std::vector<double> sample_time_s;  // Latent times of every sample (relative).
   double kappa = 1.0;
+  // The globals' covariance as reported: κ·covariance.globals, and once polished also at least
+  // the sandwich's in every direction (DominatingCovariance); the largest ratio between them.
+  Eigen::MatrixXd globals_covariance;
+  double sandwich_ratio = 1.0;
   double score = 0.0;  // −2 log evidence (Laplace) + 2·(number of timing globals).
   int iterations = 0;
   int rounds = 0;

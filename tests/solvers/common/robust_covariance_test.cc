@@ -124,5 +124,38 @@ TEST(RobustCovarianceTest, DynamicSandwichMatchesFixed) {
   EXPECT_LT((a->covariance - b->covariance).norm(), 1e-12);
 }
 
+// The dominating covariance holds both: every combination's variance is at least the larger of
+// its two, it is the model where the sandwich is smaller in every direction, and its largest ratio
+// is the largest generalized eigenvalue.
+TEST(RobustCovarianceTest, DominatingCovarianceHoldsBoth) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> normal;
+  const auto random_spd = [&](int n) {
+    Eigen::MatrixXd a(n, n);
+    for (int i = 0; i < n * n; ++i) a(i) = normal(rng);
+    return Eigen::MatrixXd(a * a.transpose() + 0.1 * Eigen::MatrixXd::Identity(n, n));
+  };
+  const Eigen::MatrixXd model = random_spd(5), sandwich = random_spd(5);
+  const DominatingCovarianceResult both = DominatingCovariance(model, sandwich);
+  double largest = 0.0;
+  for (int trial = 0; trial < 200; ++trial) {
+    Eigen::VectorXd g(5);
+    for (int i = 0; i < 5; ++i) g(i) = normal(rng);
+    const double v = g.dot(both.covariance * g);
+    EXPECT_GE(v, (1.0 - 1e-9) * std::max(g.dot(model * g), g.dot(sandwich * g)));
+    largest = std::max(largest, g.dot(sandwich * g) / g.dot(model * g));
+  }
+  EXPECT_GE(both.largest_ratio, largest);
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eigen(sandwich, model);
+  EXPECT_NEAR(both.largest_ratio, eigen.eigenvalues().maxCoeff(), 1e-9 * both.largest_ratio);
+
+  const DominatingCovarianceResult model_only = DominatingCovariance(model, 0.5 * model);
+  EXPECT_LT((model_only.covariance - model).cwiseAbs().maxCoeff(), 1e-9 * model.norm());
+  EXPECT_DOUBLE_EQ(model_only.largest_ratio, 1.0);
+  // A model that is not positive definite is returned as it is.
+  const Eigen::MatrixXd singular = Eigen::MatrixXd::Zero(5, 5);
+  EXPECT_EQ(DominatingCovariance(singular, sandwich).covariance, singular);
+}
+
 }  // namespace
 }  // namespace calib

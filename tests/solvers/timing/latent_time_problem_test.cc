@@ -1,7 +1,10 @@
 #include <calib/core/laser/laser_simulator.h>
 #include <calib/core/timing/stream_samples.h>
 #include <calib/solvers/timing/latent_time_problem.h>
+#include <calib/solvers/timing/latent_time_statistics.h>
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "tests/solvers/timing/perturbed_streams.h"
 
@@ -118,6 +121,36 @@ TEST(LatentTimeProblemTest, NoiseScalesSetInPlaceMatchARebuiltProblem) {
   EXPECT_NEAR(a->data_cost, b->data_cost, 1e-6 * b->data_cost);
   // A jitter cannot go from positive to 0 in place: the latents would have to go.
   EXPECT_FALSE(reused.SetNoiseScales(rescaled.noise_sigma, 0.0, rescaled.encoder_sigma_s).ok());
+}
+
+// The intervals' profile scores (latents optimised out, their priors included) sum to the
+// globals' gradient at the optimum, 0, for both clock models: without the priors' share or the
+// latents' gain they would not.
+TEST(LatentTimeProblemTest, ProfileScoresSumToZeroAtTheOptimum) {
+  for (const SensorClockModel model : {SensorClockModel::kStamps, SensorClockModel::kFreeRunning}) {
+    const LatentScene scene = MakeScene(model);
+    ASSERT_FALSE(scene.data.samples.empty());
+    LatentTimeProblem problem(scene.data, model, scene.state, TwoThreads(), true);
+    BandArrowSummary summary;
+    ASSERT_TRUE(problem.Solve(&summary, 1e-9).ok());
+    const StatusOr<LatentLinearization> lin = problem.Linearize(true);
+    ASSERT_TRUE(lin.ok()) << lin.message();
+    const LatentTimeState state = problem.state();
+    const LatentPrior prior =
+        MakeLatentPrior(*lin, state.offset_s, state.sensor_sigma_s, state.encoder_sigma_s);
+    const StatusOr<LatentCovariance> covariance = MarginalLatentCovariance(*lin, prior);
+    ASSERT_TRUE(covariance.ok()) << covariance.message();
+    const StatusOr<Eigen::MatrixXd> u = LatentProfileScores(*lin, prior, *covariance);
+    ASSERT_TRUE(u.ok()) << u.message();
+    ASSERT_EQ(u->rows(), static_cast<Eigen::Index>(problem.num_intervals()));
+    // The clock's curvature has a prior the scores leave out (it is no observation).
+    const Eigen::Index checked = model == SensorClockModel::kFreeRunning ? 8 : u->cols();
+    for (Eigen::Index g = 0; g < checked; ++g) {
+      EXPECT_LT(std::abs(u->col(g).sum()), 1e-3 * u->col(g).norm()) << g;
+    }
+    // Each interval's score is no longer 0: the meat of the sandwich.
+    EXPECT_GT(u->col(0).norm(), 0.0);
+  }
 }
 
 }  // namespace
