@@ -1,13 +1,14 @@
 #ifndef CALIB_BENCHMARKS_BENCH_LASER_MONTE_CARLO_H_
 #define CALIB_BENCHMARKS_BENCH_LASER_MONTE_CARLO_H_
 
+#include <calib/core/laser/laser_params.h>
+
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "benchmarks/bench_common.h"
-#include <calib/core/laser/laser_params.h>
 
 // Section laser_mc: Monte Carlo accuracy of the closed form, the trimmed closed form and the two
 // Ceres refinements against the Cramér–Rao bound, over seeds, on simulated logs.

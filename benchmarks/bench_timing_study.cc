@@ -31,8 +31,6 @@ LaserSimOptions StudySimOptions(int intervals, uint64_t seed) {
 
 namespace {
 
-constexpr uint32_t kChainedNoiseStream = 9001;
-
 // Exact repeats (same stamp and values) dropped; what remains must increase strictly, as the
 // stream reader requires.
 template <typename Sample, typename Same>
@@ -129,41 +127,43 @@ void RunTimingAware(const LaserStreams& streams, const LaserCalibration& truth,
   run->sensor_clock = result->sensor_clock;
 }
 
+// τ's truth: the mean of (true sample time − stamp) over each sample's first row, the rows that
+// the timing-aware calibration keeps (the simulator's stamps and times share one clock).
+double TrueTimeOffset(const LaserStreams& streams, const LoggedTimingTruth& timing) {
+  std::vector<bool> seen(timing.all_sensor_sample_times_s.size(), false);
+  double sum = 0.0;
+  int count = 0;
+  for (size_t k = 0; k < streams.sensor_poses.size(); ++k) {
+    const size_t sample = timing.sensor_sample_index[k];
+    if (seen[sample]) continue;
+    seen[sample] = true;
+    sum += timing.sensor_sample_time_s[k] - streams.sensor_poses[k].t_s;
+    ++count;
+  }
+  return count > 0 ? sum / count : 0.0;
+}
+
 }  // namespace
 
 LaserStreams SimulatePattern(const TimingPattern& pattern, const LaserSimOptions& sim,
-                             LaserSimTruth* truth) {
-  if (!pattern.chained_noise) return SimulateLoggedLaserStreams(sim, pattern.logging, truth);
+                             LaserSimTruth* truth, double* true_time_offset_s) {
   LaserSimOptions exact = sim;
-  exact.scan_noise_sigma.setZero();
+  if (pattern.chained_noise) exact.scan_noise_sigma.setZero();
   LoggedTimingTruth timing;
   LaserStreams streams = SimulateLoggedLaserStreams(exact, pattern.logging, truth, &timing);
-  // pose_k = pose_{k−1} ∘ (true motion between the samples) ∘ noise; a row that holds the same
-  // sample as the one before (a repeat or a held sample) gets the same pose.
-  Random random(sim.seed, kChainedNoiseStream);
-  std::vector<StampedPose>& poses = streams.sensor_poses;
-  Pose2d previous_true = poses.empty() ? Pose2d::Zero() : poses.front().world_T_sensor;
-  for (size_t k = 1; k < poses.size(); ++k) {
-    const Pose2d true_pose = poses[k].world_T_sensor;
-    if (timing.sensor_sample_index[k] == timing.sensor_sample_index[k - 1]) {
-      poses[k].world_T_sensor = poses[k - 1].world_T_sensor;
-      continue;
-    }
-    Pose2d noise;
-    for (int j = 0; j < 3; ++j) noise(j) = sim.scan_noise_sigma(j) * random.Normal();
-    poses[k].world_T_sensor = Compose(poses[k - 1].world_T_sensor,
-                                      Compose(Compose(Inverse(previous_true), true_pose), noise));
-    poses[k].world_T_sensor(2) = WrapAngle(poses[k].world_T_sensor(2));
-    previous_true = true_pose;
+  if (pattern.chained_noise) {
+    ChainScanMatcherNoise(sim.scan_noise_sigma, timing.sensor_sample_index, sim.seed,
+                          &streams.sensor_poses);
   }
+  if (true_time_offset_s != nullptr) *true_time_offset_s = TrueTimeOffset(streams, timing);
   return streams;
 }
 
 TimingSeedRun RunSeed(const TimingPattern& pattern, int intervals, uint64_t seed, bool diagnose) {
   TimingSeedRun run;
   LaserSimTruth sim_truth;
-  const LaserStreams streams =
-      SimulatePattern(pattern, StudySimOptions(intervals, seed), &sim_truth);
+  const LaserStreams streams = SimulatePattern(pattern, StudySimOptions(intervals, seed),
+                                               &sim_truth, &run.true_time_offset_s);
   LaserCalibration truth;
   truth.odometry = sim_truth.odometry;
   truth.base_T_sensor = sim_truth.base_T_sensor;
@@ -334,8 +334,9 @@ nlohmann::ordered_json RunTimingStudy(const BenchConfig& config) {
   }
   table.Print();
   std::printf(
-      "\ntiming_aware's own estimates per pattern (tau: the time offset; sigma_s, sigma_e: the "
-      "sensor and encoder jitter; medians):\n");
+      "\ntiming_aware's own estimates per pattern (tau: the time offset, its truth the mean "
+      "of true sample time - stamp over the distinct samples, err = tau - truth; sigma_s, "
+      "sigma_e: the sensor and encoder jitter; medians):\n");
   estimates.Print();
   out["false_alarms"] = RunFalseAlarms(clean_runs);
   for (const TimingPattern& pattern : patterns) {

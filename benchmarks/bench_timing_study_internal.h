@@ -45,6 +45,7 @@ struct TimingSeedRun {
   // The timing-aware calibration's own timing estimates and decisions.
   double time_offset_s = 0.0;
   double time_offset_stddev_s = 0.0;
+  double true_time_offset_s = 0.0;  // The simulated logger's mean lag (TrueTimeOffset).
   double sensor_jitter_s = 0.0;
   double encoder_jitter_s = 0.0;
   std::string sensor_clock;
@@ -69,9 +70,10 @@ struct TimingMethodStats {
 // The base simulation of the study (motion, noise, truth) for `intervals` sensor intervals.
 LaserSimOptions StudySimOptions(int intervals, uint64_t seed);
 
-// Simulates one log of the pattern: the streams as logged, and the truth.
+// Simulates one log of the pattern: the streams as logged, the truth, and τ's truth (the mean of
+// true sample time − stamp over the distinct samples).
 LaserStreams SimulatePattern(const TimingPattern& pattern, const LaserSimOptions& sim,
-                             LaserSimTruth* truth);
+                             LaserSimTruth* truth, double* true_time_offset_s = nullptr);
 
 // The stamp-as-truth log: exact repeated records dropped, then the stream reader.
 StatusOr<LaserLog> StampsAsTruthLog(const LaserStreams& streams);

@@ -34,6 +34,7 @@ enum Stream : uint32_t {
   kLoggerTiming,  // The logging model's draws.
   kEncoderTiming,
   kRepeats,
+  kChainedScanNoise = 9001,  // The value calib_bench's timing section drew from before.
 };
 
 using laser_sim_internal::ConstantSpeedProfile;
@@ -339,6 +340,27 @@ std::vector<LaserInterval> DropBackwardIntervals(const std::vector<LaserInterval
     dropped = false;
   }
   return kept;
+}
+
+void ChainScanMatcherNoise(const Eigen::Vector3d& sigma, const std::vector<size_t>& sample_index,
+                           uint64_t seed, std::vector<StampedPose>* poses) {
+  if (poses->empty()) return;
+  Random random(seed, Stream::kChainedScanNoise);
+  Pose2d previous_true = poses->front().world_T_sensor;
+  for (size_t k = 1; k < poses->size(); ++k) {
+    Pose2d& pose = (*poses)[k].world_T_sensor;
+    const Pose2d true_pose = pose;
+    if (!sample_index.empty() && sample_index[k] == sample_index[k - 1]) {
+      pose = (*poses)[k - 1].world_T_sensor;
+      continue;
+    }
+    Pose2d noise;
+    for (int j = 0; j < 3; ++j) noise(j) = sigma(j) * random.Normal();
+    pose = Compose((*poses)[k - 1].world_T_sensor,
+                   Compose(Compose(Inverse(previous_true), true_pose), noise));
+    pose(2) = WrapAngle(pose(2));
+    previous_true = true_pose;
+  }
 }
 
 }  // namespace calib

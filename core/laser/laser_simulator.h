@@ -89,6 +89,15 @@ LaserStreams SimulateLoggedLaserStreams(const LaserSimOptions& options, const Lo
                                         LaserSimTruth* truth = nullptr,
                                         LoggedTimingTruth* timing = nullptr);
 
+// An incremental scan matcher's noise on exact poses: each displacement between consecutive
+// distinct samples gets its own N(0, σ²) composed at its end, pose_k = pose_{k−1} ∘ (true motion)
+// ∘ noise, so errors accumulate as in chained ICP and consecutive displacements are independent
+// (MeasuredSensorPoses' independent pose noise makes them correlated by −1/2). A row holding the
+// same sample as the row before (`sample_index`, one per row; empty: every row its own) keeps its
+// pose.
+void ChainScanMatcherNoise(const Eigen::Vector3d& sigma, const std::vector<size_t>& sample_index,
+                           uint64_t seed, std::vector<StampedPose>* poses);
+
 }  // namespace calib
 
 #endif  // CALIB_CORE_LASER_LASER_SIMULATOR_H_

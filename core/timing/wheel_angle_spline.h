@@ -35,9 +35,16 @@ inline double ParabolaRate(double h_near, double d_near, double h_far, double d_
   return std::copysign(std::min(std::abs(rate), limit), rate);
 }
 
+// Which polls a rate's parabola goes through: the sample and its neighbours, or the sample and
+// the next two (forward) or the two before (backward), where they exist. The one-sided curves
+// honour every poll too; where the acceleration jumps between polls they disagree, by about 2.3
+// times the centred curve's error (RMS, for a jump at a uniformly random place).
+enum class RateSide { kCentred, kForward, kBackward };
+
 // `time_s(i)` is sample i's time (its stamp, or its estimated true time).
 template <typename TimeOf>
-WheelRates WheelRatesAt(const std::vector<EncoderSample>& odometry, size_t j, TimeOf time_s) {
+WheelRates WheelRatesAt(const std::vector<EncoderSample>& odometry, size_t j, TimeOf time_s,
+                        RateSide side = RateSide::kCentred) {
   const size_t n = odometry.size();
   if (n < 2) return {};
   // Step i: from sample i to i + 1; valid for 0 <= i < n − 1.
@@ -62,14 +69,18 @@ WheelRates WheelRatesAt(const std::vector<EncoderSample>& odometry, size_t j, Ti
   if (n == 2) return {secant(0, true), secant(0, false)};
   if (j == 0) return one_sided(0, true);
   if (j + 1 == n) return one_sided(n - 2, false);
+  if (side == RateSide::kForward && j + 2 < n) return one_sided(j, true);
+  if (side == RateSide::kBackward && j >= 2) return one_sided(j - 1, false);
   const double before = step(j - 1), after = step(j);
   if (before > 4.0 * after) return one_sided(j, true);
   if (after > 4.0 * before) return one_sided(j - 1, false);
   return rates(j - 1, j, true);
 }
 
-inline WheelRates WheelRatesAt(const std::vector<EncoderSample>& odometry, size_t j) {
-  return WheelRatesAt(odometry, j, [&](size_t i) { return odometry[i].t_s; });
+inline WheelRates WheelRatesAt(const std::vector<EncoderSample>& odometry, size_t j,
+                               RateSide side = RateSide::kCentred) {
+  return WheelRatesAt(
+      odometry, j, [&](size_t i) { return odometry[i].t_s; }, side);
 }
 
 // The angle at t on [e0, e1] from the angles a0, a1 and rates m0, m1 there, with s = (t − e0)/Δ,

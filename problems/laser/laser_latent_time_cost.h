@@ -85,6 +85,27 @@ class LaserLatentTimeCost : public ceres::CostFunction {
     return true;
   }
 
+  // The residual and its derivatives by the four end angles (start left, start right, end left,
+  // end right; 3 × 4, row-major): how an error of the wheel angles between polls moves it.
+  void EndAngleJacobian(double const* const* parameters, double* residuals,
+                        double* jacobian) const {
+    using Jet = ceres::Jet<double, 4>;
+    double ends[4];
+    LaserLatentTimeResidual::AnglesAt(residual_.start(), parameters, &ends[0], &ends[1]);
+    LaserLatentTimeResidual::AnglesAt(residual_.end(), parameters, &ends[2], &ends[3]);
+    Jet odometry[3], mounting[3], jet_ends[4], r[3];
+    for (int i = 0; i < 3; ++i) {
+      odometry[i] = Jet(parameters[0][i]);
+      mounting[i] = Jet(parameters[1][i]);
+    }
+    for (int i = 0; i < 4; ++i) jet_ends[i] = Jet(ends[i], i);
+    residual_.FromEndAngles(odometry, mounting, jet_ends, r);
+    for (int c = 0; c < 3; ++c) {
+      residuals[c] = r[c].a;
+      for (int i = 0; i < 4; ++i) jacobian[4 * c + i] = r[c].v(i);
+    }
+  }
+
   static ceres::CostFunction* Create(const Pose2d& sensor_motion,
                                      const Eigen::Matrix3d* sqrt_information,
                                      const LatentTimeEnd& start, const LatentTimeEnd& end,

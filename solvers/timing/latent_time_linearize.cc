@@ -1,5 +1,6 @@
 // LatentTimeProblem::Linearize: the Jacobian of the interval residuals, robustified as Ceres does,
 // folded into the information blocks of the globals and of the time-ordered (banded) latents.
+#include <calib/problems/laser/laser_latent_time_cost.h>
 #include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/timing/latent_time_problem.h>
 
@@ -32,6 +33,9 @@ struct RobustRow {
   double cost = 0.0;          // ½ρ.
   std::array<Entry, kMaxEntries> entries;
   int num_entries = 0;
+  // With `with_angles`: ∂r/∂(end angles) (3 × 4), corrected for the loss as the entries.
+  bool has_angles = false;
+  double angle[3][4];
 };
 
 // `column_of` gives a block's first tangent column (−1: constant); `manifold_block` is the one
@@ -39,7 +43,8 @@ struct RobustRow {
 template <typename ColumnOf>
 bool EvaluateRobustRow(const ceres::CostFunction& function, const std::vector<double*>& blocks,
                        const ColumnOf& column_of, const ceres::LossFunction* loss,
-                       const double* manifold_block, const Eigen::Matrix3d& plus, RobustRow* row) {
+                       const double* manifold_block, const Eigen::Matrix3d& plus, bool with_angles,
+                       RobustRow* row) {
   constexpr int kMaxAmbient = 3, kMaxBlocks = 12;
   const std::vector<int32_t>& sizes = function.parameter_block_sizes();
   if (blocks.size() > static_cast<size_t>(kMaxBlocks)) return false;
@@ -83,6 +88,17 @@ bool EvaluateRobustRow(const ceres::CostFunction& function, const std::vector<do
     }
   }
   for (int c = 0; c < 3; ++c) row->residual[c] = residual_scale * r[c];
+  const auto* interval = dynamic_cast<const LaserLatentTimeCost*>(&function);
+  row->has_angles = with_angles && interval != nullptr;
+  if (row->has_angles) {
+    double unused[3];
+    Eigen::Matrix<double, 3, 4, Eigen::RowMajor> a;
+    interval->EndAngleJacobian(blocks.data(), unused, a.data());
+    a = (sqrt_rho1 * (a - alpha_over_s * rv * (rv.transpose() * a))).eval();
+    for (int c = 0; c < 3; ++c) {
+      for (int w = 0; w < 4; ++w) row->angle[c][w] = a(c, w);
+    }
+  }
   return true;
 }
 
@@ -132,12 +148,20 @@ void AddScores(const RobustRow& row, int g, int interval, LatentLinearization* l
     const RobustRow::Entry& e = row.entries[a];
     const double score =
         e.value[0] * row.residual[0] + e.value[1] * row.residual[1] + e.value[2] * row.residual[2];
+    double angle[4] = {0.0, 0.0, 0.0, 0.0};
+    for (int w = 0; row.has_angles && w < 4; ++w) {
+      for (int c = 0; c < 3; ++c) angle[w] += e.value[c] * row.angle[c][w];
+    }
     if (e.column < g) {
       lin->score_globals(interval, e.column) += score;
+      for (int w = 0; w < 4; ++w) lin->angle_globals[w](interval, e.column) += angle[w];
       continue;
     }
     const int latent = e.column - g;
-    if (used < LatentLinearization::kMaxIntervalLatents) latents[used++] = {latent, score};
+    if (used < LatentLinearization::kMaxIntervalLatents) {
+      latents[used] = {latent, score};
+      std::copy(angle, angle + 4, latents[used++].angle);
+    }
     if (lin->latent_row[latent] < 0) lin->latent_row[latent] = interval;
   }
 }
@@ -211,6 +235,10 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize(bool with_scores) con
     lin.score_globals = Eigen::MatrixXd::Zero(interval_costs_.size(), g);
     lin.score_latents.resize(interval_costs_.size());
     lin.latent_row.assign(num_latents, -1);
+    for (Eigen::MatrixXd& a : lin.angle_globals)
+      a = Eigen::MatrixXd::Zero(interval_costs_.size(), g);
+    lin.interval_sample = data_.interval_start;
+    lin.sample_angle = AngleSpreads();
   }
   // Rows evaluated in parallel a batch at a time (a buffer that stays in cache), added in order.
   std::vector<RobustRow> rows(std::min(interval_costs_.size(), kBatch));
@@ -220,9 +248,9 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize(bool with_scores) con
     ParallelChunks(
         count, options_.num_threads, kMinChunk, [&](int chunk, size_t begin, size_t end) {
           for (size_t i = begin; i < end && ok[chunk]; ++i) {
-            ok[chunk] =
-                EvaluateRobustRow(*interval_functions_[first + i], interval_blocks_[first + i],
-                                  column_of, loss_.get(), odometry_, plus, &rows[i]);
+            ok[chunk] = EvaluateRobustRow(
+                *interval_functions_[first + i], interval_blocks_[first + i], column_of,
+                loss_.get(), odometry_, plus, with_scores && !encoder_rates_.empty(), &rows[i]);
           }
         });
     if (std::find(ok.begin(), ok.end(), 0) != ok.end()) {

@@ -310,6 +310,34 @@ std::vector<int> LatentTimeProblem::Brackets() const {
   return brackets;
 }
 
+std::vector<LatentLinearization::AngleSpread> LatentTimeProblem::AngleSpreads() const {
+  std::vector<LatentLinearization::AngleSpread> spreads;
+  if (encoder_rates_.empty()) return spreads;
+  const auto time_s = [&](size_t j) { return EncoderTime(static_cast<int>(j)); };
+  const size_t m = data_.encoders.size();
+  std::vector<WheelRates> forward(m), backward(m);
+  for (size_t j = 0; j < m; ++j) {
+    forward[j] = WheelRatesAt(data_.encoders, j, time_s, RateSide::kForward);
+    backward[j] = WheelRatesAt(data_.encoders, j, time_s, RateSide::kBackward);
+  }
+  spreads.resize(data_.samples.size());
+  for (size_t k = 0; k < spreads.size(); ++k) {
+    const int j = state_.bracket[k];
+    const double t = SampleTime(static_cast<int>(k)), e0 = time_s(j), e1 = time_s(j + 1);
+    const EncoderSample &a = data_.encoders[j], &b = data_.encoders[j + 1];
+    const double left =
+        HermiteWheelAngle(t, e0, e1, a.left_rad, b.left_rad, forward[j].left, forward[j + 1].left) -
+        HermiteWheelAngle(t, e0, e1, a.left_rad, b.left_rad, backward[j].left,
+                          backward[j + 1].left);
+    const double right = HermiteWheelAngle(t, e0, e1, a.right_rad, b.right_rad, forward[j].right,
+                                           forward[j + 1].right) -
+                         HermiteWheelAngle(t, e0, e1, a.right_rad, b.right_rad, backward[j].right,
+                                           backward[j + 1].right);
+    spreads[k] = {kAngleErrorPerSpread * std::abs(left), kAngleErrorPerSpread * std::abs(right), j};
+  }
+  return spreads;
+}
+
 bool LatentTimeProblem::BracketsHold() const {
   for (size_t j = 0; j + 1 < data_.encoders.size(); ++j) {
     if (!(EncoderTime(static_cast<int>(j) + 1) > EncoderTime(static_cast<int>(j)))) return false;

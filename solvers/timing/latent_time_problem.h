@@ -44,6 +44,11 @@ inline constexpr int kLatentRoundMaxIterations = 12;
 // Prior σ of the clock's curvature a (problems/timing/time_prior_residual.h, ClockDriftPrior).
 inline constexpr double kClockDriftSigmaS = 1e-3;
 
+// The centred cubic's RMS error over the RMS spread of the two one-sided ones, for a jump of the
+// acceleration at a uniformly random place between polls (where the cubic errs most; on smooth
+// stretches the spread is small as well).
+inline constexpr double kAngleErrorPerSpread = 0.43;
+
 struct LatentTimeState {
   LaserCalibration calibration;
   Eigen::Vector3d noise_sigma = Eigen::Vector3d::Ones();  // Scan noise (x, y, θ).
@@ -96,10 +101,22 @@ struct LatentLinearization {
   struct LatentScore {
     int latent = -1;
     double value = 0.0;
+    double angle[4] = {0.0, 0.0, 0.0, 0.0};  // Jᵀ·∂r/∂(end angle w), as angle_globals.
   };
   Eigen::MatrixXd score_globals;
   std::vector<std::array<LatentScore, kMaxIntervalLatents>> score_latents;
   std::vector<int> latent_row;
+  // The same projections of the residual's derivatives by its four end angles (start left,
+  // start right, end left, end right) instead of r, where the wheel angles come from the cubic
+  // between polls; the interval's first sample; and per sample the σ of its interpolated left and
+  // right angles and its segment (the encoder sample before it).
+  std::array<Eigen::MatrixXd, 4> angle_globals;
+  std::vector<int> interval_sample;
+  struct AngleSpread {
+    double left_rad = 0.0, right_rad = 0.0;
+    int segment = -1;
+  };
+  std::vector<AngleSpread> sample_angle;
 };
 
 class LatentTimeProblem {
@@ -133,6 +150,9 @@ class LatentTimeProblem {
   bool BracketsHold() const;
   // The brackets of the current latent times (for a rebuilt problem).
   std::vector<int> Brackets() const;
+  // Per sample, the σ of its wheel angles on the cubic between polls: kAngleErrorPerSpread times
+  // the spread of the two one-sided cubics (RateSide) at its time; empty with the line.
+  std::vector<LatentLinearization::AngleSpread> AngleSpreads() const;
   // Unwhitened errors of the intervals, in data.interval_start order.
   std::vector<Eigen::Vector3d> Errors() const;
   // `with_scores`: also each interval's gradient contribution (LatentLinearization::score_*).

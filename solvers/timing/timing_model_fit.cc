@@ -290,10 +290,13 @@ Status PolishTimingModel(const StreamSamples& data, const LaserTimingOptions& op
   const DominatingCovarianceResult reported =
       DominatingCovariance(fit->kappa * fit->covariance.globals,
                            sandwich.ok() ? *sandwich : fit->kappa * fit->covariance.globals);
-  fit->globals_covariance = reported.covariance;
+  CALIB_ASSIGN_OR_RETURN(const Eigen::MatrixXd angles,
+                         LatentAngleCovariance(fit->lin, fit->covariance));
+  fit->globals_covariance = reported.covariance + angles;
   fit->sandwich_ratio = reported.largest_ratio;
   fit->lin.score_globals.resize(0, 0);
   fit->lin.score_latents.clear();
+  for (Eigen::MatrixXd& a : fit->lin.angle_globals) a.resize(0, 0);
   return Status::Ok();
 }
 

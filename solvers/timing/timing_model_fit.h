@@ -24,7 +24,8 @@ struct TimingModelFit {
   std::vector<double> sample_time_s;  // Latent times of every sample (relative).
   double kappa = 1.0;
   // The globals' covariance as reported: κ·covariance.globals, and once polished also at least
-  // the sandwich's in every direction (DominatingCovariance); the largest ratio between them.
+  // the sandwich's in every direction (DominatingCovariance; the largest ratio between them), plus
+  // what the cubic's wheel angles between polls add (LatentAngleCovariance).
   Eigen::MatrixXd globals_covariance;
   double sandwich_ratio = 1.0;
   double score = 0.0;  // −2 log evidence (Laplace) + 2·(number of timing globals).
