@@ -158,6 +158,8 @@ void FillTiming(const StreamSamples& data, const TimingModelFit& fit, LaserTimin
     out->sensor_jitter_s = fit.state.sensor_sigma_s;
   }
   out->encoder_jitter_s = fit.state.encoder_sigma_s;
+  out->neighbour_correlation = fit.neighbours.correlation.diagonal();
+  out->pose_errors = fit.neighbours.PoseErrors();
 }
 
 }  // namespace

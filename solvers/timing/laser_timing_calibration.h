@@ -5,6 +5,7 @@
 #include <calib/core/status.h>
 #include <calib/solvers/laser/calibrate_laser.h>
 
+#include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <vector>
@@ -46,6 +47,10 @@ struct LaserTimingResult {
   LaserStreams timed_streams;
   int held_repeats_dropped = 0;
   int intervals = 0;
+  // Lag-1 correlation (x, y, θ) of the errors of intervals that share a sample; pose_errors: near
+  // −1/2, the scan poses err independently and the covariance carries the lag-1 term.
+  Eigen::Vector3d neighbour_correlation = Eigen::Vector3d::Zero();
+  bool pose_errors = false;
   // −2 log evidence (Laplace) + 2·globals of each model tried; lower is better.
   std::optional<double> stamps_score;  // Empty when pick-up stamps ruled the stamp model out.
   std::optional<double> free_running_score;

@@ -155,12 +155,14 @@ void AddScores(const RobustRow& row, int g, int interval, LatentLinearization* l
     if (e.column < g) {
       lin->score_globals(interval, e.column) += score;
       for (int w = 0; w < 4; ++w) lin->angle_globals[w](interval, e.column) += angle[w];
+      for (int c = 0; c < 3; ++c) lin->row_globals[c](interval, e.column) += e.value[c];
       continue;
     }
     const int latent = e.column - g;
     if (used < LatentLinearization::kMaxIntervalLatents) {
       latents[used] = {latent, score};
-      std::copy(angle, angle + 4, latents[used++].angle);
+      std::copy(angle, angle + 4, latents[used].angle);
+      std::copy(e.value, e.value + 3, latents[used++].row);
     }
     if (lin->latent_row[latent] < 0) lin->latent_row[latent] = interval;
   }
@@ -237,6 +239,7 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize(bool with_scores) con
     lin.latent_row.assign(num_latents, -1);
     for (Eigen::MatrixXd& a : lin.angle_globals)
       a = Eigen::MatrixXd::Zero(interval_costs_.size(), g);
+    for (Eigen::MatrixXd& a : lin.row_globals) a = Eigen::MatrixXd::Zero(interval_costs_.size(), g);
     lin.interval_sample = data_.interval_start;
     lin.sample_angle = AngleSpreads();
   }

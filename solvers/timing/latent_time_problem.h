@@ -102,6 +102,7 @@ struct LatentLinearization {
     int latent = -1;
     double value = 0.0;
     double angle[4] = {0.0, 0.0, 0.0, 0.0};  // Jᵀ·∂r/∂(end angle w), as angle_globals.
+    double row[3] = {0.0, 0.0, 0.0};         // J's rows (x, y, θ) in this column, as row_globals.
   };
   Eigen::MatrixXd score_globals;
   std::vector<std::array<LatentScore, kMaxIntervalLatents>> score_latents;
@@ -111,6 +112,8 @@ struct LatentLinearization {
   // between polls; the interval's first sample; and per sample the σ of its interpolated left and
   // right angles and its segment (the encoder sample before it).
   std::array<Eigen::MatrixXd, 4> angle_globals;
+  // The interval's whitened, loss-corrected Jacobian rows (x, y, θ) in the globals' columns.
+  std::array<Eigen::MatrixXd, 3> row_globals;
   std::vector<int> interval_sample;
   struct AngleSpread {
     double left_rad = 0.0, right_rad = 0.0;

@@ -306,38 +306,6 @@ StatusOr<Eigen::MatrixXd> LatentProfileScores(const LatentLinearization& lin,
   return u;
 }
 
-StatusOr<Eigen::MatrixXd> LatentAngleCovariance(const LatentLinearization& lin,
-                                                const LatentCovariance& covariance) {
-  const Eigen::Index g = covariance.globals.rows();
-  const size_t rows = lin.interval_sample.size();
-  if (lin.sample_angle.empty()) return Eigen::MatrixXd(Eigen::MatrixXd::Zero(g, g));
-  if (lin.score_latents.size() != rows ||
-      lin.angle_globals[0].rows() != static_cast<Eigen::Index>(rows)) {
-    return Status::Internal("the angles' covariance needs the intervals' scores (Linearize(true))");
-  }
-  const Eigen::MatrixXd& x = covariance.latent_gain;
-  int segments = 0;
-  for (const LatentLinearization::AngleSpread& s : lin.sample_angle) {
-    segments = std::max(segments, s.segment + 1);
-  }
-  // Per segment and wheel, Σ σ·J̃ᵀ·∂r/∂α over its samples' ends.
-  Eigen::MatrixXd moved = Eigen::MatrixXd::Zero(g, 2 * segments);
-  for (size_t i = 0; i < rows; ++i) {
-    for (int w = 0; w < 4; ++w) {
-      Eigen::VectorXd v = lin.angle_globals[w].row(i).transpose();
-      for (const LatentLinearization::LatentScore& l : lin.score_latents[i]) {
-        if (l.latent >= 0) v -= l.angle[w] * x.row(l.latent).transpose();
-      }
-      const LatentLinearization::AngleSpread& s =
-          lin.sample_angle[lin.interval_sample[i] + (w >= 2 ? 1 : 0)];
-      if (s.segment < 0) continue;
-      moved.col(2 * s.segment + w % 2) += (w % 2 == 0 ? s.left_rad : s.right_rad) * v;
-    }
-  }
-  const Eigen::MatrixXd& c = covariance.globals;
-  return Eigen::MatrixXd(c * (moved * moved.transpose()) * c);
-}
-
 StatusOr<Eigen::MatrixXd> LatentSandwichCovariance(const LatentLinearization& lin,
                                                    const LatentPrior& prior,
                                                    const LatentCovariance& covariance, int lag,

@@ -74,14 +74,6 @@ StatusOr<Eigen::MatrixXd> LatentProfileScores(const LatentLinearization& lin,
                                               const LatentPrior& prior,
                                               const LatentCovariance& covariance);
 
-// What the wheel angles between polls add to the globals' covariance: each sample's angles err
-// by σ (LatentLinearization::sample_angle) and move the globals by C·J̃ᵀ·∂r/∂α through the one
-// or two intervals they end (J̃ = J_g − J_l·X, the latents following). The errors of one segment
-// and wheel move together (one jump of the acceleration between two polls), the segments and
-// wheels independently. Zero without the cubic. `lin` from Linearize(true).
-StatusOr<Eigen::MatrixXd> LatentAngleCovariance(const LatentLinearization& lin,
-                                                const LatentCovariance& covariance);
-
 // The globals' cluster-robust (sandwich) covariance C·V·C·n/r, C = covariance.globals (the
 // inverse of their information with the latents marginalised), V the long-run covariance
 // (Bartlett, `lag` intervals) of the profile scores. It stays honest where the residuals hold

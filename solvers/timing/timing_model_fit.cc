@@ -3,6 +3,7 @@
 #include <calib/solvers/common/robust_covariance.h>
 #include <calib/solvers/common/solver_options.h>
 #include <calib/solvers/timing/clock_indices.h>
+#include <calib/solvers/timing/latent_error_covariance.h>
 #include <calib/solvers/timing/pick_up_clock.h>
 #include <calib/solvers/timing/timing_model_fit.h>
 
@@ -95,6 +96,37 @@ Status CaptureFit(const StreamSamples& data, const LatentTimeProblem& problem, T
   }
   fit->score = Score(*fit, NoiseScales{fit->state.noise_sigma, fit->state.sensor_sigma_s,
                                        fit->state.encoder_sigma_s});
+  return Status::Ok();
+}
+
+// The globals' covariance as reported (TimingModelFit::globals_covariance): the model's, κ·C, at
+// least the sandwich's in every direction (the sandwich keeps structure in the errors that the
+// model leaves out). With scan poses that err independently the intervals' errors are correlated
+// (−1/2 between neighbours) and κ·C overstates the low frequencies several times over, so the
+// model's gets the lag-1 term, floored at 1 % of κ·C in every direction. Those directions' variance
+// goes as 1 + 2R, and R is estimated (−0.43 where −0.47 would be exact on the simulator's logs;
+// −0.5 made the σ's 1.7 times too small): the sandwich bounds it from below.
+Status ReportCovariance(const StreamSamples& data, double components, double redundancy,
+                        TimingModelFit* fit) {
+  Eigen::MatrixXd model = fit->kappa * fit->covariance.globals;
+  fit->neighbours =
+      NeighbourErrorCorrelation(fit->errors, fit->state.noise_sigma, data.interval_start);
+  if (fit->neighbours.PoseErrors()) {
+    CALIB_ASSIGN_OR_RETURN(
+        const Eigen::MatrixXd shared,
+        LatentNeighbourCovariance(fit->lin, fit->covariance, fit->neighbours.correlation));
+    model = DominatingCovariance(model + fit->kappa * shared, 0.01 * model).covariance;
+  }
+  const LatentPrior prior = MakeLatentPrior(fit->lin, fit->state.offset_s,
+                                            fit->state.sensor_sigma_s, fit->state.encoder_sigma_s);
+  const StatusOr<Eigen::MatrixXd> sandwich = LatentSandwichCovariance(
+      fit->lin, prior, fit->covariance, ScoreLag(data), components, redundancy);
+  const DominatingCovarianceResult reported =
+      DominatingCovariance(model, sandwich.ok() ? *sandwich : model);
+  fit->sandwich_ratio = reported.largest_ratio;
+  CALIB_ASSIGN_OR_RETURN(const Eigen::MatrixXd angles,
+                         LatentAngleCovariance(fit->lin, fit->covariance));
+  fit->globals_covariance = reported.covariance + angles;
   return Status::Ok();
 }
 
@@ -283,20 +315,11 @@ Status PolishTimingModel(const StreamSamples& data, const LaserTimingOptions& op
   const double redundancy = components - fit->lin.num_globals - fit->covariance.effective_latents;
   if (!(redundancy > 0.0)) return Status::NotObservable("too few intervals for the timing model");
   CALIB_ASSIGN_OR_RETURN(fit->kappa, LossCorrection(fit->lin.loss_sums, components, redundancy));
-  const LatentPrior prior = MakeLatentPrior(fit->lin, fit->state.offset_s,
-                                            fit->state.sensor_sigma_s, fit->state.encoder_sigma_s);
-  const StatusOr<Eigen::MatrixXd> sandwich = LatentSandwichCovariance(
-      fit->lin, prior, fit->covariance, ScoreLag(data), components, redundancy);
-  const DominatingCovarianceResult reported =
-      DominatingCovariance(fit->kappa * fit->covariance.globals,
-                           sandwich.ok() ? *sandwich : fit->kappa * fit->covariance.globals);
-  CALIB_ASSIGN_OR_RETURN(const Eigen::MatrixXd angles,
-                         LatentAngleCovariance(fit->lin, fit->covariance));
-  fit->globals_covariance = reported.covariance + angles;
-  fit->sandwich_ratio = reported.largest_ratio;
+  CALIB_RETURN_IF_ERROR(ReportCovariance(data, components, redundancy, fit));
   fit->lin.score_globals.resize(0, 0);
   fit->lin.score_latents.clear();
   for (Eigen::MatrixXd& a : fit->lin.angle_globals) a.resize(0, 0);
+  for (Eigen::MatrixXd& a : fit->lin.row_globals) a.resize(0, 0);
   return Status::Ok();
 }
 

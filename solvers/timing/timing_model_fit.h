@@ -3,6 +3,7 @@
 
 #include <calib/core/status.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
+#include <calib/solvers/timing/latent_error_covariance.h>
 #include <calib/solvers/timing/latent_time_problem.h>
 #include <calib/solvers/timing/latent_time_statistics.h>
 #include <calib/solvers/timing/pick_up_clock.h>
@@ -24,11 +25,13 @@ struct TimingModelFit {
   std::vector<double> sample_time_s;  // Latent times of every sample (relative).
   double kappa = 1.0;
   // The globals' covariance as reported: κ·covariance.globals, and once polished also at least
-  // the sandwich's in every direction (DominatingCovariance; the largest ratio between them), plus
-  // what the cubic's wheel angles between polls add (LatentAngleCovariance).
+  // the sandwich's in every direction (DominatingCovariance; the largest ratio between them), or
+  // with the lag-1 term where the scan poses err independently (`neighbours`), plus what the
+  // cubic's wheel angles between polls add (LatentAngleCovariance).
   Eigen::MatrixXd globals_covariance;
   double sandwich_ratio = 1.0;
-  double score = 0.0;  // −2 log evidence (Laplace) + 2·(number of timing globals).
+  NeighbourCorrelation neighbours;  // Of the intervals' errors, once polished.
+  double score = 0.0;               // −2 log evidence (Laplace) + 2·(number of timing globals).
   int iterations = 0;
   int rounds = 0;
   bool converged = true;

@@ -39,6 +39,9 @@ nlohmann::ordered_json LatentTimingJson(const LaserTimingResult& r) {
   if (r.free_running_score) out["scores"]["free_running"] = *r.free_running_score;
   out["intervals"] = r.intervals;
   out["held_repeats_dropped"] = r.held_repeats_dropped;
+  out["neighbour_error_correlation"] = {r.neighbour_correlation(0), r.neighbour_correlation(1),
+                                        r.neighbour_correlation(2)};
+  out["pose_errors"] = r.pose_errors;
   out["rounds"] = r.rounds;
   out["seconds"] = r.seconds;
   out["sample_time_stddev_s"] = {
@@ -103,6 +106,14 @@ std::string LatentTimingSummary(const LaserTimingResult& r) {
                   1e3 * r.encoder_jitter_s);
   }
   text += line;
+  if (r.pose_errors) {
+    std::snprintf(line, sizeof(line),
+                  "  timing: neighbouring intervals' errors correlate (%.2f, %.2f, %.2f; x, y, θ): "
+                  "the scan poses err each on its own, and the σ's count it\n",
+                  r.neighbour_correlation(0), r.neighbour_correlation(1),
+                  r.neighbour_correlation(2));
+    text += line;
+  }
   int which = 0;
   const double shift = LargestShift(r, &which);
   std::snprintf(line, sizeof(line),
