@@ -115,7 +115,8 @@ Status ReportCovariance(const StreamSamples& data, double components, double red
     CALIB_ASSIGN_OR_RETURN(
         const Eigen::MatrixXd shared,
         LatentNeighbourCovariance(fit->lin, fit->covariance, fit->neighbours.correlation));
-    model = DominatingCovariance(model + fit->kappa * shared, 0.01 * model).covariance;
+    // The floor goes first: it is factored, and the lag-1 model may be indefinite where R errs.
+    model = DominatingCovariance(0.01 * model, model + fit->kappa * shared).covariance;
   }
   const LatentPrior prior = MakeLatentPrior(fit->lin, fit->state.offset_s,
                                             fit->state.sensor_sigma_s, fit->state.encoder_sigma_s);

@@ -155,6 +155,15 @@ TEST(RobustCovarianceTest, DominatingCovarianceHoldsBoth) {
   // A model that is not positive definite is returned as it is.
   const Eigen::MatrixXd singular = Eigen::MatrixXd::Zero(5, 5);
   EXPECT_EQ(DominatingCovariance(singular, sandwich).covariance, singular);
+  // An indefinite second one (a lag-1 model with an estimated correlation) is floored by the first.
+  Eigen::MatrixXd indefinite = sandwich;
+  indefinite(0, 0) = -indefinite(0, 0);
+  const DominatingCovarianceResult floored = DominatingCovariance(0.01 * model, indefinite);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> floored_eigen(floored.covariance);
+  EXPECT_GT(floored_eigen.eigenvalues().minCoeff(), 0.0);
+  Eigen::VectorXd e0 = Eigen::VectorXd::Zero(5);
+  e0(0) = 1.0;
+  EXPECT_GE(e0.dot(floored.covariance * e0), (1.0 - 1e-9) * 0.01 * model(0, 0));
 }
 
 }  // namespace
