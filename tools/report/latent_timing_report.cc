@@ -109,7 +109,7 @@ std::string LatentTimingSummary(const LaserTimingResult& r) {
   if (r.pose_errors) {
     std::snprintf(line, sizeof(line),
                   "  timing: neighbouring intervals' errors correlate (%.2f, %.2f, %.2f; x, y, θ): "
-                  "the scan poses err each on its own, and the σ's count it\n",
+                  "the scan poses err independently of one another, and the σ's count it\n",
                   r.neighbour_correlation(0), r.neighbour_correlation(1),
                   r.neighbour_correlation(2));
     text += line;
