@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <future>
 #include <string>
 
 namespace calib {
@@ -183,6 +184,16 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
                               " sensor samples lie outside the encoders' time span and are not "
                               "used: do the two streams share a clock and cover the same run?");
   }
+  bool try_clock = options.sensor_clock == "free_running" ||
+                   (options.sensor_clock == "auto" && ClockCandidate(data));
+  // Held repeats under distinct stamps that a pick-up clock names every sample from: the stamps
+  // are pick-up times, not sample times, and in auto mode the stamp model is not fitted (it took
+  // most of the time on such logs); the clock starts from the stamp-as-truth fit. The clock's
+  // search needs only the stamps: it runs beside the stamp-as-truth calibration.
+  std::future<std::optional<PickUpClock>> pick_up_search;
+  if (options.sensor_clock == "auto" && try_clock && data.held_repeats_dropped > 0) {
+    pick_up_search = std::async(std::launch::async, [&data] { return FitPickUpClock(data); });
+  }
   const LaserStreams distinct = DistinctStreams(data);
   CALIB_ASSIGN_OR_RETURN(const LaserLog log,
                          LaserLogFromStreams(distinct.odometry, distinct.sensor_poses, "streams"));
@@ -200,15 +211,8 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
       options.sensor_jitter_s.value_or(StartingJitter(sensor_stamps, data.sensor_period_s));
   initial.encoder_sigma_s =
       options.encoder_jitter_s.value_or(StartingJitter(encoder_stamps, data.encoder_period_s));
-  const bool try_clock = options.sensor_clock == "free_running" ||
-                         (options.sensor_clock == "auto" && ClockCandidate(data));
-  // Held repeats under distinct stamps that a pick-up clock names every sample from: the stamps
-  // are pick-up times, not sample times, and in auto mode the stamp model is not fitted (it took
-  // most of the time on such logs); the clock starts from the stamp-as-truth fit.
   std::optional<PickUpClock> pick_up;
-  if (options.sensor_clock == "auto" && try_clock && data.held_repeats_dropped > 0) {
-    pick_up = FitPickUpClock(data);
-  }
+  if (pick_up_search.valid()) pick_up = pick_up_search.get();
   const bool named = pick_up && pick_up->NamesEverySample();
   const bool try_stamps = options.sensor_clock != "free_running" && !named;
   // Otherwise the stamp model runs first: its latent times seed the clock model.
@@ -218,6 +222,9 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
     CALIB_ASSIGN_OR_RETURN(best, FitTimingModel(data, SensorClockModel::kStamps, initial, options));
     result.stamps_score = best.score;
     result.rounds = best.rounds;
+  }
+  if (try_clock && !pick_up && try_stamps && TimesStrayFromEveryClock(data, best)) {
+    try_clock = false;
   }
   if (try_clock) {
     LatentTimeState clock_start = ClockStartFromTimes(data, best, pick_up);

@@ -169,8 +169,12 @@ std::optional<Vector5d> NewtonDirection(const Vector5d& theta, const Vector5d& g
 
 }  // namespace
 
+// In −2 log evidence: a likelihood ratio of 1.005.
+constexpr double kEvidenceGainTolerance = 0.01;
+
 NoiseScales MaximizeLatentEvidence(const LatentLinearization& lin, double offset_s,
-                                   NoiseScales initial, const NoiseScaleFit& fit) {
+                                   NoiseScales initial, const NoiseScaleFit& fit, double* gain) {
+  if (gain) *gain = 0.0;
   const bool has_sensor = std::find(lin.latent_is_sensor.begin(), lin.latent_is_sensor.end(),
                                     true) != lin.latent_is_sensor.end();
   const bool has_encoder = std::find(lin.latent_is_sensor.begin(), lin.latent_is_sensor.end(),
@@ -200,6 +204,8 @@ NoiseScales MaximizeLatentEvidence(const LatentLinearization& lin, double offset
   std::optional<LatentEvidence> current = evaluate(theta, true);
   if (!current) return initial;
   constexpr double kEdge = 1e-9;
+  double previous = current->value;
+  const double start = current->value;
   for (int iteration = 0; iteration < 30; ++iteration) {
     // Coordinates at a bound whose gradient points out of the box stay there.
     std::array<bool, 5> active = free;
@@ -229,10 +235,16 @@ NoiseScales MaximizeLatentEvidence(const LatentLinearization& lin, double offset
       }
     }
     if (!accepted) break;
+    const double step_gain = previous - current->value;
+    previous = current->value;
     const double change = (moved - theta).cwiseAbs().maxCoeff();
     theta = moved;
-    if (change < 1e-3) break;  // 0.1 % in every σ.
+    // 0.1 % in every σ, or an evidence that no longer changes: a σ the data hardly determine
+    // (a jitter heading for the floor) can otherwise creep along its flat valley for dozens of
+    // steps.
+    if (change < 1e-3 || step_gain < kEvidenceGainTolerance) break;
   }
+  if (gain) *gain = start - current->value;
   NoiseScales out = ScalesFromLog(theta);
   if (!free[3]) out.sensor_s = initial.sensor_s;
   if (!free[4]) out.encoder_s = initial.encoder_s;

@@ -52,8 +52,10 @@ struct NoiseScaleFit {
   double floor_s = 1e-4, ceiling_s = 1.0;
   int num_threads = 1;  // For the Hessian's columns.
 };
+// `gain`, when given: how much −2 log evidence fell from `initial` to the result.
 NoiseScales MaximizeLatentEvidence(const LatentLinearization& lin, double offset_s,
-                                   NoiseScales initial, const NoiseScaleFit& fit);
+                                   NoiseScales initial, const NoiseScaleFit& fit,
+                                   double* gain = nullptr);
 
 struct LatentCovariance {
   Eigen::MatrixXd globals;          // G × G, tangent space (see odometry_plus_jacobian).

@@ -1,4 +1,5 @@
 #include <calib/core/timing/encoder_integration.h>
+#include <calib/core/timing/sample_clock.h>
 #include <calib/core/timing/stamp_timing.h>
 #include <calib/solvers/common/robust_covariance.h>
 #include <calib/solvers/common/solver_options.h>
@@ -32,6 +33,10 @@ bool ScalesSettled(const NoiseScales& before, const NoiseScales& now) {
          RelativeChange(now.sensor_s, before.sensor_s) < 0.1 &&
          RelativeChange(now.encoder_s, before.encoder_s) < 0.1;
 }
+
+// Or the evidence gains less than this (−2 log) from them: a σ the log hardly determines (a
+// jitter near the floor) moves by tens of % between rounds without changing the fit.
+constexpr double kSettledEvidenceGain = 1.0;
 
 // Aitken's extrapolation of the σ update, per σ in log: from x0 → x1 = F(x0) → x2 = F(x1) with
 // steps shrinking by q = Δ2/Δ1 ∈ (0, 0.75], the fixed point x2 + Δ2·q/(1 − q). The rounds'
@@ -135,7 +140,32 @@ Status ReportCovariance(const StreamSamples& data, double components, double red
 
 double StartingJitter(const std::vector<double>& stamps_s, double period_s) {
   const StreamTiming timing = AnalyzeStreamTiming(stamps_s);
-  return std::clamp(2.0 * timing.jitter_s, kJitterFloor, std::max(kJitterFloor, 0.25 * period_s));
+  // Steps that vary and add up (an irregular sampler) scatter about a grid without being jitter:
+  // only the white part, which anti-correlates neighbouring steps, is.
+  const double white = std::min(timing.jitter_s, timing.pickup_scatter_s);
+  return std::clamp(2.0 * white, kJitterFloor, std::max(kJitterFloor, 0.25 * period_s));
+}
+
+bool TimesStrayFromEveryClock(const StreamSamples& data, const TimingModelFit& stamps) {
+  const double period = data.sensor_period_s;
+  const std::vector<double>& times = stamps.sample_time_s;
+  if (stamps.model != SensorClockModel::kStamps || times.size() < 50 || !(period > 0.0) ||
+      !(stamps.state.sensor_sigma_s < 0.1 * period)) {
+    return false;
+  }
+  std::vector<double> indices = {0.0};
+  for (size_t k = 1; k < times.size(); ++k) {
+    indices.push_back(indices.back() +
+                      std::max(1.0, std::round((times[k] - times[k - 1]) / period)));
+  }
+  const SampleClock clock = FitSampleClock(indices, times);
+  std::vector<double> residual;
+  for (size_t k = 0; k < times.size(); ++k) residual.push_back(times[k] - clock.Time(indices[k]));
+  const size_t low = residual.size() / 100, high = residual.size() - 1 - low;
+  std::nth_element(residual.begin(), residual.begin() + low, residual.end());
+  const double q_low = residual[low];
+  std::nth_element(residual.begin(), residual.begin() + high, residual.end());
+  return residual[high] - q_low > period;
 }
 
 LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModelFit& stamps,
@@ -271,7 +301,8 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
     const NoiseScales current = ScalesOf(fit.state);
     entered.push_back(current);
     // Scan noise and jitters together, by the evidence with the latents integrated out.
-    NoiseScales next = MaximizeLatentEvidence(fit.lin, fit.state.offset_s, current, what);
+    double gain = 0.0;
+    NoiseScales next = MaximizeLatentEvidence(fit.lin, fit.state.offset_s, current, what, &gain);
     if (model == SensorClockModel::kFreeRunning && fit.lin.stamp_prior_count > 4 &&
         !options.sensor_jitter_s) {
       // The clock's pick-up scatter: the RMS of t − s − τ (four clock and offset parameters).
@@ -279,7 +310,7 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
                          std::sqrt(fit.lin.stamp_prior_chi2 / (fit.lin.stamp_prior_count - 4));
       next.sensor_s = std::clamp(rms, kJitterFloor, what.ceiling_s);
     }
-    bool settled = ScalesSettled(current, next);
+    bool settled = ScalesSettled(current, next) || gain < kSettledEvidenceGain;
     if (!problem->BracketsHold()) {
       fit.state.bracket = problem->Brackets();
       problem.reset();
@@ -307,7 +338,7 @@ Status PolishTimingModel(const StreamSamples& data, const LaserTimingOptions& op
   LatentTimeProblem problem(data, fit->model, fit->state, options.calibration.refinement,
                             options.estimate_offset);
   BandArrowSummary summary;
-  CALIB_RETURN_IF_ERROR(problem.Solve(&summary, kLatentCostTolerance));
+  CALIB_RETURN_IF_ERROR(problem.Solve(&summary, kLatentCostTolerance, kLatentGlobalStep));
   fit->iterations += summary.iterations;
   fit->converged = summary.converged;
   fit->polished = true;

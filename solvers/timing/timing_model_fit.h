@@ -55,6 +55,13 @@ Status PolishTimingModel(const StreamSamples& data, const LaserTimingOptions& op
 // first round and the rounds then take long to shed it.
 double StartingJitter(const std::vector<double>& stamps_s, double period_s);
 
+// Whether the stamp model's sample times rule out any sensor clock: its jitter is under a tenth
+// of the period (the times sit near the stamps), yet counting whole periods between them, they
+// stray from the best regular grid by more than a period (steps that vary and add up: a sensor
+// triggered by something else). A clock's samples picked up late stay within about a period of
+// their grid; such a log only costs the clock model's rounds, which then never settle.
+bool TimesStrayFromEveryClock(const StreamSamples& data, const TimingModelFit& stamps);
+
 // The clock model's starting point from a fit of the stamp model: whole periods per interval
 // (from the stamps where they sit on the period's grid and the motion agrees; pick-up stamps with
 // held repeats name them exactly through FitPickUpClock, and are then never re-assigned; else
