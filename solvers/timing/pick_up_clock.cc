@@ -7,6 +7,8 @@
 namespace calib {
 namespace {
 
+// Holds, or periods the motion counted other than the stamps' step, needed to tell P from the
+// logger's own period.
 constexpr int kMinHolds = 3;
 constexpr double kMaxViolationShare = 0.01;
 constexpr double kSearchSpan = 0.5;  // P within (1 ± this)·median step.
@@ -20,47 +22,59 @@ constexpr double kMaxTestsPerWindow = 5e7;
 constexpr int kMaxRounds = 40;
 
 // Consecutive records (distinct samples and held repeats, in stamp order): the earlier stamp,
-// the later one, and whether the later one is a new sample.
+// the later one, and the sensor's ticks between them: 0 for a held repeat, the motion's count for
+// a new sample where it has one, else −1 (at least one).
 struct Pair {
   double from_s, to_s;
-  bool new_sample;
+  int ticks;
 };
 
-std::vector<Pair> Pairs(const StreamSamples& data) {
-  std::vector<std::pair<double, bool>> records;
-  for (const StreamSample& s : data.samples) records.push_back({s.stamp_s, true});
-  for (const double stamp : data.held_stamp_s) records.push_back({stamp, false});
+std::vector<Pair> Pairs(const StreamSamples& data, const std::vector<int>& motion_periods) {
+  struct Record {
+    double stamp_s;
+    int ticks;
+  };
+  std::vector<Record> records;
+  for (size_t k = 0; k < data.samples.size(); ++k) {
+    const int counted = k < motion_periods.size() ? motion_periods[k] : 0;
+    records.push_back({data.samples[k].stamp_s, counted > 0 ? counted : -1});
+  }
+  for (const double stamp : data.held_stamp_s) records.push_back({stamp, 0});
   std::stable_sort(records.begin(), records.end(),
-                   [](const auto& a, const auto& b) { return a.first < b.first; });
+                   [](const Record& a, const Record& b) { return a.stamp_s < b.stamp_s; });
   std::vector<Pair> pairs;
   for (size_t k = 1; k < records.size(); ++k) {
-    pairs.push_back({records[k - 1].first, records[k].first, records[k].second});
+    pairs.push_back({records[k - 1].stamp_s, records[k].stamp_s, records[k].ticks});
   }
   return pairs;
 }
 
-// The fewest constraints of `pairs` any phase breaks at period P, and that phase. With
-// φ = (to − c) mod P, a new sample needs a tick of the sensor in (from, to]: φ < to − from; a held
-// repeat needs none: φ ≥ to − from. Each broken set is an arc of c; a sweep finds the least covered
-// point.
+// The phases φ = (to − c) mod P that a pair allows, [lo, hi) within [0, P): the sensor ticks at
+// to − φ − jP, so m ticks in (from, to] need gap − mP ≤ φ < gap − (m − 1)P. A new sample needs at
+// least one: φ < gap; a held repeat none: φ ≥ gap.
+void AllowedPhases(const Pair& pair, double period, double* lo, double* hi) {
+  const double gap = pair.to_s - pair.from_s;
+  if (pair.ticks < 0) {
+    *lo = 0.0, *hi = std::min(gap, period);
+  } else {
+    *lo = std::max(0.0, gap - pair.ticks * period);
+    *hi = std::min(period, gap - (pair.ticks - 1) * period);
+  }
+}
+
+// The fewest constraints of `pairs` any phase breaks at period P, and that phase. Each pair breaks
+// for φ outside its allowed range, an arc or two of c; a sweep finds the least covered point.
 std::pair<int, double> BestPhase(const std::vector<Pair>& pairs, size_t count, double period) {
   // Called tens of thousands of times per log: one buffer per thread, no fmod.
   thread_local std::vector<std::pair<double, int>> events;
   events.clear();
   const double inverse_period = 1.0 / period;
-  int always = 0;
-  for (size_t i = 0; i < count; ++i) {
-    const double gap = pairs[i].to_s - pairs[i].from_s;
-    if (gap >= period) {
-      always += !pairs[i].new_sample;
-      continue;
-    }
-    // Broken for φ in [lo, hi): c in (to − hi, to − lo] (mod P).
-    const double lo = pairs[i].new_sample ? gap : 0.0;
-    const double hi = pairs[i].new_sample ? period : gap;
-    const double x = pairs[i].to_s - hi;
+  // Broken for φ in [a, b): c in (to − b, to − a] (mod P).
+  const auto broken = [&](double to, double a, double b) {
+    if (!(b > a)) return;
+    const double x = to - b;
     const double start = std::clamp(x - period * std::floor(x * inverse_period), 0.0, period);
-    const double end = start + (hi - lo);
+    const double end = start + (b - a);
     events.push_back({start, 1});
     if (end <= period) {
       events.push_back({end, -1});
@@ -69,6 +83,17 @@ std::pair<int, double> BestPhase(const std::vector<Pair>& pairs, size_t count, d
       events.push_back({0.0, 1});
       events.push_back({end - period, -1});
     }
+  };
+  int always = 0;
+  for (size_t i = 0; i < count; ++i) {
+    double lo = 0.0, hi = 0.0;
+    AllowedPhases(pairs[i], period, &lo, &hi);
+    if (!(hi > lo)) {
+      ++always;
+      continue;
+    }
+    broken(pairs[i].to_s, 0.0, lo);
+    broken(pairs[i].to_s, hi, period);
   }
   if (events.empty()) return {always, 0.0};
   std::sort(events.begin(), events.end());
@@ -124,12 +149,17 @@ std::vector<Candidate> Narrow(const std::vector<Pair>& pairs, size_t count, doub
 
 }  // namespace
 
-std::optional<PickUpClock> FitPickUpClock(const StreamSamples& data) {
-  if (static_cast<int>(data.held_stamp_s.size()) < kMinHolds || data.samples.size() < 2 ||
-      !(data.sensor_period_s > 0.0)) {
-    return std::nullopt;
+std::optional<PickUpClock> FitPickUpClock(const StreamSamples& data,
+                                          const std::vector<int>& motion_periods) {
+  if (data.samples.size() < 2 || !(data.sensor_period_s > 0.0)) return std::nullopt;
+  int telling = static_cast<int>(data.held_stamp_s.size());
+  for (size_t k = 1; k < data.samples.size() && k < motion_periods.size(); ++k) {
+    const double steps =
+        std::round((data.samples[k].stamp_s - data.samples[k - 1].stamp_s) / data.sensor_period_s);
+    telling += motion_periods[k] > 0 && motion_periods[k] != steps;
   }
-  const std::vector<Pair> pairs = Pairs(data);
+  if (telling < kMinHolds) return std::nullopt;
+  const std::vector<Pair> pairs = Pairs(data, motion_periods);
   // The first pairs hold few held repeats, so fractions and neighbours of P break as few of them
   // as P does: every run of the coarse grid within one of the fewest is a candidate. Longer
   // prefixes narrow the basin of the true P as 1/(pairs used), and the candidates with it.

@@ -35,7 +35,15 @@ struct PickUpClock {
 // a long log (each allows a few ms of phase in ~100): a logger with 2 ms of jitter holds ~5 of
 // 1000 samples, and counting periods from the motion instead took 99.885 ms for 99.5 on one.
 // The skips are then less pinned than P, but naming them still beats the motion's re-assignment.
-std::optional<PickUpClock> FitPickUpClock(const StreamSamples& data);
+//
+// `motion_periods` (per sample k, between samples k − 1 and k; 0 where unknown): whole sensor
+// periods the motion counts, which make m ticks in (from, to] a constraint too. A logger slower
+// than its sensor never holds, but its skips (two periods of motion in one stamp step) pin P and
+// c the same way, and between them, where the robot stood still, the clock names the skips the
+// motion could not see. These counts then stand in for the holds (3 at least that differ from the
+// stamps' step).
+std::optional<PickUpClock> FitPickUpClock(const StreamSamples& data,
+                                          const std::vector<int>& motion_periods = {});
 
 }  // namespace calib
 

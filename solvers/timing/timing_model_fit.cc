@@ -168,6 +168,43 @@ bool TimesStrayFromEveryClock(const StreamSamples& data, const TimingModelFit& s
   return residual[high] - q_low > period;
 }
 
+namespace {
+
+// Trusted intervals whose wheel motion per stamp step matches both neighbours' to 10 %: a pick-up
+// stamp lags its sample by up to a period, so elsewhere (the robot speeding up from rest) the
+// measured motion can be twice the wheels' between the stamps without a skipped sample.
+std::vector<bool> Steady(const std::vector<bool>& trusted,
+                         const std::vector<Eigen::Vector3d>& wheel_motion,
+                         const Eigen::Vector3d& weight) {
+  std::vector<bool> steady(trusted.size(), false);
+  const auto norm = [&](const Eigen::Vector3d& v) {
+    return std::sqrt(v.dot(weight.cwiseProduct(v)));
+  };
+  for (size_t k = 2; k + 1 < trusted.size(); ++k) {
+    const double size = norm(wheel_motion[k]);
+    steady[k] = trusted[k] && norm(wheel_motion[k] - wheel_motion[k - 1]) < 0.1 * size &&
+                norm(wheel_motion[k] - wheel_motion[k + 1]) < 0.1 * size;
+  }
+  return steady;
+}
+
+// Whole sensor periods per interval as the motion counts them (stamp step × measured over wheel
+// motion), where it is trusted and within a quarter of a whole number; else 0.
+std::vector<int> MotionPeriods(const std::vector<double>& stamp_ratio,
+                               const std::vector<double>& motion_ratio,
+                               const std::vector<bool>& trusted) {
+  std::vector<int> periods(stamp_ratio.size(), 0);
+  for (size_t k = 1; k < periods.size(); ++k) {
+    const double counted = stamp_ratio[k] * motion_ratio[k];
+    if (trusted[k] && counted > 0.75 && std::abs(counted - std::round(counted)) < 0.25) {
+      periods[k] = static_cast<int>(std::round(counted));
+    }
+  }
+  return periods;
+}
+
+}  // namespace
+
 LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModelFit& stamps,
                                     const std::optional<PickUpClock>& pick_up_known) {
   LatentTimeState s = stamps.state;
@@ -184,6 +221,7 @@ LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModel
   const size_t n = data.samples.size();
   std::vector<double> stamp_ratio(n, 0.0), motion_ratio(n, 1.0);
   std::vector<bool> trusted(n, false);
+  std::vector<Eigen::Vector3d> wheel_motion(n, Eigen::Vector3d::Zero());
   for (size_t k = 1; k < n; ++k) {
     stamp_ratio[k] = (data.samples[k].stamp_s - data.samples[k - 1].stamp_s) / period;
     double left[2], right[2];
@@ -192,6 +230,7 @@ LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModel
     }
     const Pose2d robot = WheelAngleChainDisplacement(v(0), v(1), v(2), left, right, 2);
     const Eigen::Vector3d predicted = SensorMotionFromRobotMotion(mounting, robot);
+    wheel_motion[k] = predicted;
     Eigen::Vector3d measured =
         Between(data.samples[k - 1].world_T_sensor, data.samples[k].world_T_sensor);
     measured(2) = WrapAngle(measured(2));
@@ -207,16 +246,21 @@ LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModel
   // the sample times up to a small scatter. Their steps count the periods; the motion ratio of a
   // single interval (wheel angles interpolated between polls while the robot accelerates) would
   // only add errors.
+  // A logger slower than its sensor skips one sample in hundreds: too few for that 5 %, so the
+  // clear skips the motion counts are looked at too.
+  const std::vector<int> motion_periods =
+      MotionPeriods(stamp_ratio, motion_ratio, Steady(trusted, wheel_motion, weight));
   std::vector<double> off_grid;
-  int trusted_count = 0, disagreeing = 0;
+  int trusted_count = 0, disagreeing = 0, skips = 0;
   for (size_t k = 1; k < n; ++k) {
     off_grid.push_back(std::abs(stamp_ratio[k] - std::round(stamp_ratio[k])));
     trusted_count += trusted[k];
     disagreeing += trusted[k] && std::abs(motion_ratio[k] - 1.0) > 0.15;  // 1.5 % on exact stamps.
+    skips += motion_periods[k] > std::round(stamp_ratio[k]);
   }
   const bool on_grid =
       !off_grid.empty() && data.held_repeats_dropped == 0 && disagreeing <= 0.05 * trusted_count &&
-      [&] {
+      skips < std::max(3.0, 0.001 * trusted_count) && [&] {
         std::nth_element(off_grid.begin(), off_grid.begin() + off_grid.size() / 2, off_grid.end());
         return 1.4826 * off_grid[off_grid.size() / 2] < 0.05;
       }();
@@ -225,12 +269,22 @@ LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModel
     const double ratio = on_grid ? stamp_ratio[k] : stamp_ratio[k] * motion_ratio[k];
     steps[k] = std::max(1.0, std::round(ratio));
   }
-  // Pick-up stamps with held repeats name their samples exactly once the period is known: the
-  // motion ratios miss skips where the robot stands still or the match is poor.
+  // Pick-up stamps with held repeats or skips the motion counted name their samples exactly once
+  // the period is known: the motion ratios alone miss skips where the robot stands still or the
+  // match is poor.
   s.clock_indices_named = false;
   s.period_prior_s = s.period_prior_sigma_s = 0.0;
   if (!on_grid) {
-    const std::optional<PickUpClock> pick_up = pick_up_known ? pick_up_known : FitPickUpClock(data);
+    // Holds first; else skips the motion counted (MotionPeriods, steady stretches only). Named
+    // indices are never re-assigned (re-assigning them by the motion had drifted P to the logger's
+    // period on 10⁴-scan logs); a wrong P they might name still has to beat the stamp model's
+    // evidence.
+    std::optional<PickUpClock> pick_up = pick_up_known ? pick_up_known : FitPickUpClock(data);
+    if (!pick_up || !pick_up->NamesEverySample()) {
+      if (std::optional<PickUpClock> counted = FitPickUpClock(data, motion_periods)) {
+        pick_up = std::move(counted);
+      }
+    }
     if (pick_up) {
       for (size_t k = 1; k < n; ++k) steps[k] = pick_up->indices[k] - pick_up->indices[k - 1];
       s.clock_indices_named = pick_up->NamesEverySample();
