@@ -223,13 +223,18 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
     result.stamps_score = best.score;
     result.rounds = best.rounds;
   }
-  if (try_clock && !pick_up && try_stamps && TimesStrayFromEveryClock(data, best)) {
-    try_clock = false;
+  std::optional<LatentTimeState> clock_start;
+  if (try_clock) {
+    clock_start = ClockStartFromTimes(data, best, pick_up);
+    // Sample times that stray from every grid rule a clock out, unless holds or counted skips
+    // named its samples (a logger whose own steps wander still picks up a clock's samples).
+    if (try_stamps && !clock_start->clock_indices_named && TimesStrayFromEveryClock(data, best)) {
+      try_clock = false;
+    }
   }
   if (try_clock) {
-    LatentTimeState clock_start = ClockStartFromTimes(data, best, pick_up);
     StatusOr<TimingModelFit> clock =
-        FitTimingModel(data, SensorClockModel::kFreeRunning, clock_start, options);
+        FitTimingModel(data, SensorClockModel::kFreeRunning, *clock_start, options);
     // The rounds' looser optimum ranks the two models unless their scores are close; then both
     // are polished first.
     if (clock.ok() && try_stamps && std::abs(clock->score - best.score) < kPolishBothMargin) {

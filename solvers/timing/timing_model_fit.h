@@ -59,7 +59,8 @@ double StartingJitter(const std::vector<double>& stamps_s, double period_s);
 // of the period (the times sit near the stamps), yet counting whole periods between them, they
 // stray from the best regular grid by more than a period (steps that vary and add up: a sensor
 // triggered by something else). A clock's samples picked up late stay within about a period of
-// their grid; such a log only costs the clock model's rounds, which then never settle.
+// their grid; such a log only costs the clock model's rounds, which then never settle. (The
+// caller asks only where no holds or counted skips named the clock's samples.)
 bool TimesStrayFromEveryClock(const StreamSamples& data, const TimingModelFit& stamps);
 
 // The clock model's starting point from a fit of the stamp model: whole periods per interval
