@@ -18,6 +18,7 @@ constexpr double kGapPeriods = 5.0;          // A longer interval is a gap.
 constexpr double kMultipleTolerance = 0.25;  // |Δ/P − k| within this is "near k·P".
 constexpr int kStepWindow = 8;               // Steps per steady-window test.
 constexpr double kStepTolerance = 0.15;      // |d/u − k| within this is a whole multiple.
+constexpr double kUnitSpread = 0.1;          // Largest over smallest step at the usual multiple.
 
 // The base period: the largest m/n (m the median interval, n = 1..6) such that at least 80 % of
 // the intervals lie near a whole multiple k ≥ 1 of it, refined as the median of Δ/k over them.
@@ -192,6 +193,36 @@ int CountHeldRepeats(const std::vector<double>& steps) {
   return held;
 }
 
+// The window's steps at its usual multiple agree to kUnitSpread: the speed was constant, and a
+// free-running sensor's samples are then one unit each.
+bool ConstantUnit(const double* d, const std::vector<int>& k_of, int mode) {
+  double lo = INFINITY, hi = 0.0;
+  for (size_t i = 0; i < k_of.size(); ++i) {
+    if (k_of[i] != mode) continue;
+    lo = std::min(lo, d[i]);
+    hi = std::max(hi, d[i]);
+  }
+  return hi > 0.0 && hi <= (1.0 + kUnitSpread) * lo;
+}
+
+// Every run of steps off the window's usual multiple m sits between steps at it, is at most three
+// steps long and adds up to within one unit of m per step: a skipped or held sample (with its
+// catch-up, or the run a jittery logger makes where its pick-up crosses the sensor's tick) keeps
+// the sensor's pace. A change of speed (the simulator's segments switch speeds at once) instead
+// starts a new level, which a third or half of a step can fit as multiples of a smaller unit.
+bool IsolatedOffSteps(const std::vector<int>& k_of, int mode) {
+  const int w = static_cast<int>(k_of.size());
+  for (int i = 0; i < w; ++i) {
+    if (k_of[i] == mode) continue;
+    int end = i, sum = 0;
+    while (end < w && k_of[end] != mode) sum += k_of[end++];
+    const int length = end - i;
+    if (i == 0 || end >= w || length > 3 || std::abs(sum - length * mode) > 1) return false;
+    i = end;
+  }
+  return true;
+}
+
 }  // namespace
 
 StepMultiples AnalyzeDisplacementSteps(const std::vector<double>& stamps_s,
@@ -207,6 +238,7 @@ StepMultiples AnalyzeDisplacementSteps(const std::vector<double>& stamps_s,
     int counts[5] = {0, 0, 0, 0, 0};
     for (const int k : k_of) ++counts[k];
     const int mode = static_cast<int>(std::max_element(counts + 1, counts + 5) - counts);
+    if (!ConstantUnit(&step_lengths[b], k_of, mode) || !IsolatedOffSteps(k_of, mode)) continue;
     out.steady_steps += kStepWindow;
     out.zero_steps += counts[0];
     for (int k = 1; k <= 4; ++k) {

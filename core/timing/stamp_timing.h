@@ -68,8 +68,10 @@ struct StepMultiples {
 
 // The constant-speed signature from the values: in windows of 8 consecutive steps where every
 // step length is within 15 % of a whole multiple (0..4) of one unit u > 0 (u = the median
-// non-zero step / n, n = 1..3, the first that fits) and every zero step is isolated and followed
-// by a catch-up of ≥ 2 units (steady motion, not a start or a stop), counts the steps off the
+// non-zero step / n, n = 1..3, the first that fits), every zero step is isolated and followed
+// by a catch-up of ≥ 2 units (steady motion, not a start or a stop), the steps at the window's
+// usual multiple agree to 10 % and every run off it is interior, at most 3 steps and within one
+// unit of the usual pace (a skip or a hold, not a change of speed), counts the steps off the
 // window's most common multiple: held (0) or skipped (one more or less) sensor samples.
 // `step_lengths[k]` is the length of the displacement from record k to k + 1 (any consistent norm);
 // `stamps_s` (one more than step_lengths) is kept for future use of the intervals and must match in

@@ -231,6 +231,18 @@ TEST(StampTimingTest, DisplacementSteps) {
   EXPECT_NEAR(s.multiple_fraction, 10.0 / s.steady_steps, 1e-12);
   EXPECT_TRUE(s.detected);
 
+  // Speeds that switch at once every 7 steps (as the simulator's segments), intervals ±2.5 %: a
+  // step to 2/3 or 1/2 of the last fits a multiple of a third or a half of it, but the new level
+  // stays; no skip or hold is there.
+  std::vector<double> switching;
+  const double levels[] = {0.3, 0.2, 0.3, 0.15, 0.45, 0.3};
+  for (int k = 0; k < 700; ++k) {
+    switching.push_back(levels[(k / 7) % 6] * (1.0 + 0.025 * std::sin(1.7 * k)));
+  }
+  s = AnalyzeDisplacementSteps(std::vector<double>(701, 0.0), switching);
+  EXPECT_EQ(s.multiple_fraction, 0.0);
+  EXPECT_FALSE(s.detected);
+
   // Starting from rest and accelerating: no steady window holds a held sample.
   std::vector<double> start(200, 0.0);
   for (size_t k = 100; k < start.size(); ++k) start[k] = 0.001 * std::min<size_t>(k - 99, 20);
