@@ -72,8 +72,10 @@ Status AddSensorSamples(const std::vector<StampedPose>& poses, const std::string
     last = &p.world_T_sensor;
     last_stamp = p.t_s;
     const double stamp = p.t_s - out->origin_s;
-    const auto after = std::upper_bound(enc.begin(), enc.end(), stamp,
-                                        [](double t, const EncoderSample& s) { return t < s.t_s; });
+    auto after = std::upper_bound(enc.begin(), enc.end(), stamp,
+                                  [](double t, const EncoderSample& s) { return t < s.t_s; });
+    // A sample stamped with the last encoder lies in the last bracket, not outside the span.
+    if (after == enc.end() && enc.size() >= 2 && stamp == enc.back().t_s) --after;
     last_kept = after != enc.begin() && after != enc.end();
     if (!last_kept) {  // Outside the encoder span.
       ++out->outside_encoder_span;

@@ -1,3 +1,4 @@
+#include <calib/core/timing/stamp_timing.h>
 #include <calib/core/timing/stream_samples.h>
 #include <calib/solvers/laser/laser_consistency.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
@@ -14,18 +15,33 @@
 namespace calib {
 namespace {
 
-// A free-running sensor stamped at pick-up is worth trying when records repeat (held samples) or
-// the stamps are regular (the logger's own period): the evidence then decides.
+// Neighbouring stamp intervals correlated below this: scatter about a grid (−0.5 for white
+// scatter), not an irregular sampler's independent intervals (0).
+constexpr double kScatterAboutAGrid = -0.2;
+
+// A free-running sensor stamped at pick-up is worth trying where records repeat (held samples) or
+// the stream shows the free-running signature (steps at constant speed off their usual whole
+// multiple), or where the stamps keep to a grid within a tenth of the period (the logger's own
+// period) and are either regular or scattered about it (neighbouring intervals anti-correlated);
+// the evidence then decides. An irregular sampler's stamps (independent intervals) are its sample
+// times, with no clock behind them: on the simulator's default 2000-interval logs at 0.5 rad/s the
+// evidence could not tell and chose a clock whose stamps sat ±130 ms off it.
 bool ClockCandidate(const StreamSamples& data) {
   if (data.samples.size() < 50) return false;
   if (data.held_repeats_dropped > 0) return true;
-  std::vector<double> deviation;
-  for (size_t k = 1; k < data.samples.size(); ++k) {
-    deviation.push_back(
-        std::abs(data.samples[k].stamp_s - data.samples[k - 1].stamp_s - data.sensor_period_s));
+  std::vector<double> stamps, values, deviation;
+  for (const StreamSample& s : data.samples) {
+    stamps.push_back(s.stamp_s);
+    values.insert(values.end(), s.world_T_sensor.data(), s.world_T_sensor.data() + 3);
+  }
+  const StreamTiming timing = AnalyzeStreamTiming(stamps, values);
+  if (timing.free_running_signature) return true;
+  for (size_t k = 1; k < stamps.size(); ++k) {
+    deviation.push_back(std::abs(stamps[k] - stamps[k - 1] - data.sensor_period_s));
   }
   std::nth_element(deviation.begin(), deviation.begin() + deviation.size() / 2, deviation.end());
-  return 1.4826 * deviation[deviation.size() / 2] < 0.1 * data.sensor_period_s;
+  const bool on_grid = 1.4826 * deviation[deviation.size() / 2] < 0.1 * data.sensor_period_s;
+  return on_grid && (timing.regular || timing.interval_correlation < kScatterAboutAGrid);
 }
 
 // The six parameters' covariance in the ambient space, times κ.

@@ -1,3 +1,5 @@
+#include <calib/core/laser/laser_simulator.h>
+#include <calib/core/timing/stamp_timing.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <gtest/gtest.h>
 
@@ -173,6 +175,34 @@ TEST(LaserTimingCalibration, PoseErrorsAreCountedInTheCovariance) {
 }
 
 // Sensor samples the encoders do not cover are counted and named, not silently dropped.
+// The simulator's default streams (an irregular sampler: steps of 0.8 s ± 20 ms that add up, the
+// encoders read at the same instants) are sample times: the stamp model, no clock tried, nothing
+// to warn of. The last scan, stamped with the last encoder reading, had been called outside the
+// encoders' span; the stream diagnostics had read the segments' switches of speed as skipped
+// samples; and the clock model, tried, had won on evidence with stamps ±130 ms off its grid.
+TEST(LaserTimingCalibration, TheSimulatorsDefaultStreamsAreSampleTimes) {
+  LaserSimOptions o;
+  o.num_intervals = 2000;
+  o.seed = 11;
+  LaserSimTruth truth;
+  const LaserStreams streams = SimulateLoggedLaserStreams(o, LoggingModel{}, &truth);
+  const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(streams);
+  ASSERT_TRUE(r.ok()) << r.message();
+  Print("default", *r, truth);
+  EXPECT_EQ(r->sensor_clock, "stamps");
+  EXPECT_FALSE(r->free_running_score.has_value());
+  for (const std::string& w : r->warnings) ADD_FAILURE() << w;
+  EXPECT_LE(WorstZ(r->calibration, truth), 3.0);
+  std::vector<double> stamps, values;
+  for (const StampedPose& p : streams.sensor_poses) {
+    stamps.push_back(p.t_s);
+    values.insert(values.end(), p.world_T_sensor.data(), p.world_T_sensor.data() + 3);
+  }
+  const StreamTiming timing = AnalyzeStreamTiming(stamps, values);
+  EXPECT_FALSE(timing.step_multiples_detected) << timing.step_multiple_fraction;
+  EXPECT_TRUE(timing.stamps_are_sample_times);
+}
+
 TEST(LaserTimingCalibration, SamplesOutsideTheEncoderSpanAreNamed) {
   LaserSimTruth truth;
   LaserStreams streams = SimulateLaserStreams(ScanningRobot(600, 3), 50.0, &truth);
