@@ -45,6 +45,14 @@ RobotLike MakeRobotLike(int intervals = 0, uint64_t seed = 0,
   return out;
 }
 
+// The calibration's error over its σ, per parameter.
+LaserParamVector ErrorSigmas(const LaserTimingResult& r, const RobotLike& log) {
+  LaserCalibration truth;
+  truth.odometry = log.generated.truth.odometry;
+  truth.base_T_sensor = log.generated.truth.base_T_sensor;
+  return (r.calibration.estimate.ToVector() - truth.ToVector()).cwiseQuotient(r.calibration.stddev);
+}
+
 // The true sample index of every sample.
 std::vector<double> TrueIndices(const RobotLike& log) {
   std::vector<double> truth;
@@ -129,11 +137,7 @@ TEST(PickUpClock, NamedSamplesSkipTheStampModel) {
   const LoggingModel& logging = log.recipe.logging;
   EXPECT_NEAR(r->sensor_period_s, logging.sensor_period_s * (1.0 + logging.sensor_clock_drift),
               3.0 * r->sensor_period_stddev_s);
-  LaserCalibration truth;
-  truth.odometry = log.generated.truth.odometry;
-  truth.base_T_sensor = log.generated.truth.base_T_sensor;
-  const LaserParamVector z =
-      (r->calibration.estimate.ToVector() - truth.ToVector()).cwiseQuotient(r->calibration.stddev);
+  const LaserParamVector z = ErrorSigmas(*r, log);
   EXPECT_LT(z.cwiseAbs().maxCoeff(), 3.0) << z.transpose();
 }
 
@@ -234,11 +238,7 @@ TEST(PickUpClock, ALoggerSlowerThanItsScannerIsCalibratedThroughItsSkips) {
   const LoggingModel& logging = log.recipe.logging;
   EXPECT_NEAR(r->sensor_period_s, logging.sensor_period_s * (1.0 + logging.sensor_clock_drift),
               2e-6);
-  LaserCalibration t;
-  t.odometry = log.generated.truth.odometry;
-  t.base_T_sensor = log.generated.truth.base_T_sensor;
-  const LaserParamVector z =
-      (r->calibration.estimate.ToVector() - t.ToVector()).cwiseQuotient(r->calibration.stddev);
+  const LaserParamVector z = ErrorSigmas(*r, log);
   EXPECT_LT(z.cwiseAbs().maxCoeff(), 3.0) << z.transpose();
   EXPECT_NEAR(r->time_offset_s, TrueMeanLag(log), 3.0 * r->time_offset_stddev_s);
 }
