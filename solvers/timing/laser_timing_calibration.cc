@@ -1,6 +1,7 @@
 #include <calib/core/timing/stamp_timing.h>
 #include <calib/core/timing/stream_samples.h>
 #include <calib/solvers/laser/laser_consistency.h>
+#include <calib/solvers/timing/clock_start.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/solvers/timing/pick_up_clock.h>
 #include <calib/solvers/timing/timing_model_fit.h>

@@ -46,6 +46,9 @@ inline constexpr int kLatentRoundMaxIterations = 6;
 // step.)
 inline constexpr double kLatentGlobalStep = 0.01;
 
+// Jitter σ's are searched in [kJitterFloor, period]: below 0.1 ms no log can tell them from 0.
+inline constexpr double kJitterFloor = 1e-4;
+
 // Prior σ of the clock's curvature a (problems/timing/time_prior_residual.h, ClockDriftPrior).
 inline constexpr double kClockDriftSigmaS = 1e-3;
 

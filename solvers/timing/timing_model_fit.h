@@ -6,10 +6,8 @@
 #include <calib/solvers/timing/latent_error_covariance.h>
 #include <calib/solvers/timing/latent_time_problem.h>
 #include <calib/solvers/timing/latent_time_statistics.h>
-#include <calib/solvers/timing/pick_up_clock.h>
 
 #include <Eigen/Core>
-#include <optional>
 #include <vector>
 
 // One timing model fitted to the streams: rounds of solve → re-estimate scan noise and jitter →
@@ -54,24 +52,6 @@ Status PolishTimingModel(const StreamSamples& data, const LaserTimingOptions& op
 // latent times barely move; starting high instead lets the latents absorb the scan noise in the
 // first round and the rounds then take long to shed it.
 double StartingJitter(const std::vector<double>& stamps_s, double period_s);
-
-// Whether the stamp model's sample times rule out any sensor clock: its jitter is under a tenth
-// of the period (the times sit near the stamps), yet counting whole periods between them, they
-// stray from the best regular grid by more than a period (steps that vary and add up: a sensor
-// triggered by something else). A clock's samples picked up late stay within about a period of
-// their grid; such a log only costs the clock model's rounds, which then never settle. (The
-// caller asks only where no holds or counted skips named the clock's samples.)
-bool TimesStrayFromEveryClock(const StreamSamples& data, const TimingModelFit& stamps);
-
-// The clock model's starting point from a fit of the stamp model: whole periods per interval
-// (from the stamps where they sit on the period's grid and the motion agrees; pick-up stamps with
-// held repeats name them exactly through FitPickUpClock, and are then never re-assigned; else
-// from the ratio of measured to wheel motion), the clock fitted to the stamps, indices
-// re-assigned from them, and
-// for stamps on the grid a stamp prior (τ, σ_s) from their scatter about the clock.
-// `pick_up`: FitPickUpClock's result when the caller has it already.
-LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModelFit& stamps,
-                                    const std::optional<PickUpClock>& pick_up = std::nullopt);
 
 }  // namespace calib
 

@@ -1,3 +1,4 @@
+#include <calib/solvers/timing/clock_start.h>
 #include <calib/solvers/timing/timing_model_fit.h>
 #include <gtest/gtest.h>
 

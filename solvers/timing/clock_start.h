@@ -1,0 +1,34 @@
+#ifndef CALIB_SOLVERS_TIMING_CLOCK_START_H_
+#define CALIB_SOLVERS_TIMING_CLOCK_START_H_
+
+#include <calib/core/timing/stream_samples.h>
+#include <calib/solvers/timing/pick_up_clock.h>
+#include <calib/solvers/timing/timing_model_fit.h>
+
+#include <optional>
+
+// Where the free-running clock model starts from, and whether to try it, given a fit of the stamp
+// model.
+namespace calib {
+
+// Whether the stamp model's sample times rule out any sensor clock: its jitter is under a tenth
+// of the period (the times sit near the stamps), yet counting whole periods between them, they
+// stray from the best regular grid by more than a period (steps that vary and add up: a sensor
+// triggered by something else). A clock's samples picked up late stay within about a period of
+// their grid; such a log only costs the clock model's rounds, which then never settle. (The
+// caller asks only where no holds or counted skips named the clock's samples.)
+bool TimesStrayFromEveryClock(const StreamSamples& data, const TimingModelFit& stamps);
+
+// The clock model's starting point from a fit of the stamp model: whole periods per interval
+// (from the stamps where they sit on the period's grid and the motion agrees; pick-up stamps with
+// held repeats, or skips the motion counts over steady stretches, name them exactly through
+// FitPickUpClock, and are then never re-assigned; else from the ratio of measured to wheel
+// motion), the clock fitted to the stamps, indices re-assigned from them, and for stamps on the
+// grid a stamp prior (τ, σ_s) from their scatter about the clock.
+// `pick_up`: FitPickUpClock's result when the caller has it already.
+LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModelFit& stamps,
+                                    const std::optional<PickUpClock>& pick_up = std::nullopt);
+
+}  // namespace calib
+
+#endif  // CALIB_SOLVERS_TIMING_CLOCK_START_H_
