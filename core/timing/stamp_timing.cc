@@ -228,9 +228,11 @@ bool IsolatedOffSteps(const std::vector<int>& k_of, int mode) {
 StepMultiples AnalyzeDisplacementSteps(const std::vector<double>& stamps_s,
                                        const std::vector<double>& step_lengths) {
   (void)stamps_s;
-  StepMultiples out;
-  int off_mode = 0;
-  for (size_t b = 0; b + kStepWindow <= step_lengths.size(); b += kStepWindow) {
+  // Windows overlap by half, so that a skip or hold at one window's edge (which that window
+  // cannot tell from a change of speed) lies inside the next; each step is counted once.
+  // kind: −1 not in a steady window, 0 at its window's usual multiple, 1 held, 2 other multiple.
+  std::vector<int> kind(step_lengths.size(), -1);
+  for (size_t b = 0; b + kStepWindow <= step_lengths.size(); b += kStepWindow / 2) {
     std::vector<int> k_of;
     if (!timing_internal::SteadyWindow(&step_lengths[b], kStepWindow, kStepTolerance, &k_of)) {
       continue;
@@ -239,17 +241,22 @@ StepMultiples AnalyzeDisplacementSteps(const std::vector<double>& stamps_s,
     for (const int k : k_of) ++counts[k];
     const int mode = static_cast<int>(std::max_element(counts + 1, counts + 5) - counts);
     if (!ConstantUnit(&step_lengths[b], k_of, mode) || !IsolatedOffSteps(k_of, mode)) continue;
-    out.steady_steps += kStepWindow;
-    out.zero_steps += counts[0];
-    for (int k = 1; k <= 4; ++k) {
-      if (k != mode) out.multi_steps += counts[k];
+    for (int i = 0; i < kStepWindow; ++i) {
+      const int step_kind = k_of[i] == mode ? 0 : (k_of[i] == 0 ? 1 : 2);
+      kind[b + i] = std::max(kind[b + i], step_kind);
     }
-    off_mode += kStepWindow - counts[mode];
   }
+  StepMultiples out;
+  for (const int k : kind) {
+    out.steady_steps += k >= 0;
+    out.zero_steps += k == 1;
+    out.multi_steps += k == 2;
+  }
+  const int off_mode = out.zero_steps + out.multi_steps;
   if (out.steady_steps > 0) {
     out.multiple_fraction = static_cast<double>(off_mode) / out.steady_steps;
   }
-  out.detected = out.steady_steps >= 20 && off_mode >= 3 && out.multiple_fraction >= 0.005;
+  out.detected = out.steady_steps >= 20 && off_mode >= 3 && out.multiple_fraction >= 0.0025;
   return out;
 }
 

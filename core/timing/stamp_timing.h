@@ -63,7 +63,7 @@ struct StepMultiples {
   int multi_steps = 0;   // ≈ k ≥ 1 units but not the window's usual (mode) multiple.
   // (zero + multi) / steady: steps off their window's usual multiple of the unit.
   double multiple_fraction = 0;
-  bool detected = false;  // At least 3 such steps, ≥ 0.5 %, in ≥ 20 steady steps.
+  bool detected = false;  // At least 3 such steps, ≥ 0.25 %, in ≥ 20 steady steps.
 };
 
 // The constant-speed signature from the values: in windows of 8 consecutive steps where every

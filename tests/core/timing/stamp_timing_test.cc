@@ -140,6 +140,22 @@ TEST(StampTimingTest, FreeRunningSensorPickedUpByALogger) {
   EXPECT_FALSE(t.stamps_are_sample_times);
   EXPECT_NE(Notes(t).find("held sample picked up again"), std::string::npos) << Notes(t);
 
+  // A logger without jitter, 0.5 % slower than the sensor: it never holds a sample and skips one
+  // in 200. Only the steps show it (a skip at one window's edge lies inside the next window).
+  stamps.clear();
+  values.clear();
+  for (int j = 0; j < 3000; ++j) {
+    const double pickup = 0.1 * j + 0.05;
+    stamps.push_back(pickup);
+    const double sample_time = std::floor(pickup / sensor_period) * sensor_period;
+    values.insert(values.end(), {SamplePosition(speed, sensor_period, sample_time), 0.0, 0.0});
+  }
+  const StreamTiming skips = AnalyzeStreamTiming(stamps, values);
+  EXPECT_EQ(skips.repeated_values, 0);
+  EXPECT_NEAR(skips.step_multiple_fraction, 0.005, 0.001);
+  EXPECT_TRUE(skips.step_multiples_detected);
+  EXPECT_FALSE(skips.stamps_are_sample_times);
+
   // The same sensor logged only when a new sample is there, at polls every 257 ms: the
   // intervals (and the steps) come in 2 or 3 sensor periods.
   stamps.clear();
