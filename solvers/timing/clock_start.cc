@@ -130,7 +130,28 @@ std::optional<PickUpClock> PickUpClockOf(const StreamSamples& data,
   return pick_up;
 }
 
+// Per-interval motion, the periods it counts over steady stretches, and the grid test on them.
+struct PeriodCount {
+  IntervalMotion motion;
+  std::vector<int> motion_periods;
+  bool stamps_count = false;
+};
+
+PeriodCount CountPeriods(const StreamSamples& data, const LatentTimeState& s) {
+  PeriodCount c;
+  const Eigen::Vector3d weight = s.noise_sigma.cwiseInverse().cwiseAbs2();
+  c.motion = MeasureIntervalMotion(data, s, weight);
+  c.motion_periods = MotionPeriods(c.motion.stamp_ratio, c.motion.motion_ratio,
+                                   Steady(c.motion.trusted, c.motion.wheel_motion, weight));
+  c.stamps_count = StampsCountPeriods(data, c.motion, c.motion_periods);
+  return c;
+}
+
 }  // namespace
+
+bool StampsCountSensorPeriods(const StreamSamples& data, const LatentTimeState& state) {
+  return data.samples.size() >= 2 && CountPeriods(data, state).stamps_count;
+}
 
 bool TimesStrayFromEveryClock(const StreamSamples& data, const TimingModelFit& stamps) {
   const double period = data.sensor_period_s;
@@ -160,11 +181,10 @@ LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModel
   // Whole sensor periods per interval: where the robot moves, the ratio of the measured motion to
   // the motion the wheels made between the two stamps; elsewhere the stamp step. The clock is then
   // fitted to the stamps and the indices re-assigned.
-  const Eigen::Vector3d weight = s.noise_sigma.cwiseInverse().cwiseAbs2();
-  const IntervalMotion m = MeasureIntervalMotion(data, s, weight);
-  const std::vector<int> motion_periods =
-      MotionPeriods(m.stamp_ratio, m.motion_ratio, Steady(m.trusted, m.wheel_motion, weight));
-  const bool on_grid = StampsCountPeriods(data, m, motion_periods);
+  const PeriodCount count = CountPeriods(data, s);
+  const IntervalMotion& m = count.motion;
+  const std::vector<int>& motion_periods = count.motion_periods;
+  const bool on_grid = count.stamps_count;
   const size_t n = data.samples.size();
   std::vector<double> steps(n, 0.0);
   for (size_t k = 1; k < n; ++k) {

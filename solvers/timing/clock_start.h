@@ -19,6 +19,12 @@ namespace calib {
 // caller asks only where no holds or counted skips named the clock's samples.)
 bool TimesStrayFromEveryClock(const StreamSamples& data, const TimingModelFit& stamps);
 
+// Whether the stamps count the sensor's periods: steps within 5 % of whole periods, no held
+// repeats, and the motion (wheels at `state`'s calibration against the measured motion) confirms
+// the steps (no skipped samples, under 5 % of the intervals disagreeing). The clock's indices are
+// then the stamps' own, and the clock model needs no stamp model to start from.
+bool StampsCountSensorPeriods(const StreamSamples& data, const LatentTimeState& state);
+
 // The clock model's starting point from a fit of the stamp model: whole periods per interval
 // (from the stamps where they sit on the period's grid and the motion agrees; pick-up stamps with
 // held repeats, or skips the motion counts over steady stretches, name them exactly through

@@ -230,7 +230,12 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
       options.encoder_jitter_s.value_or(StartingJitter(encoder_stamps, data.encoder_period_s));
   std::optional<PickUpClock> pick_up;
   if (pick_up_search.valid()) pick_up = pick_up_search.get();
-  const bool named = pick_up && pick_up->NamesEverySample();
+  // Stamps that count the sensor's periods (a grid the motion confirms) name every sample too:
+  // the clock model then starts from the stamp-as-truth fit (the stamp model's rounds had taken
+  // most of the time on such logs, and the clock model won by far on every one tried).
+  const bool named = (pick_up && pick_up->NamesEverySample()) ||
+                     (try_clock && options.sensor_clock == "auto" &&
+                      StampsCountSensorPeriods(data, initial));
   const bool try_stamps = options.sensor_clock != "free_running" && !named;
   // Otherwise the stamp model runs first: its latent times seed the clock model.
   TimingModelFit best;
@@ -281,8 +286,8 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
       }
     } else if (named) {
       result.warnings.push_back("the free-running clock model failed (" + clock.message() +
-                                ") although the pick-up stamps name every sample: the stamp "
-                                "model is used");
+                                ") although the stamps name every sample: the stamp model is "
+                                "used");
       CALIB_ASSIGN_OR_RETURN(best,
                              FitTimingModel(data, SensorClockModel::kStamps, initial, options));
     } else if (!try_stamps) {

@@ -110,6 +110,24 @@ TEST(LaserTimingCalibration, CleanTimingAgreesWithStampsAsTruth) {
   EXPECT_LE(WorstZ(r->calibration, truth), 3.0);
 }
 
+// Exact stamps of a scanner's own clock with scattered encoder stamps: the stamps count the
+// periods (a grid the motion confirms), so the clock model starts from the stamp-as-truth fit
+// and the stamp model is not fitted (its rounds had taken most of the time on such logs).
+TEST(LaserTimingCalibration, StampsThatCountThePeriodsNeedNoStampModel) {
+  LaserSimTruth truth;
+  LaserSimOptions o = ScanningRobot(3000, 13);
+  o.max_wheel_speed = 8.0;
+  LaserStreams streams = SimulateLaserStreams(o, 4.0, &truth);
+  test::ScatterEncoderStamps(&streams, 0.01, 31);
+  const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(streams);
+  ASSERT_TRUE(r.ok()) << r.message();
+  Print("counted by stamps", *r, truth);
+  EXPECT_EQ(r->sensor_clock, "free_running");
+  EXPECT_FALSE(r->stamps_score.has_value());
+  EXPECT_LE(WorstZ(r->calibration, truth), 3.0);
+  EXPECT_NEAR(r->sensor_period_s, 0.0995, 1e-6);
+}
+
 // Between 250 ms polls even the cubic misses the wheel angles where the acceleration jumps, and
 // that error follows the acceleration as a time offset does: τ's σ must carry it
 // (LatentAngleCovariance). Without it τ = 0 fell outside 2σ on 38 of 100 such clean logs.
