@@ -233,9 +233,9 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
   // Stamps that count the sensor's periods (a grid the motion confirms) name every sample too:
   // the clock model then starts from the stamp-as-truth fit (the stamp model's rounds had taken
   // most of the time on such logs, and the clock model won by far on every one tried).
-  const bool named = (pick_up && pick_up->NamesEverySample()) ||
-                     (try_clock && options.sensor_clock == "auto" &&
-                      StampsCountSensorPeriods(data, initial));
+  const bool named =
+      (pick_up && pick_up->NamesEverySample()) ||
+      (try_clock && options.sensor_clock == "auto" && StampsCountSensorPeriods(data, initial));
   const bool try_stamps = options.sensor_clock != "free_running" && !named;
   // Otherwise the stamp model runs first: its latent times seed the clock model.
   TimingModelFit best;

@@ -63,8 +63,9 @@ void AllowedPhases(const Pair& pair, double period, double* lo, double* hi) {
 }
 
 // Sorts the events (phase, ±1) by phase in [0, period], ties −1 first, in O(n): a bucket per
-// event, then insertion sort inside each bucket (a sort where they pile up). BestPhase is called tens of thousands of times
-// per log, on up to 10⁴ pairs; a comparison sort took most of the pick-up search.
+// event, then insertion sort inside each bucket (a sort where they pile up). BestPhase is called
+// tens of thousands of times per log, on up to 10⁴ pairs; a comparison sort took most of the
+// pick-up search.
 void SortEvents(double period, std::vector<std::pair<double, int>>* events,
                 std::vector<std::pair<double, int>>* sorted, std::vector<int>* bucket_end) {
   const int buckets = static_cast<int>(events->size());
