@@ -1,0 +1,78 @@
+#ifndef CALIB_CORE_BAG_ROBOT_MESSAGES_H_
+#define CALIB_CORE_BAG_ROBOT_MESSAGES_H_
+
+#include <calib/core/scan/laser_scan.h>
+#include <calib/core/status.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+// The messages of a robot's recording that a calibration uses, decoded from a ROS 2 bag (MCAP,
+// CDR) or a ROS 1 bag (v2.0), with no ROS installation. Every message keeps its header stamp
+// (stamp_s, the driver's idea of the sample time), the bag's log time (log_time_s, when the
+// recorder received it) and its record index, so that errors name it and the timing diagnostics
+// can compare the two clocks.
+namespace calib {
+
+struct JointState {  // sensor_msgs/JointState
+  double stamp_s = 0.0, log_time_s = 0.0;
+  int64_t record = 0;
+  std::string frame_id;
+  std::vector<std::string> name;
+  std::vector<double> position, velocity, effort;  // Each empty or one per name.
+};
+
+struct Odometry {  // nav_msgs/Odometry, the planar part kept plus z and the full quaternion.
+  double stamp_s = 0.0, log_time_s = 0.0;
+  int64_t record = 0;
+  std::string frame_id, child_frame_id;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero();   // In child_frame_id.
+  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  // In child_frame_id.
+};
+
+struct TransformStamped {  // geometry_msgs/TransformStamped
+  double stamp_s = 0.0, log_time_s = 0.0;
+  int64_t record = 0;
+  std::string parent_frame, child_frame;
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+};
+
+struct TopicInfo {
+  std::string name;
+  // Normalised to "package/Type" (ROS 2's "sensor_msgs/msg/LaserScan" → "sensor_msgs/LaserScan").
+  std::string type;
+  int64_t message_count = 0;
+};
+
+struct RobotMessages {
+  std::string source;            // The file read.
+  std::vector<TopicInfo> topics;  // Every topic in the bag, whatever its type.
+  // By topic name, in log-time order; only topics of these types are decoded.
+  std::map<std::string, std::vector<LaserScan>> scans;
+  std::map<std::string, std::vector<JointState>> joint_states;
+  std::map<std::string, std::vector<Odometry>> odometry;
+  std::vector<TransformStamped> tf, tf_static;  // From /tf and /tf_static (tf2_msgs/TFMessage).
+};
+
+struct BagReadOptions {
+  // Topics to decode; empty: every topic of a type above.
+  std::set<std::string> topics;
+};
+
+// A ROS 2 bag: an .mcap file, or a bag directory holding one (metadata.yaml beside it).
+StatusOr<RobotMessages> ReadMcapBag(const std::string& path, const BagReadOptions& options = {});
+
+// A ROS 1 bag, format 2.0 (uncompressed, bz2 or lz4 chunks).
+StatusOr<RobotMessages> ReadRos1Bag(const std::string& path, const BagReadOptions& options = {});
+
+}  // namespace calib
+
+#endif  // CALIB_CORE_BAG_ROBOT_MESSAGES_H_
