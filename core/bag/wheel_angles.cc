@@ -1,0 +1,151 @@
+#include <calib/core/bag/wheel_angles.h>
+#include <calib/core/se2.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace calib {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double MessageTime(double stamp_s, double log_time_s) {
+  return stamp_s > 0.0 ? stamp_s : log_time_s;
+}
+
+int IndexOf(const std::vector<std::string>& names, const std::string& name) {
+  const auto it = std::find(names.begin(), names.end(), name);
+  return it == names.end() ? -1 : static_cast<int>(it - names.begin());
+}
+
+// Adds whole turns where a joint reported within (−π, π] jumps by more than π between samples.
+int Unwrap(std::vector<EncoderSample>* samples, double EncoderSample::*angle) {
+  bool within = true, jumps = false;
+  for (size_t k = 0; k < samples->size(); ++k) {
+    within = within && std::abs((*samples)[k].*angle) <= kPi + 1e-6;
+    if (k > 0) jumps = jumps || std::abs((*samples)[k].*angle - (*samples)[k - 1].*angle) > kPi;
+  }
+  if (!within || !jumps) return 0;
+  int turns = 0;
+  double offset = 0.0, previous = (*samples)[0].*angle;
+  for (EncoderSample& s : *samples) {
+    const double raw = s.*angle;
+    const double step = raw - previous;
+    if (step > kPi) offset -= 2.0 * kPi, ++turns;
+    if (step < -kPi) offset += 2.0 * kPi, ++turns;
+    previous = raw;
+    s.*angle = raw + offset;
+  }
+  return turns;
+}
+
+double Yaw(const Eigen::Quaterniond& q) {
+  return std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()),
+                    1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
+}
+
+// Signed arc length of a step from (x, y, yaw) a to b taken as one arc: the chord over
+// sinc(Δθ/2), forward when the chord points along the mid-step heading.
+double ArcLength(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const double turn = WrapAngle(b(2) - a(2));
+  const double dx = b(0) - a(0), dy = b(1) - a(1);
+  const double chord = std::hypot(dx, dy);
+  const double heading = a(2) + 0.5 * turn;
+  const double along = dx * std::cos(heading) + dy * std::sin(heading);
+  const double half = 0.5 * turn;
+  const double arc = std::abs(half) > 1e-9 ? chord * half / std::sin(half) : chord;
+  return along < 0.0 ? -arc : arc;
+}
+
+}  // namespace
+
+StatusOr<WheelAngleStream> WheelAnglesFromJointStates(const std::vector<JointState>& messages,
+                                                      const std::string& left_joint,
+                                                      const std::string& right_joint,
+                                                      const std::string& where) {
+  WheelAngleStream out;
+  for (const JointState& m : messages) {
+    const int left = IndexOf(m.name, left_joint), right = IndexOf(m.name, right_joint);
+    if (left < 0 && right < 0) {
+      ++out.skipped_messages;
+      continue;
+    }
+    if (left < 0 || right < 0) {
+      ++out.half_messages;
+      continue;
+    }
+    const std::string record = where + ": record " + std::to_string(m.record);
+    if (m.position.size() != m.name.size()) {
+      return Status::InvalidInput(record + ": JointState has " + std::to_string(m.name.size()) +
+                                  " names but " + std::to_string(m.position.size()) +
+                                  " positions: the wheel angles need positions");
+    }
+    const double l = m.position[left], r = m.position[right];
+    if (!std::isfinite(l) || !std::isfinite(r)) {
+      return Status::InvalidInput(record + ": wheel joint position is not finite");
+    }
+    const double t = MessageTime(m.stamp_s, m.log_time_s);
+    out.samples.push_back(EncoderSample{t, l, r, static_cast<int>(m.record)});
+  }
+  if (out.samples.size() < 2) {
+    return Status::InvalidInput(where + ": " + std::to_string(out.samples.size()) +
+                                " JointState message(s) carry both '" + left_joint + "' and '" +
+                                right_joint + "' (" + std::to_string(out.half_messages) +
+                                " carry one of them): at least two are needed");
+  }
+  out.unwrapped_turns = Unwrap(&out.samples, &EncoderSample::left_rad) +
+                        Unwrap(&out.samples, &EncoderSample::right_rad);
+  return out;
+}
+
+StatusOr<WheelAngleStream> WheelAnglesFromOdometry(const std::vector<Odometry>& messages,
+                                                   double nominal_wheel_radius_m,
+                                                   double nominal_wheelbase_m,
+                                                   const std::string& where) {
+  if (!(nominal_wheel_radius_m > 0.0) || !(nominal_wheelbase_m > 0.0) ||
+      !std::isfinite(nominal_wheel_radius_m) || !std::isfinite(nominal_wheelbase_m)) {
+    return Status::InvalidInput(where +
+                                ": wheel angles from Odometry need the nominal wheel "
+                                "radius and wheelbase the driver used (both > 0)");
+  }
+  if (messages.size() < 2) {
+    return Status::InvalidInput(where + ": " + std::to_string(messages.size()) +
+                                " Odometry message(s): at least two are needed");
+  }
+  bool poses = false;
+  for (const Odometry& m : messages) {
+    poses = poses || m.position.head<2>().norm() > 0.0 || std::abs(Yaw(m.orientation)) > 0.0;
+  }
+  WheelAngleStream out;
+  const double r = nominal_wheel_radius_m, half_b = 0.5 * nominal_wheelbase_m;
+  double left = 0.0, right = 0.0;
+  for (size_t k = 0; k < messages.size(); ++k) {
+    const Odometry& m = messages[k];
+    const std::string record = where + ": record " + std::to_string(m.record);
+    if (!m.position.allFinite() || !m.orientation.coeffs().allFinite() ||
+        !m.linear_velocity.allFinite() || !m.angular_velocity.allFinite()) {
+      return Status::InvalidInput(record + ": Odometry holds a value that is not finite");
+    }
+    const double t = MessageTime(m.stamp_s, m.log_time_s);
+    if (k > 0) {
+      const Odometry& p = messages[k - 1];
+      double arc = 0.0, turn = 0.0;
+      if (poses) {
+        const Eigen::Vector3d a(p.position.x(), p.position.y(), Yaw(p.orientation));
+        const Eigen::Vector3d b(m.position.x(), m.position.y(), Yaw(m.orientation));
+        arc = ArcLength(a, b);
+        turn = WrapAngle(b(2) - a(2));
+      } else {
+        const double dt = t - MessageTime(p.stamp_s, p.log_time_s);
+        arc = 0.5 * dt * (p.linear_velocity.x() + m.linear_velocity.x());
+        turn = 0.5 * dt * (p.angular_velocity.z() + m.angular_velocity.z());
+      }
+      left += (arc - turn * half_b) / r;
+      right += (arc + turn * half_b) / r;
+    }
+    out.samples.push_back(EncoderSample{t, left, right, static_cast<int>(m.record)});
+  }
+  return out;
+}
+
+}  // namespace calib

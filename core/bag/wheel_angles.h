@@ -1,0 +1,42 @@
+#ifndef CALIB_CORE_BAG_WHEEL_ANGLES_H_
+#define CALIB_CORE_BAG_WHEEL_ANGLES_H_
+
+#include <calib/core/bag/robot_messages.h>
+#include <calib/core/encoder_sample.h>
+#include <calib/core/status.h>
+
+#include <string>
+#include <vector>
+
+// The cumulative wheel angles (the encoder stream of the laser calibration) from a bag's
+// messages. Each sample keeps its message's header stamp (its log time when the stamp is unset)
+// and, in `line`, its record index for messages.
+namespace calib {
+
+struct WheelAngleStream {
+  std::vector<EncoderSample> samples;
+  int unwrapped_turns = 0;   // Whole turns added where a wrapped joint angle jumped by ~2π.
+  int skipped_messages = 0;  // Messages that carry neither wheel (other joints' states).
+  int half_messages = 0;     // Messages that carry one wheel only: not used.
+};
+
+// From the positions of two joints of a sensor_msgs/JointState topic. A joint reported wrapped
+// into (−π, π] (every position within it, and steps of nearly a full turn) is unwrapped.
+StatusOr<WheelAngleStream> WheelAnglesFromJointStates(const std::vector<JointState>& messages,
+                                                      const std::string& left_joint,
+                                                      const std::string& right_joint,
+                                                      const std::string& where);
+
+// From a nav_msgs/Odometry topic that the robot's driver integrated with its nominal wheel radius
+// and wheelbase: each step between two poses, taken as an arc (chord, heading change, direction
+// of travel), gives the nominal wheel angles back, so that the calibration returns corrections to
+// the nominal values. Where every pose is zero (a driver that only fills the twist), the twist is
+// integrated instead (trapezoids).
+StatusOr<WheelAngleStream> WheelAnglesFromOdometry(const std::vector<Odometry>& messages,
+                                                   double nominal_wheel_radius_m,
+                                                   double nominal_wheelbase_m,
+                                                   const std::string& where);
+
+}  // namespace calib
+
+#endif  // CALIB_CORE_BAG_WHEEL_ANGLES_H_
