@@ -265,4 +265,62 @@ StatusOr<ScanSimulation> SimulateScans(const ScanSimOptions& options) {
   return sim;
 }
 
+RobotMessages ScanSimulationMessages(const ScanSimulation& simulation,
+                                     const RobotMessageNames& names) {
+  RobotMessages messages;
+  messages.source = "simulation";
+  const double epoch = names.epoch_s;
+  std::vector<LaserScan>& scans = messages.scans[names.scan_topic];
+  for (LaserScan scan : simulation.scans) {
+    scan.stamp_s += epoch;
+    scan.log_time_s += epoch;
+    scans.push_back(std::move(scan));
+  }
+  std::vector<JointState>& joints = messages.joint_states[names.joint_topic];
+  std::vector<Odometry>& odometry = messages.odometry[names.odom_topic];
+  const OdometryParams& p = simulation.truth.odometry;
+  Pose2d pose = Pose2d::Zero();
+  for (size_t j = 0; j < simulation.encoders.size(); ++j) {
+    const EncoderSample& e = simulation.encoders[j];
+    JointState joint;
+    joint.stamp_s = joint.log_time_s = e.t_s + epoch;
+    joint.record = static_cast<int64_t>(j);
+    joint.name = {names.left_joint, names.right_joint};
+    joint.position = {e.left_rad, e.right_rad};
+    joints.push_back(std::move(joint));
+    if (j > 0) {
+      const EncoderSample& a = simulation.encoders[j - 1];
+      pose =
+          Compose(pose, WheelStepDisplacement(p.left_radius_m, p.right_radius_m, p.wheelbase_m,
+                                              e.left_rad - a.left_rad, e.right_rad - a.right_rad));
+    }
+    Odometry odom;
+    odom.stamp_s = odom.log_time_s = joints.back().stamp_s;
+    odom.record = static_cast<int64_t>(j);
+    odom.frame_id = names.odom_frame;
+    odom.child_frame_id = names.base_frame;
+    odom.position = Eigen::Vector3d(pose(0), pose(1), 0.0);
+    odom.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(pose(2), Eigen::Vector3d::UnitZ()));
+    odometry.push_back(odom);
+  }
+  TransformStamped mount;
+  const double start = simulation.scans.empty() ? 0.0 : simulation.scans.front().stamp_s;
+  mount.stamp_s = mount.log_time_s = start + epoch;
+  mount.parent_frame = names.base_frame;
+  mount.child_frame = simulation.scans.empty() ? "laser" : simulation.scans.front().frame_id;
+  const Pose2d& l = simulation.truth.base_T_sensor;
+  mount.translation = Eigen::Vector3d(l(0), l(1), 0.0);
+  mount.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(l(2), Eigen::Vector3d::UnitZ()));
+  messages.tf_static.push_back(mount);
+  for (const auto& [topic, list] : messages.scans) {
+    messages.topics.push_back({topic, "sensor_msgs/LaserScan", static_cast<int64_t>(list.size())});
+  }
+  messages.topics.push_back(
+      {names.joint_topic, "sensor_msgs/JointState", static_cast<int64_t>(joints.size())});
+  messages.topics.push_back(
+      {names.odom_topic, "nav_msgs/Odometry", static_cast<int64_t>(odometry.size())});
+  messages.topics.push_back({"/tf_static", "tf2_msgs/TFMessage", 1});
+  return messages;
+}
+
 }  // namespace calib

@@ -1,6 +1,7 @@
 #ifndef CALIB_CORE_SCAN_SCAN_SIMULATOR_H_
 #define CALIB_CORE_SCAN_SCAN_SIMULATOR_H_
 
+#include <calib/core/bag/robot_messages.h>
 #include <calib/core/diff_drive.h>
 #include <calib/core/encoder_sample.h>
 #include <calib/core/laser/laser_simulator.h>
@@ -83,6 +84,19 @@ struct ScanSimulation {
 
 // Fails on bad options (the message names the field) or a world that cannot be built.
 StatusOr<ScanSimulation> SimulateScans(const ScanSimOptions& options);
+
+struct RobotMessageNames {
+  double epoch_s = 1.7e9;  // Added to every time, so that stamps look like a real recording's.
+  std::string scan_topic = "/scan", joint_topic = "/joint_states", odom_topic = "/odom";
+  std::string odom_frame = "odom", base_frame = "base_link";
+  std::string left_joint = "left_wheel_joint", right_joint = "right_wheel_joint";
+};
+
+// The simulated robot's recording as a bag would hold it: the scans, one JointState per encoder
+// sample (cumulative wheel angles as positions), the driver's Odometry (the encoders dead-reckoned
+// with the true parameters) and base_T_sensor on /tf_static. Log times equal the stamps.
+RobotMessages ScanSimulationMessages(const ScanSimulation& simulation,
+                                     const RobotMessageNames& names = {});
 
 }  // namespace calib
 

@@ -1,11 +1,16 @@
+#include <calib/core/bag/robot_messages_json.h>
 #include <calib/core/diff_drive.h>
 #include <calib/core/scan/scan_simulator.h>
 #include <calib/core/se2.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
 #include <vector>
 
 namespace calib {
@@ -156,6 +161,60 @@ TEST(ScanSimulatorTest, BadOptionsAreErrors) {
   EXPECT_NE(SimulateScans(options).status().message().find("sweep_s"), std::string::npos);
 }
 
+TEST(ScanSimulatorTest, RobotMessagesJsonHoldsTheTopicsAndCounts) {
+  ScanSimOptions options = MovingOptions();
+  options.laser.num_intervals = 5;
+  options.beams = 90;
+  options.encoder_rate_hz = 50.0;
+  options.missing_probability = 0.2;
+  const StatusOr<ScanSimulation> sim = SimulateScans(options);
+  ASSERT_TRUE(sim.ok());
+  const RobotMessages messages = ScanSimulationMessages(*sim);
+  const nlohmann::json json = nlohmann::json::parse(RobotMessagesJson(messages));
+  std::map<std::string, std::string> types;
+  for (const auto& topic : json.at("topics")) types[topic.at("name")] = topic.at("type");
+  const std::map<std::string, std::string> expected = {{"/scan", "sensor_msgs/LaserScan"},
+                                                       {"/joint_states", "sensor_msgs/JointState"},
+                                                       {"/odom", "nav_msgs/Odometry"},
+                                                       {"/tf_static", "tf2_msgs/TFMessage"}};
+  EXPECT_EQ(types, expected);
+  std::map<std::string, int> counts;
+  int64_t previous = 0;
+  int infinities = 0;
+  for (const auto& message : json.at("messages")) {
+    ++counts[message.at("topic")];
+    const int64_t log_time = message.at("log_time_ns");
+    EXPECT_GE(log_time, previous);
+    previous = log_time;
+    if (message.at("topic") == "/scan") {
+      const auto& msg = message.at("msg");
+      EXPECT_EQ(msg.at("ranges").size(), 90u);
+      for (const auto& r : msg.at("ranges")) infinities += r.is_string() && r == "inf";
+      EXPECT_EQ(msg.at("header").at("frame_id"), "laser");
+      EXPECT_LT(msg.at("header").at("stamp").at("nanosec").get<int64_t>(), 1000000000);
+    }
+  }
+  EXPECT_EQ(counts["/scan"], 6);
+  EXPECT_EQ(counts["/joint_states"], static_cast<int>(sim->encoders.size()));
+  EXPECT_EQ(counts["/odom"], static_cast<int>(sim->encoders.size()));
+  EXPECT_EQ(counts["/tf_static"], 1);
+  EXPECT_GT(infinities, 6 * 90 / 10);
+  const auto& first_scan = *std::find_if(json.at("messages").begin(), json.at("messages").end(),
+                                         [](const auto& m) { return m.at("topic") == "/scan"; });
+  const double stamp =
+      first_scan.at("msg").at("header").at("stamp").at("sec").get<int64_t>() +
+      1e-9 * first_scan.at("msg").at("header").at("stamp").at("nanosec").get<int64_t>();
+  EXPECT_NEAR(stamp, 1.7e9 + sim->scans[0].stamp_s, 1e-6);
+  const auto& tf = *std::find_if(json.at("messages").begin(), json.at("messages").end(),
+                                 [](const auto& m) { return m.at("topic") == "/tf_static"; });
+  ASSERT_EQ(tf.at("msg").at("transforms").size(), 1u);
+  const auto& mount = tf.at("msg").at("transforms")[0];
+  EXPECT_EQ(mount.at("header").at("frame_id"), "base_link");
+  EXPECT_EQ(mount.at("child_frame_id"), "laser");
+  EXPECT_EQ(mount.at("transform").at("translation").at("x").get<double>(),
+            sim->truth.base_T_sensor(0));
+}
+
 // Run with --gtest_also_run_disabled_tests for the figure.
 TEST(ScanSimulatorTest, DISABLED_ThousandScansOf1081Beams) {
   ScanSimOptions options;
@@ -164,6 +223,8 @@ TEST(ScanSimulatorTest, DISABLED_ThousandScansOf1081Beams) {
   options.field_of_view_rad = 1.5 * M_PI;
   options.sweep_s = 0.025;
   options.range_noise_sigma_m = 0.01;
+  options.world.kind = WorldKind::kMixed;
+  options.world.clutter_per_m2 = 0.5;
   const auto start = std::chrono::steady_clock::now();
   const StatusOr<ScanSimulation> sim = SimulateScans(options);
   const double seconds =
