@@ -224,7 +224,7 @@ TEST(ScanSimulatorTest, DISABLED_ThousandScansOf1081Beams) {
   options.sweep_s = 0.025;
   options.range_noise_sigma_m = 0.01;
   options.world.kind = WorldKind::kMixed;
-  options.world.clutter_per_m2 = 0.5;
+  options.world.clutter_per_m2 = 2.0;
   const auto start = std::chrono::steady_clock::now();
   const StatusOr<ScanSimulation> sim = SimulateScans(options);
   const double seconds =
