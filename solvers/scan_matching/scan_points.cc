@@ -1,0 +1,78 @@
+#include <calib/solvers/scan_matching/scan_points.h>
+
+#include <cmath>
+#include <string>
+
+namespace calib {
+namespace {
+
+bool IsFinite(const Eigen::Vector3d& v) { return v.allFinite(); }
+
+Status CheckScan(const LaserScan& scan, const ScanPointsOptions& options) {
+  const std::string where = "scan (record " + std::to_string(scan.record) + "): ";
+  if (!std::isfinite(scan.angle_min_rad) || !std::isfinite(scan.angle_increment_rad)) {
+    return Status::InvalidInput(where + "angle_min or angle_increment is not finite");
+  }
+  if (scan.ranges_m.size() > 1 && scan.angle_increment_rad == 0.0) {
+    return Status::InvalidInput(where + "angle_increment is zero with more than one beam");
+  }
+  if (std::abs(scan.angle_increment_rad) * (static_cast<double>(scan.ranges_m.size()) - 1) >
+      2.0 * M_PI + 1e-6) {
+    return Status::InvalidInput(where + "the beams span more than a whole turn");
+  }
+  if (options.sensor_velocity.has_value()) {
+    if (!IsFinite(*options.sensor_velocity)) {
+      return Status::InvalidInput(where + "the de-skewing velocity is not finite");
+    }
+    if (!std::isfinite(scan.time_increment_s)) {
+      return Status::InvalidInput(where + "time_increment is not finite");
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+StatusOr<ScanPoints> MakeScanPoints(const LaserScan& scan, const ScanPointsOptions& options) {
+  CALIB_RETURN_IF_ERROR(CheckScan(scan, options));
+  const int num_beams = static_cast<int>(scan.ranges_m.size());
+  ScanPoints out;
+  out.angle_min_rad = scan.angle_min_rad;
+  out.angle_increment_rad = scan.angle_increment_rad;
+  const double span_rad = std::abs(scan.angle_increment_rad) * num_beams;
+  out.full_circle =
+      num_beams > 2 && span_rad >= 2.0 * M_PI - 0.5 * std::abs(scan.angle_increment_rad);
+  out.point_of_beam.assign(num_beams, -1);
+  out.beam_angle_rad.resize(num_beams);
+  out.points_m.reserve(num_beams);
+  out.directions.reserve(num_beams);
+  out.beams.reserve(num_beams);
+  for (int i = 0; i < num_beams; ++i) {
+    const double angle_rad = scan.BeamAngle(i);
+    out.beam_angle_rad[i] = angle_rad;
+    if (!scan.IsReturn(i)) continue;
+    const double range_m = scan.ranges_m[i];
+    Eigen::Vector2d direction(std::cos(angle_rad), std::sin(angle_rad));
+    Eigen::Vector2d point_m = range_m * direction;
+    if (options.sensor_velocity.has_value()) {
+      // stamp_T_beam = Exp(ξ·dt); the point seen from the stamp's frame is stamp_T_beam ⊕ point.
+      const double dt_s = i * scan.time_increment_s;
+      const Pose2d stamp_T_beam = Exp<double>(*options.sensor_velocity * dt_s);
+      const Eigen::Vector2d p = point_m;
+      point_m = Compose(stamp_T_beam, Pose2d(p.x(), p.y(), 0.0)).head<2>();
+      const double c = std::cos(stamp_T_beam(2));
+      const double s = std::sin(stamp_T_beam(2));
+      direction = Eigen::Vector2d(c * direction.x() - s * direction.y(),
+                                  s * direction.x() + c * direction.y());
+      out.beam_angle_rad[i] =
+          angle_rad + WrapAngle(std::atan2(point_m.y(), point_m.x()) - angle_rad);
+    }
+    out.point_of_beam[i] = static_cast<int>(out.points_m.size());
+    out.points_m.push_back(point_m);
+    out.directions.push_back(direction);
+    out.beams.push_back(i);
+  }
+  return out;
+}
+
+}  // namespace calib

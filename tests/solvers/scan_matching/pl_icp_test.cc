@@ -1,0 +1,217 @@
+#include <calib/solvers/scan_matching/pl_icp.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Cholesky>
+#include <chrono>
+#include <cstdio>
+#include <random>
+
+#include "tests/solvers/scan_matching/test_scans.h"
+
+namespace calib {
+namespace {
+
+using test_scans::CastScan;
+using test_scans::ScanSpec;
+
+const Pose2d kReferencePose(0.3, -0.2, 0.1);
+
+double PoseError(const Pose2d& a, const Pose2d& b) {
+  return std::max((a.head<2>() - b.head<2>()).norm(), std::abs(WrapAngle(a(2) - b(2))));
+}
+
+void ExpectExactRecovery(const ScanSpec& spec) {
+  const auto room = test_scans::RoomWithBoxes();
+  const LaserScan reference = CastScan(room, kReferencePose, spec);
+  const std::vector<Pose2d> motions = {Pose2d(0.1, 0.05, 0.0), Pose2d(0.3, -0.2, 0.2),
+                                       Pose2d(-0.25, 0.15, -0.3), Pose2d(0.05, 0.0, 0.35),
+                                       Pose2d(0.0, 0.0, -0.18)};
+  for (const Pose2d& truth : motions) {
+    const LaserScan current = CastScan(room, Compose(kReferencePose, truth), spec);
+    const Pose2d guess = truth + Pose2d(0.05, -0.04, 0.03);
+    const StatusOr<ScanMatch> match = MatchScans(reference, current, guess);
+    ASSERT_TRUE(match.ok()) << match.message();
+    EXPECT_TRUE(match->ok()) << match->reason;
+    EXPECT_LT(PoseError(match->reference_T_current, truth), 1e-6)
+        << "truth " << truth.transpose() << " got " << match->reference_T_current.transpose();
+    EXPECT_GT(match->correspondences, spec.beams / 2);
+  }
+}
+
+TEST(PlIcpTest, RecoversTheDisplacementExactlyFromNoiseFreeScans360) {
+  ExpectExactRecovery(ScanSpec{});
+}
+
+TEST(PlIcpTest, RecoversTheDisplacementExactlyFromNoiseFreeScans1081) {
+  ScanSpec spec;
+  spec.beams = 1081;
+  spec.fov_rad = 1.5 * M_PI;
+  ExpectExactRecovery(spec);
+}
+
+// With range noise the error, over many trials, is within the reported covariance: the
+// normalised errors z = L⁻¹e (Σ = LLᵀ) have an RMS near one and stay within 3σ.
+TEST(PlIcpTest, CovarianceIsHonestUnderRangeNoise) {
+  const auto room = test_scans::RoomWithBoxes();
+  ScanSpec spec;
+  spec.range_sigma_m = 0.01;
+  std::mt19937 rng(7);
+  const Pose2d truth(0.2, -0.1, 0.15);
+  double sum_z2 = 0.0;
+  int within_3_sigma = 0;
+  const int trials = 150;
+  for (int trial = 0; trial < trials; ++trial) {
+    const LaserScan reference = CastScan(room, kReferencePose, spec, &rng);
+    const LaserScan current = CastScan(room, Compose(kReferencePose, truth), spec, &rng);
+    const StatusOr<ScanMatch> match =
+        MatchScans(reference, current, truth + Pose2d(0.03, 0.02, -0.02));
+    ASSERT_TRUE(match.ok()) << match.message();
+    ASSERT_TRUE(match->ok()) << match->reason;
+    Eigen::Vector3d error = match->reference_T_current - truth;
+    error(2) = WrapAngle(error(2));
+    const Eigen::Vector3d z = match->covariance.llt().matrixL().solve(error);
+    sum_z2 += z.squaredNorm();
+    bool inside = true;
+    for (int k = 0; k < 3; ++k)
+      inside &= std::abs(error(k)) < 3.0 * std::sqrt(match->covariance(k, k));
+    within_3_sigma += inside;
+    EXPECT_NEAR(match->range_sigma_m, 0.01, 0.003);
+  }
+  const double rms_z = std::sqrt(sum_z2 / (3.0 * trials));
+  std::printf("RMS normalised error over %d trials: %.3f; within 3 sigma: %d\n", trials, rms_z,
+              within_3_sigma);
+  EXPECT_GT(rms_z, 0.8);
+  EXPECT_LT(rms_z, 1.25);
+  EXPECT_GE(within_3_sigma, trials * 95 / 100);
+}
+
+TEST(PlIcpTest, FlagsACorridorAsDegenerate) {
+  const auto corridor = test_scans::Corridor();
+  ScanSpec spec;
+  spec.range_max_m = 15.0;
+  const LaserScan reference = CastScan(corridor, Pose2d(0, 0, 0), spec);
+  const LaserScan current = CastScan(corridor, Pose2d(0.3, 0.1, 0.05), spec);
+  const StatusOr<ScanMatch> match = MatchScans(reference, current, Pose2d(0.25, 0.12, 0.04));
+  ASSERT_TRUE(match.ok()) << match.message();
+  EXPECT_EQ(match->quality, ScanMatchQuality::kDegenerate) << match->reason;
+  EXPECT_FALSE(match->reason.empty());
+  // Across the corridor and in heading the match is still exact.
+  EXPECT_NEAR(match->reference_T_current(1), 0.1, 1e-6);
+  EXPECT_NEAR(match->reference_T_current(2), 0.05, 1e-6);
+}
+
+TEST(PlIcpTest, FlagsAScanWithTooFewReturns) {
+  const auto room = test_scans::RoomWithBoxes();
+  const LaserScan reference = CastScan(room, kReferencePose, ScanSpec{});
+  LaserScan current = CastScan(room, kReferencePose, ScanSpec{});
+  for (size_t i = 10; i < current.ranges_m.size(); ++i) current.ranges_m[i] = NAN;
+  StatusOr<ScanMatch> match = MatchScans(reference, current, Pose2d::Zero());
+  ASSERT_TRUE(match.ok()) << match.message();
+  EXPECT_EQ(match->quality, ScanMatchQuality::kTooFewCorrespondences) << match->reason;
+  EXPECT_TRUE(std::isinf(match->covariance(0, 0)));
+
+  LaserScan empty = current;
+  empty.ranges_m.clear();
+  match = MatchScans(empty, reference, Pose2d::Zero());
+  ASSERT_TRUE(match.ok()) << match.message();
+  EXPECT_EQ(match->quality, ScanMatchQuality::kTooFewCorrespondences);
+  match = MatchScans(reference, empty, Pose2d::Zero());
+  ASSERT_TRUE(match.ok()) << match.message();
+  EXPECT_EQ(match->quality, ScanMatchQuality::kTooFewCorrespondences);
+}
+
+TEST(PlIcpTest, FlagsAMatchFarFromItsGuessAsPoor) {
+  const auto room = test_scans::RoomWithBoxes();
+  const LaserScan reference = CastScan(room, kReferencePose, ScanSpec{});
+  const LaserScan current = CastScan(room, Compose(kReferencePose, Pose2d(0, 0, 1.5)), ScanSpec{});
+  const StatusOr<ScanMatch> match = MatchScans(reference, current, Pose2d::Zero());
+  ASSERT_TRUE(match.ok()) << match.message();
+  EXPECT_FALSE(match->ok());
+  std::printf("90-degree miss: %s (%s)\n", ScanMatchQualityName(match->quality),
+              match->reason.c_str());
+}
+
+TEST(PlIcpTest, RejectsMalformedInput) {
+  const auto room = test_scans::RoomWithBoxes();
+  const LaserScan scan = CastScan(room, kReferencePose, ScanSpec{});
+  EXPECT_EQ(MatchScans(scan, scan, Pose2d(NAN, 0, 0)).code(), StatusCode::kInvalidInput);
+  LaserScan zero_increment = scan;
+  zero_increment.angle_increment_rad = 0.0;
+  EXPECT_EQ(MatchScans(scan, zero_increment, Pose2d::Zero()).code(), StatusCode::kInvalidInput);
+  LaserScan nan_angle = scan;
+  nan_angle.angle_min_rad = NAN;
+  EXPECT_EQ(MatchScans(nan_angle, scan, Pose2d::Zero()).code(), StatusCode::kInvalidInput);
+  PlIcpOptions bad;
+  bad.correspondence.max_distance_m = -1.0;
+  EXPECT_EQ(MatchScans(scan, scan, Pose2d::Zero(), bad).code(), StatusCode::kInvalidInput);
+  // Different beam counts are two different sensors' scans, not an error.
+  ScanSpec fine;
+  fine.beams = 1081;
+  const LaserScan dense = CastScan(room, Compose(kReferencePose, Pose2d(0.1, 0, 0.05)), fine);
+  const StatusOr<ScanMatch> match = MatchScans(scan, dense, Pose2d(0.08, 0.01, 0.04));
+  ASSERT_TRUE(match.ok()) << match.message();
+  EXPECT_TRUE(match->ok()) << match->reason;
+  EXPECT_LT(PoseError(match->reference_T_current, Pose2d(0.1, 0, 0.05)), 1e-3);
+}
+
+// A sensor moving during its sweep: with the sweep's twist the points are moved to the stamp
+// and the match is exact again.
+TEST(PlIcpTest, DeskewingRestoresExactRecovery) {
+  const auto room = test_scans::RoomWithBoxes();
+  ScanSpec spec;
+  spec.sweep_time_s = 0.1;
+  spec.velocity = Twist2d(0.8, 0.1, 0.9);
+  const Pose2d truth = Exp<double>(spec.velocity * 0.1);  // One sweep later.
+  const LaserScan reference = CastScan(room, kReferencePose, spec);
+  const LaserScan current = CastScan(room, Compose(kReferencePose, truth), spec);
+  PlIcpOptions options;
+  const StatusOr<ScanMatch> skewed = MatchScans(reference, current, truth, options);
+  ASSERT_TRUE(skewed.ok());
+  options.reference_points.sensor_velocity = spec.velocity;
+  options.current_points.sensor_velocity = spec.velocity;
+  const StatusOr<ScanMatch> deskewed = MatchScans(reference, current, truth, options);
+  ASSERT_TRUE(deskewed.ok());
+  EXPECT_TRUE(deskewed->ok()) << deskewed->reason;
+  EXPECT_LT(PoseError(deskewed->reference_T_current, truth), 1e-6);
+  std::printf("error without de-skewing %.2e, with %.2e\n",
+              PoseError(skewed->reference_T_current, truth),
+              PoseError(deskewed->reference_T_current, truth));
+}
+
+// Prints the throughput; asserts nothing about time (the machine is shared).
+TEST(PlIcpTest, ReportsScansPerSecond) {
+  const auto room = test_scans::RoomWithBoxes();
+  for (int beams : {360, 1081}) {
+    ScanSpec spec;
+    spec.beams = beams;
+    spec.fov_rad = beams == 360 ? 2.0 * M_PI : 1.5 * M_PI;
+    spec.range_sigma_m = 0.01;
+    std::mt19937 rng(3);
+    std::vector<LaserScan> scans;
+    const Pose2d step(0.05, 0.01, 0.03);
+    Pose2d pose = kReferencePose;
+    for (int i = 0; i < 21; ++i) {
+      scans.push_back(CastScan(room, pose, spec, &rng));
+      pose = Compose(pose, step);
+    }
+    const int repeats = beams == 360 ? 20 : 8;
+    int matched = 0;
+    const auto start = std::chrono::steady_clock::now();
+    for (int r = 0; r < repeats; ++r) {
+      for (size_t i = 1; i < scans.size(); ++i) {
+        const StatusOr<ScanMatch> match =
+            MatchScans(scans[i - 1], scans[i], step + Pose2d(0.01, -0.01, 0.005));
+        matched += match.ok() && match->ok();
+      }
+    }
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const int total = repeats * static_cast<int>(scans.size() - 1);
+    std::printf("%d beams: %.0f scans/s (%d of %d matches ok)\n", beams, total / seconds, matched,
+                total);
+    EXPECT_EQ(matched, total);
+  }
+}
+
+}  // namespace
+}  // namespace calib
