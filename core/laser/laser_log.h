@@ -35,6 +35,9 @@ struct StampedPose {
   double t_s = 0.0;
   Pose2d world_T_sensor = Pose2d::Zero();
   int line = 0;  // 1-based line in sensor_poses.csv (0: not from a file).
+  // Poses of different segments are not linked (a scan matcher's chain broke between them): no
+  // interval spans two segments.
+  int segment = 0;
 };
 
 // The raw samples of a stream directory (declared with its reader in laser_log_io.h; defined

@@ -203,7 +203,9 @@ StreamNames DirectoryNames(const std::string& directory) {
 // Drops exact duplicates (an error for a repeated stamp with other values), validates, and
 // appends the timing of each stream as given to `timing` (may be null).
 StatusOr<LaserStreams> PrepareStreams(StreamRecords odometry, StreamRecords poses,
-                                      const StreamNames& names, std::vector<StreamTiming>* timing) {
+                                      const StreamNames& names, std::vector<StreamTiming>* timing,
+                                      const std::vector<int>& segments = {}) {
+  const std::vector<double> given_stamps = poses.stamps_s;
   if (timing != nullptr) {
     // The records as given: the analysis counts the duplicates itself.
     timing->push_back(
@@ -221,10 +223,14 @@ StatusOr<LaserStreams> PrepareStreams(StreamRecords odometry, StreamRecords pose
     const int line = odometry.lines.empty() ? 0 : odometry.lines[k];
     streams.odometry.push_back(EncoderSample{odometry.stamps_s[k], v[0], v[1], line});
   }
-  for (size_t k = 0; k < poses.stamps_s.size(); ++k) {
+  for (size_t k = 0, given = 0; k < poses.stamps_s.size(); ++k) {
     const double* v = &poses.values[3 * k];
     const int line = poses.lines.empty() ? 0 : poses.lines[k];
-    streams.sensor_poses.push_back(StampedPose{poses.stamps_s[k], Pose2d(v[0], v[1], v[2]), line});
+    // The duplicates dropped kept the order: the given pose with this stamp has the segment.
+    while (given + 1 < segments.size() && given_stamps[given] != poses.stamps_s[k]) ++given;
+    const int segment = given < segments.size() ? segments[given] : 0;
+    streams.sensor_poses.push_back(
+        StampedPose{poses.stamps_s[k], Pose2d(v[0], v[1], v[2]), line, segment});
   }
   CALIB_RETURN_IF_ERROR(ValidateOdometry(streams.odometry, names));
   CALIB_RETURN_IF_ERROR(ValidatePoses(streams.sensor_poses, names));
@@ -256,12 +262,13 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
     size_t j = static_cast<size_t>(std::lower_bound(odometry.begin(), odometry.end(), ta, by_time) -
                                    odometry.begin());
     if (odometry[j].t_s > ta) --j;
-    bool gap = false;
+    bool gap = poses[k].segment != poses[k + 1].segment;
     for (size_t s = j; s < m && !gap; ++s) {
       gap = odometry[s + 1].t_s - odometry[s].t_s > gap_limit;
     }
     if (gap) {
-      // Interpolating across missing encoder data would invent wheel motion.
+      // Interpolating across missing encoder data would invent wheel motion; poses of two
+      // segments have no measured displacement between them.
       pending_gap = true;
       continue;
     }
@@ -308,9 +315,11 @@ StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometr
   names.odometry = source + " (odometry)";
   names.poses = source + " (sensor poses)";
   std::vector<StreamTiming> timing;
-  CALIB_ASSIGN_OR_RETURN(
-      LaserStreams streams,
-      PrepareStreams(OdometryRecords(odometry), PoseRecords(sensor_poses), names, &timing));
+  std::vector<int> segments;
+  for (const StampedPose& p : sensor_poses) segments.push_back(p.segment);
+  CALIB_ASSIGN_OR_RETURN(LaserStreams streams,
+                         PrepareStreams(OdometryRecords(odometry), PoseRecords(sensor_poses), names,
+                                        &timing, segments));
   CALIB_ASSIGN_OR_RETURN(LaserLog log,
                          BuildFromStreams(streams.odometry, streams.sensor_poses, names));
   log.streams = std::move(streams);

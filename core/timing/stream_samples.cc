@@ -82,7 +82,7 @@ Status AddSensorSamples(const std::vector<StampedPose>& poses, const std::string
       continue;
     }
     out->samples.push_back(StreamSample{stamp, p.world_T_sensor, static_cast<int>(k) + 1, p.line,
-                                        static_cast<int>(after - enc.begin()) - 1});
+                                        static_cast<int>(after - enc.begin()) - 1, p.segment});
   }
   return Status::Ok();
 }
@@ -115,7 +115,7 @@ StatusOr<StreamSamples> BuildStreamSamples(const std::vector<EncoderSample>& odo
   out.sensor_period_s = MedianStep(stamps);
   const double gap = 5.0 * out.encoder_period_s;
   for (size_t k = 0; k + 1 < out.samples.size(); ++k) {
-    bool usable = true;
+    bool usable = out.samples[k].segment == out.samples[k + 1].segment;
     for (int j = out.samples[k].bracket; j <= out.samples[k + 1].bracket && usable; ++j) {
       usable = out.encoders[j + 1].t_s - out.encoders[j].t_s <= gap;
     }
@@ -124,7 +124,7 @@ StatusOr<StreamSamples> BuildStreamSamples(const std::vector<EncoderSample>& odo
   if (out.interval_start.empty()) {
     return Status::InvalidInput(source +
                                 ": no pair of sensor samples lies inside the encoder span "
-                                "without an encoder gap");
+                                "without an encoder gap or a break of the sensor's pose chain");
   }
   return out;
 }

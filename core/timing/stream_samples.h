@@ -20,6 +20,7 @@ struct StreamSample {
   int record = 0;   // 1-based position in the input stream.
   int line = 0;     // Its line in sensor_poses.csv (0: not from a file).
   int bracket = 0;  // Last encoder sample with stamp ≤ this stamp (the next one is after it).
+  int segment = 0;  // StampedPose::segment: no interval joins two segments.
 };
 
 struct StreamSamples {

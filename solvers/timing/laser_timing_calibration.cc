@@ -83,7 +83,7 @@ LaserStreams DistinctStreams(const StreamSamples& data) {
   }
   for (const StreamSample& s : data.samples) {
     streams.sensor_poses.push_back(
-        StampedPose{s.stamp_s + data.origin_s, s.world_T_sensor, s.line});
+        StampedPose{s.stamp_s + data.origin_s, s.world_T_sensor, s.line, s.segment});
   }
   return streams;
 }

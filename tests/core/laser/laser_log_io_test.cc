@@ -1,4 +1,5 @@
 #include <calib/core/laser/laser_log_io.h>
+#include <calib/core/timing/stream_samples.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -614,6 +615,31 @@ TEST(LaserStreamTest, EncoderGapDropsIntervalsAndMarksTheNext) {
   }
   EXPECT_EQ(kept, log->intervals.size());
   EXPECT_LT(kept, poses.size() - 1);
+}
+
+// A scan matcher's chain that broke: the poses of the two segments have no displacement between
+// them, so no interval (nor latent-time sample pair) spans the break.
+TEST(LaserStreamTest, PoseSegmentsAreNotJoined) {
+  const std::vector<EncoderSample> odometry = MakeWheelSignal(8.0).Samples();
+  std::vector<StampedPose> poses;
+  for (int k = 0; k < 20; ++k) {
+    StampedPose p{0.1 + 0.25 * k, Pose2d(0.1 * k, 0.0, 0.05 * k)};
+    p.segment = k < 8 ? 0 : 3;
+    poses.push_back(p);
+  }
+  const StatusOr<LaserLog> log = LaserLogFromStreams(odometry, poses, "sim");
+  ASSERT_TRUE(log.ok()) << log.message();
+  ASSERT_EQ(log->intervals.size(), poses.size() - 2);
+  for (const LaserInterval& interval : log->intervals) {
+    EXPECT_NE(interval.start_s, poses[7].t_s);
+    EXPECT_EQ(interval.gap_before, interval.start_s == poses[8].t_s);
+  }
+  EXPECT_EQ(log->streams.sensor_poses[7].segment, 0);
+  EXPECT_EQ(log->streams.sensor_poses[8].segment, 3);
+  const StatusOr<StreamSamples> samples = BuildStreamSamples(odometry, poses, "sim");
+  ASSERT_TRUE(samples.ok()) << samples.message();
+  EXPECT_EQ(samples->interval_start.size(), poses.size() - 2);
+  for (const int k : samples->interval_start) EXPECT_NE(k, 7);
 }
 
 TEST(LaserStreamTest, Errors) {
