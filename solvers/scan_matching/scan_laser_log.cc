@@ -1,0 +1,112 @@
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/core/timing/encoder_integration.h>
+#include <calib/solvers/scan_matching/scan_laser_log.h>
+
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <set>
+
+namespace calib {
+namespace {
+
+// The sensor's displacement between two times through the nominal wheels and mounting.
+Pose2d NominalSensorMotion(const std::vector<EncoderSample>& encoders, double from_s, double to_s,
+                           const ScanLogOptions& o) {
+  double left[2], right[2];
+  InterpolateWheelAngles(encoders, from_s, &left[0], &right[0]);
+  InterpolateWheelAngles(encoders, to_s, &left[1], &right[1]);
+  const OdometryParams& p = o.nominal;
+  const Pose2d robot = WheelStepDisplacement(p.left_radius_m, p.right_radius_m, p.wheelbase_m,
+                                             left[1] - left[0], right[1] - right[0]);
+  return SensorMotionFromRobotMotion(o.nominal_base_T_sensor, robot);
+}
+
+bool HasNominal(const ScanLogOptions& o) {
+  const OdometryParams& p = o.nominal;
+  return p.left_radius_m > 0.0 && p.right_radius_m > 0.0 && p.wheelbase_m > 0.0;
+}
+
+// "12 of 1800 scan matches failed (degenerate 10, too few correspondences 2)".
+std::string FailureSummary(const ScanOdometryResult& r) {
+  std::map<std::string, int> by_quality;
+  for (const int i : r.failed) {
+    by_quality[i < static_cast<int>(r.matches.size()) ? ScanMatchQualityName(r.matches[i].quality)
+                                                      : "malformed"]++;
+  }
+  std::string out = std::to_string(r.failed.size()) + " of " + std::to_string(r.size()) +
+                    " scan matches failed (";
+  std::string separator;
+  for (const auto& [name, count] : by_quality) {
+    out += separator + name + " " + std::to_string(count);
+    separator = ", ";
+  }
+  return out + "): those scans are left out, as gaps";
+}
+
+}  // namespace
+
+StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
+                                    const std::vector<EncoderSample>& encoders,
+                                    const std::string& source, const ScanLogOptions& options) {
+  if (scans.size() < 3) {
+    return Status::InvalidInput(source + ": " + std::to_string(scans.size()) +
+                                " scan(s): the calibration needs many scans of a moving robot");
+  }
+  if (encoders.size() < 2) {
+    return Status::InvalidInput(source + ": " + std::to_string(encoders.size()) +
+                                " wheel-angle sample(s): at least two are needed");
+  }
+  for (size_t i = 1; i < scans.size(); ++i) {
+    if (!(scans[i].stamp_s > scans[i - 1].stamp_s)) {
+      return Status::InvalidInput(source + ": scan record " + std::to_string(scans[i].record) +
+                                  ": stamp " + std::to_string(scans[i].stamp_s) +
+                                  " does not follow the previous scan's " +
+                                  std::to_string(scans[i - 1].stamp_s));
+    }
+  }
+  const bool nominal = HasNominal(options);
+  const auto start = std::chrono::steady_clock::now();
+  ScanOdometry odometry(options.matching);
+  for (size_t i = 0; i < scans.size(); ++i) {
+    const LaserScan& scan = scans[i];
+    Pose2d guess = Pose2d::Zero();
+    if (i > 0 && nominal)
+      guess = NominalSensorMotion(encoders, scans[i - 1].stamp_s, scan.stamp_s, options);
+    std::optional<Twist2d> sweep;
+    const double sweep_s = scan.time_increment_s * static_cast<double>(scan.ranges_m.size());
+    if (options.deskew && nominal && sweep_s > 0.0) {
+      sweep = Log(NominalSensorMotion(encoders, scan.stamp_s, scan.stamp_s + sweep_s, options)) /
+              sweep_s;
+    }
+    CALIB_RETURN_IF_ERROR(odometry.AddScan(scan, guess, sweep));
+  }
+  ScanLog out;
+  out.matching = odometry.result();
+  out.matching_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const ScanOdometryResult& r = out.matching;
+  out.failed_matches = static_cast<int>(r.failed.size());
+  std::set<int> segments, keyframes;
+  std::vector<StampedPose> poses;
+  for (int i = 0; i < r.size(); ++i) {
+    if (r.chain[i] < 0) continue;
+    StampedPose p = r.poses[i];
+    p.line = static_cast<int>(scans[i].record) + 1;  // 1-based, as a line.
+    p.segment = r.chain[i];
+    segments.insert(p.segment);
+    if (r.keyframe_of[i] >= 0) keyframes.insert(r.keyframe_of[i]);
+    poses.push_back(p);
+  }
+  out.segments = static_cast<int>(segments.size());
+  out.keyframes = static_cast<int>(keyframes.size());
+  if (out.failed_matches > 0) out.warnings.push_back(FailureSummary(r));
+  if (out.segments > 1) {
+    out.warnings.push_back("the scan matching lost its track " + std::to_string(out.segments - 1) +
+                           " time(s) and restarted: no interval spans a restart");
+  }
+  CALIB_ASSIGN_OR_RETURN(out.log, LaserLogFromStreams(encoders, poses, source));
+  return out;
+}
+
+}  // namespace calib

@@ -1,0 +1,48 @@
+#ifndef CALIB_SOLVERS_SCAN_MATCHING_SCAN_LASER_LOG_H_
+#define CALIB_SOLVERS_SCAN_MATCHING_SCAN_LASER_LOG_H_
+
+#include <calib/core/diff_drive.h>
+#include <calib/core/encoder_sample.h>
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/scan/laser_scan.h>
+#include <calib/core/se2.h>
+#include <calib/core/status.h>
+#include <calib/solvers/scan_matching/scan_odometry.h>
+
+#include <string>
+#include <vector>
+
+// Raw scans and the encoders to the laser calibration's stream log: the scans are matched into
+// sensor poses (ScanOdometry, keyframes, seeded by the odometry), a failed match becomes a gap
+// (the scan is left out) and a broken chain a new pose segment (no interval spans it), and the
+// poses and wheel angles become the raw streams the calibration reads.
+namespace calib {
+
+struct ScanLogOptions {
+  ScanOdometryOptions matching;
+  // The odometry's guesses for the matcher come from these nominal values (the wheel angles
+  // between two scans through one arc, then the mounting); a zero radius gives no guess (no
+  // motion), which the matcher handles at scan rates where the robot moves a few cm per scan.
+  OdometryParams nominal{0.0, 0.0, 0.0};
+  Pose2d nominal_base_T_sensor = Pose2d::Zero();
+  // With a nominal radius and beams at their own times: each scan is de-skewed with the
+  // sensor's velocity over its sweep from the wheels.
+  bool deskew = true;
+};
+
+struct ScanLog {
+  LaserLog log;  // Intervals, the streams (sensor poses with segments) and their timing.
+  ScanOdometryResult matching;
+  int failed_matches = 0, segments = 0, keyframes = 0;
+  double matching_seconds = 0.0;
+  std::vector<std::string> warnings;
+};
+
+// `source` names the input in messages; the scans must be in stamp order.
+StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
+                                    const std::vector<EncoderSample>& encoders,
+                                    const std::string& source, const ScanLogOptions& options = {});
+
+}  // namespace calib
+
+#endif  // CALIB_SOLVERS_SCAN_MATCHING_SCAN_LASER_LOG_H_
