@@ -85,7 +85,7 @@ Status DecompressLz4(std::string_view data, uint32_t size, std::string* out) {
     used += out_size;
     in_pos += in_size;
     if (hint == 0) break;  // The frame ended.
-    if (in_pos == data.size() && out_size == 0) {
+    if (out_size == 0 && in_size == 0) {
       return Status::InvalidInput("lz4 data end before their frame does (truncated)");
     }
   }
