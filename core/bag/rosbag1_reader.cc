@@ -131,7 +131,8 @@ class Ros1BagReader {
     reading_index_ = true;
     while (pos < file_.size()) {
       const uint64_t at = pos;
-      CALIB_RETURN_IF_ERROR(file_.ReadRecord(&pos, true, &buffer_, &record_));
+      CALIB_RETURN_IF_ERROR(file_.ReadRecord(&pos, true, &buffer_, &record_)
+                                .Prefixed("index at byte " + std::to_string(index_pos) + ": "));
       const std::string where = "index record at byte " + std::to_string(at) + ": ";
       Status status;
       if (record_.op == rosbag1::kOpConnection) {
