@@ -1,4 +1,5 @@
 #include <calib/core/scan/scan_simulator.h>
+#include <calib/solvers/scan_matching/robot_bag_log.h>
 #include <calib/solvers/scan_matching/scan_laser_log.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <gtest/gtest.h>
@@ -50,6 +51,50 @@ TEST(ScanLaserLog, ScansToCalibrationRecoverTheTruth) {
     const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(log->log.streams);
     ASSERT_TRUE(r.ok()) << r.message();
     EXPECT_LE(WorstZ(r->calibration, sim->truth), 3.0);
+  }
+}
+
+// The simulated robot's recording as a bag holds it (scans, joint states, odometry, tf): the
+// topics are picked, the wheel angles read from the joints, the mounting from tf.
+TEST(ScanLaserLog, RobotMessagesToCalibration) {
+  const StatusOr<ScanSimulation> sim = SimulateScans(Robot(400, 5));
+  ASSERT_TRUE(sim.ok()) << sim.message();
+  RobotMessages bag = ScanSimulationMessages(*sim);
+  bag.source = "sim.mcap";
+  const StatusOr<RobotBagLog> log = LaserLogFromRobotMessages(bag);
+  ASSERT_TRUE(log.ok()) << log.message();
+  EXPECT_EQ(log->topics.scan_topic, "/scan");
+  EXPECT_EQ(log->topics.joint_state_topic, "/joint_states");
+  EXPECT_FALSE(log->wheels_from_odometry);
+  ASSERT_TRUE(log->nominal_mounting.has_value());
+  EXPECT_LT((log->nominal_mounting->base_T_sensor - sim->truth.base_T_sensor).norm(), 1e-9);
+  const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(log->scans.log.streams);
+  ASSERT_TRUE(r.ok()) << r.message();
+  EXPECT_LE(WorstZ(r->calibration, sim->truth), 3.0);
+
+  // Without joint states the driver's odometry needs the nominal values, and gives them back.
+  bag.joint_states.clear();
+  StatusOr<RobotBagLog> odom = LaserLogFromRobotMessages(bag);
+  ASSERT_FALSE(odom.ok());
+  EXPECT_NE(odom.message().find("--nominal_wheel_radius"), std::string::npos) << odom.message();
+  RobotBagOptions options;
+  options.nominal_wheel_radius_m = sim->truth.odometry.left_radius_m;
+  options.nominal_wheelbase_m = sim->truth.odometry.wheelbase_m;
+  odom = LaserLogFromRobotMessages(bag, options);
+  ASSERT_TRUE(odom.ok()) << odom.message();
+  EXPECT_TRUE(odom->wheels_from_odometry);
+}
+
+// A scan seen in a mirror: every return at the mirrored angle, same range.
+TEST(ScanLaserLog, MirroredScanFlipsTheAngles) {
+  LaserScan scan;
+  scan.angle_min_rad = -1.0;
+  scan.angle_increment_rad = 0.25;
+  scan.ranges_m = {1.0f, 2.0f, 3.0f, 4.0f, 5.0f};
+  const LaserScan m = MirroredScan(scan);
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_NEAR(m.BeamAngle(4 - i), -scan.BeamAngle(i), 1e-15);
+    EXPECT_EQ(m.ranges_m[4 - i], scan.ranges_m[i]);
   }
 }
 

@@ -1,0 +1,123 @@
+#include <calib/core/bag/wheel_angles.h>
+#include <calib/solvers/scan_matching/robot_bag_log.h>
+
+#include <algorithm>
+#include <set>
+
+namespace calib {
+namespace {
+
+std::set<std::string> TfFrames(const RobotMessages& bag) {
+  std::set<std::string> frames;
+  for (const auto* list : {&bag.tf_static, &bag.tf}) {
+    for (const TransformStamped& t : *list) {
+      for (std::string f : {t.parent_frame, t.child_frame}) {
+        if (!f.empty() && f[0] == '/') f = f.substr(1);
+        frames.insert(f);
+      }
+    }
+  }
+  return frames;
+}
+
+std::string BaseFrame(const RobotMessages& bag, const RobotBagOptions& options) {
+  if (!options.base_frame.empty()) return options.base_frame;
+  const std::set<std::string> frames = TfFrames(bag);
+  for (const char* name : {"base_link", "base_footprint"}) {
+    if (frames.count(name)) return name;
+  }
+  for (const auto& [topic, messages] : bag.odometry) {
+    if (!messages.empty() && !messages.front().child_frame_id.empty()) {
+      return messages.front().child_frame_id;
+    }
+  }
+  return "base_link";
+}
+
+Status WheelAngles(const RobotMessages& bag, const RobotBagOptions& options, RobotBagLog* out,
+                   WheelAngleStream* wheels) {
+  const PickedTopics& t = out->topics;
+  if (!t.joint_state_topic.empty()) {
+    CALIB_ASSIGN_OR_RETURN(
+        *wheels, WheelAnglesFromJointStates(bag.joint_states.at(t.joint_state_topic), t.left_joint,
+                                            t.right_joint, bag.source + " " + t.joint_state_topic));
+    out->wheel_source = t.joint_state_topic + " (" + t.left_joint + ", " + t.right_joint + ")";
+    if (wheels->unwrapped_turns > 0) {
+      out->warnings.push_back("the wheel joints are reported wrapped into (−π, π]: " +
+                              std::to_string(wheels->unwrapped_turns) +
+                              " whole turns were added back");
+    }
+    return Status::Ok();
+  }
+  if (!(options.nominal_wheel_radius_m > 0.0) || !(options.nominal_wheelbase_m > 0.0)) {
+    return Status::InvalidInput(
+        bag.source + ": the wheel angles come from the Odometry topic " + t.odom_topic +
+        " (no JointState names the wheels), which needs the nominal values its driver used: "
+        "give --nominal_wheel_radius and --nominal_wheelbase (the calibration then returns "
+        "corrections to them)");
+  }
+  CALIB_ASSIGN_OR_RETURN(
+      *wheels,
+      WheelAnglesFromOdometry(bag.odometry.at(t.odom_topic), options.nominal_wheel_radius_m,
+                              options.nominal_wheelbase_m, bag.source + " " + t.odom_topic));
+  out->wheels_from_odometry = true;
+  out->wheel_source = t.odom_topic + " (the driver's odometry through the nominal wheels)";
+  return Status::Ok();
+}
+
+}  // namespace
+
+LaserScan MirroredScan(const LaserScan& scan) {
+  LaserScan out = scan;
+  const int n = static_cast<int>(scan.ranges_m.size());
+  const double last = scan.angle_min_rad + (n - 1) * scan.angle_increment_rad;
+  out.angle_min_rad = -last;
+  std::reverse(out.ranges_m.begin(), out.ranges_m.end());
+  std::reverse(out.intensities.begin(), out.intensities.end());
+  // The stamp stays the first measured beam's time (the sample time the calibration reads);
+  // beams in reversed order would need a negative time increment from the last beam's time, so
+  // a mirrored scan is taken as instantaneous (not de-skewed).
+  out.time_increment_s = 0.0;
+  return out;
+}
+
+StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
+                                                const RobotBagOptions& options) {
+  RobotBagLog out;
+  CALIB_ASSIGN_OR_RETURN(out.topics, PickRobotTopics(bag, options.topics));
+  WheelAngleStream wheels;
+  CALIB_RETURN_IF_ERROR(WheelAngles(bag, options, &out, &wheels));
+  std::vector<LaserScan> scans = bag.scans.at(out.topics.scan_topic);
+  out.sensor_frame = scans.empty() ? "" : scans.front().frame_id;
+  out.base_frame = BaseFrame(bag, options);
+  const StatusOr<PlanarMounting> mounting = MountingFromTf(bag, out.base_frame, out.sensor_frame);
+  ScanLogOptions scan_options;
+  scan_options.matching = options.matching;
+  if (mounting.ok()) {
+    out.nominal_mounting = *mounting;
+    scan_options.nominal_base_T_sensor = mounting->base_T_sensor;
+    if (mounting->upside_down) {
+      for (LaserScan& scan : scans) scan = MirroredScan(scan);
+      out.warnings.push_back("tf mounts '" + out.sensor_frame +
+                             "' upside down: its scans were "
+                             "mirrored so that they turn counter-clockwise like the base");
+    }
+  } else {
+    out.warnings.push_back("tf gives no transform from '" + out.base_frame + "' to '" +
+                           out.sensor_frame +
+                           "': the nominal mounting is unknown (the calibration does not need "
+                           "it); if the sensor is mounted upside down, its scans are mirrored");
+  }
+  if (options.nominal_wheel_radius_m > 0.0 && options.nominal_wheelbase_m > 0.0) {
+    scan_options.nominal =
+        OdometryParams{options.nominal_wheel_radius_m, options.nominal_wheel_radius_m,
+                       options.nominal_wheelbase_m};
+  }
+  CALIB_ASSIGN_OR_RETURN(
+      out.scans, LaserLogFromScans(scans, wheels.samples, bag.source + " " + out.topics.scan_topic,
+                                   scan_options));
+  out.warnings.insert(out.warnings.end(), out.scans.warnings.begin(), out.scans.warnings.end());
+  return out;
+}
+
+}  // namespace calib

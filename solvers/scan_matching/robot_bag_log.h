@@ -1,0 +1,49 @@
+#ifndef CALIB_SOLVERS_SCAN_MATCHING_ROBOT_BAG_LOG_H_
+#define CALIB_SOLVERS_SCAN_MATCHING_ROBOT_BAG_LOG_H_
+
+#include <calib/core/bag/robot_messages.h>
+#include <calib/core/bag/robot_topics.h>
+#include <calib/core/bag/tf_tree.h>
+#include <calib/core/status.h>
+#include <calib/solvers/scan_matching/scan_laser_log.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+// A robot's recording (a bag's messages) to the laser calibration's stream log: the topics
+// picked, the wheel angles from the joint states (or the driver's odometry through the nominal
+// radius and wheelbase), the nominal mounting from tf, and the scans matched into sensor poses.
+namespace calib {
+
+struct RobotBagOptions {
+  TopicChoice topics;
+  // The nominal values the robot's driver uses: needed when the wheel angles come from Odometry
+  // (the calibration then returns corrections to them); otherwise they only seed the matcher.
+  double nominal_wheel_radius_m = 0.0;
+  double nominal_wheelbase_m = 0.0;
+  std::string base_frame;  // Empty: base_link, else base_footprint, else Odometry's child frame.
+  ScanOdometryOptions matching;
+};
+
+struct RobotBagLog {
+  ScanLog scans;  // scans.log: the stream log the calibration reads.
+  PickedTopics topics;
+  bool wheels_from_odometry = false;
+  std::string wheel_source;  // For the summary: "/joint_states (left_wheel_joint, ...)".
+  std::string base_frame, sensor_frame;
+  std::optional<PlanarMounting> nominal_mounting;  // From tf, when it connects the two frames.
+  std::vector<std::string> warnings;
+};
+
+StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
+                                                const RobotBagOptions& options = {});
+
+// A laser scan seen from its mirror image (y → −y): the scans of a sensor mounted upside down,
+// in a frame whose z axis points up like the base's. Beams keep increasing angles (reversed
+// order); the scan keeps its stamp and is taken as instantaneous (time_increment_s = 0).
+LaserScan MirroredScan(const LaserScan& scan);
+
+}  // namespace calib
+
+#endif  // CALIB_SOLVERS_SCAN_MATCHING_ROBOT_BAG_LOG_H_
