@@ -384,6 +384,25 @@ TEST(McapReaderTest, CdrSequenceLongerThanTheMessageNamesTopicAndRecord) {
   EXPECT_NE(std::string::npos, bag.message().find("'ranges'")) << bag.message();
 }
 
+// Bytes of the record framing, the chunks and the summary overwritten in turn: each read ends in
+// a result or an error naming the file, never a crash, hang or huge allocation (ASan-clean).
+TEST(McapReaderTest, ScribbledBytesNeverCrash) {
+  for (const std::string name : {"small_robot_zstd.mcap", "small_robot_nosummary.mcap"}) {
+    const std::string original = Fixture(name);
+    const std::string path = testing::TempDir() + "mcap_reader_test_scribbled.mcap";
+    for (size_t at = 8; at < original.size();
+         at += (at < 90 || at + 250 > original.size()) ? 3 : 401) {
+      std::string bytes = original;
+      bytes[at] = static_cast<char>(~bytes[at]);
+      ASSERT_TRUE(WriteWholeFile(path, bytes).ok());
+      const auto bag = ReadMcapBag(path);
+      if (!bag.ok()) {
+        EXPECT_EQ(0u, bag.message().find(path)) << bag.message();
+      }
+    }
+  }
+}
+
 // A hand-made CDR stream, little- or big-endian, aligned as XCDR1 from the end of the header.
 class Cdr {
  public:
