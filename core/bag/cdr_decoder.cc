@@ -160,7 +160,19 @@ Status DecodeJointState(const uint8_t* data, size_t size, JointState* joints) {
   cdr.ReadSequence(&joints->position, "position");
   cdr.ReadSequence(&joints->velocity, "velocity");
   cdr.ReadSequence(&joints->effort, "effort");
-  return cdr.status();
+  CALIB_RETURN_IF_ERROR(cdr.status());
+  // Each array is empty or holds one value per name (sensor_msgs/JointState's rule).
+  for (const auto& [field, values] :
+       {std::pair<const char*, const std::vector<double>*>{"position", &joints->position},
+        {"velocity", &joints->velocity},
+        {"effort", &joints->effort}}) {
+    if (!values->empty() && values->size() != joints->name.size()) {
+      return Status::InvalidInput("JointState field '" + std::string(field) + "' holds " +
+                                  std::to_string(values->size()) + " values for " +
+                                  std::to_string(joints->name.size()) + " names");
+    }
+  }
+  return Status::Ok();
 }
 
 // nav_msgs/Odometry: header, child_frame_id, pose {pose {position, orientation}, covariance[36]},

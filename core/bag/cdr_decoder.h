@@ -15,7 +15,8 @@
 // counted from the end of the header; strings and sequences are a uint32 count then the items
 // (a string's count includes its terminating NUL). Each decoder fills the message fields only
 // (the caller sets record and log_time_s) and fails, naming the field and the byte, when the
-// message is shorter than its fields. stamp_s = header.stamp.sec + 1e-9 * header.stamp.nanosec.
+// message is shorter than its fields (a JointState also when an array is neither empty nor one
+// value per name). stamp_s = header.stamp.sec + 1e-9 * header.stamp.nanosec.
 namespace calib {
 
 Status DecodeLaserScan(const uint8_t* data, size_t size, LaserScan* scan);

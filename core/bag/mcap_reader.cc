@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <utility>
@@ -29,7 +30,10 @@ class MappedFile {
   Status Open(const std::string& path) {
     fd_ = open(path.c_str(), O_RDONLY);
     struct stat st;
-    if (fd_ < 0 || fstat(fd_, &st) != 0) return Status::Io(path + ": cannot open: no such file");
+    if (fd_ < 0 || fstat(fd_, &st) != 0) {
+      return Status::Io(path + (errno == ENOENT ? ": no such file" : ": cannot open: ") +
+                        (errno == ENOENT ? "" : std::strerror(errno)));
+    }
     if (S_ISDIR(st.st_mode)) return Status::Io(path + ": is a directory");
     size_ = static_cast<uint64_t>(st.st_size);
     if (size_ == 0) return Status::Ok();
@@ -118,6 +122,12 @@ class BagReader {
   void Finish(RobotMessages* out);
 
  private:
+  struct Summary {
+    std::vector<ChunkIndexRecord> chunks;  // By offset in the file.
+    mcap::StatisticsRecord statistics;
+    bool have_statistics = false;
+  };
+  Status ReadSummary(const mcap::FooterRecord& footer, uint64_t footer_offset, Summary* summary);
   Status OnRecord(const RecordView& record, const std::string& where);
   Status OnChannel(const RecordView& record);
   Status OnMessage(const RecordView& record, const std::string& where);
@@ -296,40 +306,47 @@ Status BagReader::CountIndexed(const ChunkIndexRecord& index, uint64_t* count, b
   return Status::Ok();
 }
 
-Status BagReader::ReadIndexed(const mcap::FooterRecord& footer, uint64_t footer_offset,
-                              bool* used) {
-  *used = false;
+// The summary section's Schema, Channel, Chunk Index and Statistics records (it ends where the
+// footer begins: parsed as its own byte range).
+Status BagReader::ReadSummary(const mcap::FooterRecord& footer, uint64_t footer_offset,
+                              Summary* summary) {
   if (footer.summary_start < sizeof(mcap::kMagic) || footer.summary_start > footer_offset) {
     return Status::InvalidInput("Footer record" + At(footer_offset) + ": summary_start " +
                                 std::to_string(footer.summary_start) + " is outside the file");
   }
-  std::vector<ChunkIndexRecord> chunks;
-  mcap::StatisticsRecord statistics;
-  bool have_statistics = false;
-  // The summary section ends where the footer begins: parse it as its own byte range.
   for (uint64_t offset = footer.summary_start; offset < footer_offset;) {
     RecordView record;
     CALIB_RETURN_IF_ERROR(mcap::ReadRecordAt(data_, footer_offset, offset, &record));
     if (record.opcode == mcap::kChunkIndex) {
-      chunks.emplace_back();
-      CALIB_RETURN_IF_ERROR(mcap::ParseChunkIndex(record, &chunks.back()));
+      summary->chunks.emplace_back();
+      CALIB_RETURN_IF_ERROR(mcap::ParseChunkIndex(record, &summary->chunks.back()));
     } else if (record.opcode == mcap::kStatistics) {
-      CALIB_RETURN_IF_ERROR(mcap::ParseStatistics(record, &statistics));
-      have_statistics = true;
+      CALIB_RETURN_IF_ERROR(mcap::ParseStatistics(record, &summary->statistics));
+      summary->have_statistics = true;
     } else if (record.opcode == mcap::kSchema || record.opcode == mcap::kChannel) {
       CALIB_RETURN_IF_ERROR(OnRecord(record, "summary: "));
     }
     offset = record.end();
   }
-  if (!have_statistics || statistics.channel_message_counts.empty() ||
+  std::sort(summary->chunks.begin(), summary->chunks.end(), [](const auto& a, const auto& b) {
+    return a.chunk_start_offset < b.chunk_start_offset;
+  });
+  return Status::Ok();
+}
+
+Status BagReader::ReadIndexed(const mcap::FooterRecord& footer, uint64_t footer_offset,
+                              bool* used) {
+  *used = false;
+  Summary summary;
+  CALIB_RETURN_IF_ERROR(ReadSummary(footer, footer_offset, &summary));
+  const auto& statistics = summary.statistics;
+  const auto& chunks = summary.chunks;
+  if (!summary.have_statistics || statistics.channel_message_counts.empty() ||
       chunks.size() != statistics.chunk_count) {
     return Status::Ok();
   }
   std::vector<uint64_t> counts(chunks.size());
   uint64_t total = 0;
-  std::sort(chunks.begin(), chunks.end(), [](const auto& a, const auto& b) {
-    return a.chunk_start_offset < b.chunk_start_offset;
-  });
   for (size_t i = 0; i < chunks.size(); ++i) {
     bool known = false;
     CALIB_RETURN_IF_ERROR(CountIndexed(chunks[i], &counts[i], &known));
@@ -381,7 +398,7 @@ void BagReader::Finish(RobotMessages* out) {
   out->tf_static = InLogTimeOrder(&tf_static_);
 }
 
-// The Footer when the file ends with one and the trailing magic; nullopt-like false otherwise.
+// The Footer, when the file ends with one and the closing magic.
 bool FindFooter(const uint8_t* data, uint64_t size, mcap::FooterRecord* footer,
                 uint64_t* footer_offset) {
   constexpr uint64_t kTail = mcap::kRecordPrefixBytes + mcap::kFooterContentBytes + 8;

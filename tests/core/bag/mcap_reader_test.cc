@@ -263,6 +263,33 @@ TEST(McapReaderTest, ChunkedFileWithoutSummaryIsScannedLinearly) {
   EXPECT_EQ(40, bag->topics[2].message_count);
 }
 
+// The chunk indexes let a reader skip chunks that hold none of the wanted topics: a corrupt last
+// chunk goes unnoticed when only /tf_static (in the first chunk) is asked for.
+TEST(McapReaderTest, IndexedReadSkipsChunksWithoutWantedTopics) {
+  std::string bytes = Fixture("small_robot_zstd.mcap");
+  std::vector<size_t> chunks;
+  for (size_t at = 8; at + 9 <= bytes.size() && bytes[at] != 0x0F;) {  // Up to Data End.
+    uint64_t length = 0;
+    std::memcpy(&length, &bytes[at + 1], 8);
+    if (bytes[at] == 0x06) chunks.push_back(at);
+    at += 9 + length;
+  }
+  ASSERT_GE(chunks.size(), 3u);
+  for (size_t i = chunks.back() + 200; i < chunks.back() + 220; ++i) bytes[i] ^= 0x5a;
+  const std::string path = Scratch("corrupt_last_chunk.mcap", bytes);
+  BagReadOptions options;
+  options.topics = {"/tf_static"};
+  const auto bag = ReadMcapBag(path, options);
+  ASSERT_TRUE(bag.ok()) << bag.message();
+  EXPECT_EQ(1u, bag->tf_static.size());
+  EXPECT_EQ(40, bag->topics[1].message_count);
+  const auto all = ReadMcapBag(path);
+  ASSERT_FALSE(all.ok());
+  EXPECT_NE(std::string::npos,
+            all.message().find("Chunk record at byte " + std::to_string(chunks.back())))
+      << all.message();
+}
+
 TEST(McapReaderTest, ReadsABagDirectory) {
   const std::string dir = testing::TempDir() + "mcap_reader_test_bag_dir";
   std::filesystem::remove_all(dir);
@@ -282,6 +309,7 @@ TEST(McapReaderTest, MissingFileIsAnIoError) {
   const auto bag = ReadMcapBag(kBags + "no_such.mcap");
   ASSERT_FALSE(bag.ok());
   EXPECT_EQ(StatusCode::kIo, bag.code());
+  EXPECT_NE(std::string::npos, bag.message().find("no_such.mcap: no such file")) << bag.message();
 }
 
 TEST(McapReaderTest, BadMagicIsNotAnMcapFile) {
@@ -436,7 +464,7 @@ Cdr JointStateCdr(bool little_endian) {
   cdr.Put<int32_t>(1700000123).Put<uint32_t>(987654321).Str("base");
   cdr.Put<uint32_t>(2).Str("left_wheel_joint").Str("r");
   cdr.Put<uint32_t>(2).Put(1.25).Put(-2.5);
-  cdr.Put<uint32_t>(1).Put(0.125);  // A velocity for one name only: kept as written.
+  cdr.Put<uint32_t>(2).Put(0.125).Put(-0.25);
   cdr.Put<uint32_t>(0);
   return cdr;
 }
@@ -450,9 +478,21 @@ TEST(CdrDecoderTest, BigAndLittleEndianDecodeAlike) {
     EXPECT_EQ("base", joints.frame_id);
     EXPECT_EQ((std::vector<std::string>{"left_wheel_joint", "r"}), joints.name);
     EXPECT_EQ((std::vector<double>{1.25, -2.5}), joints.position);
-    EXPECT_EQ((std::vector<double>{0.125}), joints.velocity);
+    EXPECT_EQ((std::vector<double>{0.125, -0.25}), joints.velocity);
     EXPECT_TRUE(joints.effort.empty());
   }
+}
+
+TEST(CdrDecoderTest, JointStateArraysAreEmptyOrOnePerName) {
+  Cdr cdr(true);
+  cdr.Put<int32_t>(1).Put<uint32_t>(2).Str("");
+  cdr.Put<uint32_t>(2).Str("left").Str("right");
+  cdr.Put<uint32_t>(2).Put(1.0).Put(2.0).Put<uint32_t>(1).Put(3.0).Put<uint32_t>(0);
+  JointState joints;
+  const Status status = DecodeJointState(cdr.data(), cdr.size(), &joints);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(std::string::npos, status.message().find("'velocity' holds 1 values for 2 names"))
+      << status.message();
 }
 
 TEST(CdrDecoderTest, EveryShorterMessageFailsNamingAField) {
