@@ -53,7 +53,7 @@ struct TopicInfo {
 };
 
 struct RobotMessages {
-  std::string source;             // The file read.
+  std::string source;            // The file read.
   std::vector<TopicInfo> topics;  // Every topic in the bag, whatever its type.
   // By topic name, in log-time order; only topics of these types are decoded.
   std::map<std::string, std::vector<LaserScan>> scans;
