@@ -2,7 +2,8 @@
 # Installs the Debian 12 packages calib needs, only those that are missing.
 set -euo pipefail
 packages=(cmake g++ make libceres-dev libeigen3-dev libgoogle-glog-dev libgflags-dev
-          libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libbz2-dev liblz4-dev)
+          libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libbz2-dev liblz4-dev
+          libzstd-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,0 +1,441 @@
+// ReadMcapBag: a ROS 2 bag (MCAP file, CDR messages) read without an MCAP library.
+#include <calib/core/bag/cdr_decoder.h>
+#include <calib/core/bag/mcap_records.h>
+#include <calib/core/bag/robot_messages.h>
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <utility>
+
+namespace calib {
+namespace {
+
+using mcap::ChannelRecord;
+using mcap::ChunkIndexRecord;
+using mcap::RecordView;
+
+// The file mapped read-only: only the chunks read are paged in.
+class MappedFile {
+ public:
+  ~MappedFile() {
+    if (data_ != nullptr) munmap(const_cast<uint8_t*>(data_), size_);
+    if (fd_ >= 0) close(fd_);
+  }
+  Status Open(const std::string& path) {
+    fd_ = open(path.c_str(), O_RDONLY);
+    struct stat st;
+    if (fd_ < 0 || fstat(fd_, &st) != 0) {
+      return Status::Io(path + (errno == ENOENT ? ": no such file" : ": cannot open: ") +
+                        (errno == ENOENT ? "" : std::strerror(errno)));
+    }
+    if (S_ISDIR(st.st_mode)) return Status::Io(path + ": is a directory");
+    size_ = static_cast<uint64_t>(st.st_size);
+    if (size_ == 0) return Status::Ok();
+    void* map = mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd_, 0);
+    if (map == MAP_FAILED) return Status::Io(path + ": cannot read (mmap failed)");
+    data_ = static_cast<const uint8_t*>(map);
+    return Status::Ok();
+  }
+  const uint8_t* data() const { return data_; }
+  uint64_t size() const { return size_; }
+
+ private:
+  int fd_ = -1;
+  const uint8_t* data_ = nullptr;
+  uint64_t size_ = 0;
+};
+
+// A bag directory (metadata.yaml and its .mcap) resolves to its one .mcap file.
+StatusOr<std::string> BagFile(const std::string& path) {
+  std::error_code error;
+  if (!std::filesystem::is_directory(path, error)) return path;
+  std::vector<std::string> files;
+  for (const auto& entry : std::filesystem::directory_iterator(path, error)) {
+    if (entry.path().extension() == ".mcap") files.push_back(entry.path().string());
+  }
+  if (files.size() == 1) return files[0];
+  return Status::InvalidInput(path + ": a bag directory should hold one .mcap file; it holds " +
+                              std::to_string(files.size()));
+}
+
+// "sensor_msgs/msg/LaserScan" → "sensor_msgs/LaserScan".
+std::string NormalisedType(const std::string& name) {
+  const size_t slash = name.find("/msg/");
+  return slash == std::string::npos ? name : name.substr(0, slash) + name.substr(slash + 4);
+}
+
+enum class Kind { kNone, kScan, kJoints, kOdometry, kTf, kTfStatic };
+
+Kind KindOf(const std::string& topic, const std::string& type, const std::string& encoding) {
+  if (encoding != "cdr") return Kind::kNone;
+  if (type == "sensor_msgs/LaserScan") return Kind::kScan;
+  if (type == "sensor_msgs/JointState") return Kind::kJoints;
+  if (type == "nav_msgs/Odometry") return Kind::kOdometry;
+  if (type != "tf2_msgs/TFMessage") return Kind::kNone;
+  const std::string last = topic.substr(topic.rfind('/') + 1);  // npos + 1 == 0.
+  return last == "tf" ? Kind::kTf : last == "tf_static" ? Kind::kTfStatic : Kind::kNone;
+}
+
+struct Channel {
+  std::string topic, type;
+  Kind kind = Kind::kNone;
+  bool wanted = false;
+  int64_t message_count = 0;
+};
+
+// Messages with their log time in ns, sorted at the end by (log time, record).
+template <typename T>
+using Logged = std::vector<std::pair<uint64_t, T>>;
+
+template <typename T>
+std::vector<T> InLogTimeOrder(Logged<T>* logged) {
+  std::stable_sort(logged->begin(), logged->end(), [](const auto& a, const auto& b) {
+    return a.first != b.first ? a.first < b.first : a.second.record < b.second.record;
+  });
+  std::vector<T> out;
+  out.reserve(logged->size());
+  for (auto& item : *logged) out.push_back(std::move(item.second));
+  return out;
+}
+
+double Seconds(uint64_t ns) {
+  return static_cast<double>(ns / 1000000000) + 1e-9 * static_cast<double>(ns % 1000000000);
+}
+
+std::string At(uint64_t offset) { return " at byte " + std::to_string(offset); }
+
+class BagReader {
+ public:
+  BagReader(const uint8_t* data, uint64_t size, const BagReadOptions& options)
+      : data_(data), size_(size), options_(options) {}
+
+  Status ReadLinear();
+  // Reads through the summary; *used is false (and nothing decoded) when the summary lacks the
+  // statistics or indexes this needs, so that the caller scans linearly instead.
+  Status ReadIndexed(const mcap::FooterRecord& footer, uint64_t footer_offset, bool* used);
+  void Finish(RobotMessages* out);
+
+ private:
+  struct Summary {
+    std::vector<ChunkIndexRecord> chunks;  // By offset in the file.
+    mcap::StatisticsRecord statistics;
+    bool have_statistics = false;
+  };
+  Status ReadSummary(const mcap::FooterRecord& footer, uint64_t footer_offset, Summary* summary);
+  Status OnRecord(const RecordView& record, const std::string& where);
+  Status OnChannel(const RecordView& record);
+  Status OnMessage(const RecordView& record, const std::string& where);
+  Status Decode(const Channel& channel, const mcap::MessageRecord& message, int64_t record);
+  Status ForEachInChunk(const RecordView& chunk, const std::string& where);
+  Status CountIndexed(const ChunkIndexRecord& index, uint64_t* count, bool* known);
+
+  const uint8_t* data_;
+  uint64_t size_;
+  const BagReadOptions& options_;
+  std::map<uint16_t, std::string> schema_types_;
+  std::map<uint16_t, Channel> channels_;
+  int64_t next_record_ = 0;
+  bool count_messages_ = true;  // False when the summary's statistics gave the counts.
+  std::vector<uint8_t> chunk_buffer_;
+  std::map<std::string, Logged<LaserScan>> scans_;
+  std::map<std::string, Logged<JointState>> joints_;
+  std::map<std::string, Logged<Odometry>> odometry_;
+  Logged<TransformStamped> tf_, tf_static_;
+};
+
+Status BagReader::OnChannel(const RecordView& record) {
+  ChannelRecord c;
+  CALIB_RETURN_IF_ERROR(mcap::ParseChannel(record, &c));
+  Channel& channel = channels_[c.id];
+  channel.topic = c.topic;
+  const auto schema = schema_types_.find(c.schema_id);
+  channel.type = schema == schema_types_.end() ? "" : schema->second;
+  channel.kind = KindOf(c.topic, channel.type, c.message_encoding);
+  channel.wanted = channel.kind != Kind::kNone &&
+                   (options_.topics.empty() || options_.topics.count(c.topic) > 0);
+  return Status::Ok();
+}
+
+Status BagReader::OnRecord(const RecordView& record, const std::string& where) {
+  switch (record.opcode) {
+    case mcap::kSchema: {
+      mcap::SchemaRecord schema;
+      CALIB_RETURN_IF_ERROR(mcap::ParseSchema(record, &schema).Prefixed(where));
+      if (schema.id != 0) schema_types_[schema.id] = NormalisedType(schema.name);
+      return Status::Ok();
+    }
+    case mcap::kChannel:
+      return OnChannel(record).Prefixed(where);
+    case mcap::kMessage:
+      return OnMessage(record, where);
+    default:
+      return Status::Ok();  // Indexes, attachments, metadata: not needed here.
+  }
+}
+
+Status BagReader::OnMessage(const RecordView& record, const std::string& where) {
+  mcap::MessageRecord message;
+  CALIB_RETURN_IF_ERROR(mcap::ParseMessage(record, &message).Prefixed(where));
+  const int64_t index = next_record_++;
+  const auto channel = channels_.find(message.channel_id);
+  if (channel == channels_.end()) {
+    return Status::InvalidInput(where + "Message record" + At(record.offset) + " (record " +
+                                std::to_string(index) + ") is on channel " +
+                                std::to_string(message.channel_id) + ", never defined before it");
+  }
+  if (count_messages_) ++channel->second.message_count;
+  if (!channel->second.wanted) return Status::Ok();
+  return Decode(channel->second, message, index)
+      .Prefixed(where + "topic '" + channel->second.topic + "' record " + std::to_string(index) +
+                " (Message record" + At(record.offset) + "): ");
+}
+
+Status BagReader::Decode(const Channel& channel, const mcap::MessageRecord& message,
+                         int64_t record) {
+  const uint64_t ns = message.log_time_ns;
+  const double log_time_s = Seconds(ns);
+  switch (channel.kind) {
+    case Kind::kScan: {
+      LaserScan scan;
+      CALIB_RETURN_IF_ERROR(DecodeLaserScan(message.data, message.size, &scan));
+      scan.record = record;
+      scan.log_time_s = log_time_s;
+      scans_[channel.topic].emplace_back(ns, std::move(scan));
+      return Status::Ok();
+    }
+    case Kind::kJoints: {
+      JointState joints;
+      CALIB_RETURN_IF_ERROR(DecodeJointState(message.data, message.size, &joints));
+      joints.record = record;
+      joints.log_time_s = log_time_s;
+      joints_[channel.topic].emplace_back(ns, std::move(joints));
+      return Status::Ok();
+    }
+    case Kind::kOdometry: {
+      Odometry odometry;
+      CALIB_RETURN_IF_ERROR(DecodeOdometry(message.data, message.size, &odometry));
+      odometry.record = record;
+      odometry.log_time_s = log_time_s;
+      odometry_[channel.topic].emplace_back(ns, std::move(odometry));
+      return Status::Ok();
+    }
+    case Kind::kTf:
+    case Kind::kTfStatic: {
+      std::vector<TransformStamped> transforms;
+      CALIB_RETURN_IF_ERROR(DecodeTfMessage(message.data, message.size, &transforms));
+      Logged<TransformStamped>& out = channel.kind == Kind::kTf ? tf_ : tf_static_;
+      for (TransformStamped& t : transforms) {
+        t.record = record;
+        t.log_time_s = log_time_s;
+        out.emplace_back(ns, std::move(t));
+      }
+      return Status::Ok();
+    }
+    case Kind::kNone:
+      break;
+  }
+  return Status::Ok();
+}
+
+Status BagReader::ForEachInChunk(const RecordView& record, const std::string& where) {
+  const std::string chunk_where = where + "Chunk record" + At(record.offset) + ": ";
+  mcap::ChunkRecord chunk;
+  CALIB_RETURN_IF_ERROR(mcap::ParseChunk(record, &chunk).Prefixed(where));
+  CALIB_RETURN_IF_ERROR(mcap::DecompressChunk(chunk, &chunk_buffer_).Prefixed(chunk_where));
+  const std::string inner_where = chunk_where + "in its records: ";
+  for (uint64_t offset = 0; offset < chunk_buffer_.size();) {
+    RecordView inner;
+    CALIB_RETURN_IF_ERROR(
+        mcap::ReadRecordAt(chunk_buffer_.data(), chunk_buffer_.size(), offset, &inner)
+            .Prefixed(inner_where));
+    CALIB_RETURN_IF_ERROR(OnRecord(inner, inner_where));
+    offset = inner.end();
+  }
+  return Status::Ok();
+}
+
+Status BagReader::ReadLinear() {
+  RecordView record;
+  CALIB_RETURN_IF_ERROR(mcap::ReadRecordAt(data_, size_, sizeof(mcap::kMagic), &record));
+  if (record.opcode != mcap::kHeader) {
+    return Status::InvalidInput("no Header record after the magic" + At(record.offset));
+  }
+  for (uint64_t offset = record.end();; offset = record.end()) {
+    if (offset >= size_) {
+      return Status::InvalidInput("truncated: the file ends" + At(size_) +
+                                  " without a Footer record");
+    }
+    CALIB_RETURN_IF_ERROR(mcap::ReadRecordAt(data_, size_, offset, &record));
+    if (record.opcode == mcap::kFooter) {
+      if (size_ - record.end() >= 8 && std::memcmp(data_ + record.end(), mcap::kMagic, 8) == 0) {
+        return Status::Ok();
+      }
+      return Status::InvalidInput("truncated or corrupt: no closing magic after the Footer record" +
+                                  At(record.offset));
+    }
+    if (record.opcode == mcap::kChunk) {
+      CALIB_RETURN_IF_ERROR(ForEachInChunk(record, ""));
+    } else {
+      CALIB_RETURN_IF_ERROR(OnRecord(record, ""));
+    }
+  }
+}
+
+// The messages of one chunk, from the sizes of its Message Index records (16 bytes an entry).
+Status BagReader::CountIndexed(const ChunkIndexRecord& index, uint64_t* count, bool* known) {
+  *count = 0;
+  *known = !index.message_index_offsets.empty();
+  for (const auto& [channel, offset] : index.message_index_offsets) {
+    RecordView record;
+    CALIB_RETURN_IF_ERROR(mcap::ReadRecordAt(data_, size_, offset, &record));
+    if (record.opcode != mcap::kMessageIndex) {
+      return Status::InvalidInput("Chunk Index of the chunk" + At(index.chunk_start_offset) +
+                                  " points at byte " + std::to_string(offset) + " for channel " +
+                                  std::to_string(channel) + ", not at a Message Index record");
+    }
+    uint64_t n = 0;
+    CALIB_RETURN_IF_ERROR(mcap::CountMessageIndexEntries(record, &n));
+    *count += n;
+  }
+  return Status::Ok();
+}
+
+// The summary section's Schema, Channel, Chunk Index and Statistics records (it ends where the
+// footer begins: parsed as its own byte range).
+Status BagReader::ReadSummary(const mcap::FooterRecord& footer, uint64_t footer_offset,
+                              Summary* summary) {
+  if (footer.summary_start < sizeof(mcap::kMagic) || footer.summary_start > footer_offset) {
+    return Status::InvalidInput("Footer record" + At(footer_offset) + ": summary_start " +
+                                std::to_string(footer.summary_start) + " is outside the file");
+  }
+  for (uint64_t offset = footer.summary_start; offset < footer_offset;) {
+    RecordView record;
+    CALIB_RETURN_IF_ERROR(mcap::ReadRecordAt(data_, footer_offset, offset, &record));
+    if (record.opcode == mcap::kChunkIndex) {
+      summary->chunks.emplace_back();
+      CALIB_RETURN_IF_ERROR(mcap::ParseChunkIndex(record, &summary->chunks.back()));
+    } else if (record.opcode == mcap::kStatistics) {
+      CALIB_RETURN_IF_ERROR(mcap::ParseStatistics(record, &summary->statistics));
+      summary->have_statistics = true;
+    } else if (record.opcode == mcap::kSchema || record.opcode == mcap::kChannel) {
+      CALIB_RETURN_IF_ERROR(OnRecord(record, "summary: "));
+    }
+    offset = record.end();
+  }
+  std::sort(summary->chunks.begin(), summary->chunks.end(), [](const auto& a, const auto& b) {
+    return a.chunk_start_offset < b.chunk_start_offset;
+  });
+  return Status::Ok();
+}
+
+Status BagReader::ReadIndexed(const mcap::FooterRecord& footer, uint64_t footer_offset,
+                              bool* used) {
+  *used = false;
+  Summary summary;
+  CALIB_RETURN_IF_ERROR(ReadSummary(footer, footer_offset, &summary));
+  const auto& statistics = summary.statistics;
+  const auto& chunks = summary.chunks;
+  if (!summary.have_statistics || statistics.channel_message_counts.empty() ||
+      chunks.size() != statistics.chunk_count) {
+    return Status::Ok();
+  }
+  std::vector<uint64_t> counts(chunks.size());
+  uint64_t total = 0;
+  for (size_t i = 0; i < chunks.size(); ++i) {
+    bool known = false;
+    CALIB_RETURN_IF_ERROR(CountIndexed(chunks[i], &counts[i], &known));
+    if (!known) return Status::Ok();
+    total += counts[i];
+  }
+  // Messages outside chunks are in no index: then record numbers need the linear scan.
+  if (total != statistics.message_count) return Status::Ok();
+  *used = true;
+  count_messages_ = false;
+  for (auto& [id, channel] : channels_) {
+    const auto count = statistics.channel_message_counts.find(id);
+    channel.message_count =
+        count == statistics.channel_message_counts.end() ? 0 : static_cast<int64_t>(count->second);
+  }
+  int64_t first_record = 0;
+  for (size_t i = 0; i < chunks.size(); first_record += counts[i++]) {
+    bool wanted = false;
+    for (const auto& entry : chunks[i].message_index_offsets) {
+      const auto channel = channels_.find(entry.first);
+      wanted = wanted || (channel != channels_.end() && channel->second.wanted);
+    }
+    if (!wanted) continue;
+    RecordView record;
+    CALIB_RETURN_IF_ERROR(mcap::ReadRecordAt(data_, size_, chunks[i].chunk_start_offset, &record));
+    if (record.opcode != mcap::kChunk) {
+      return Status::InvalidInput("Chunk Index points at byte " + std::to_string(record.offset) +
+                                  ", not at a Chunk record");
+    }
+    next_record_ = first_record;
+    CALIB_RETURN_IF_ERROR(ForEachInChunk(record, ""));
+    if (next_record_ - first_record != static_cast<int64_t>(counts[i])) {
+      return Status::InvalidInput("Chunk record" + At(record.offset) + " holds " +
+                                  std::to_string(next_record_ - first_record) +
+                                  " messages; its index says " + std::to_string(counts[i]));
+    }
+  }
+  return Status::Ok();
+}
+
+void BagReader::Finish(RobotMessages* out) {
+  for (const auto& [id, channel] : channels_) {
+    out->topics.push_back({channel.topic, channel.type, channel.message_count});
+  }
+  for (auto& [topic, logged] : scans_) out->scans[topic] = InLogTimeOrder(&logged);
+  for (auto& [topic, logged] : joints_) out->joint_states[topic] = InLogTimeOrder(&logged);
+  for (auto& [topic, logged] : odometry_) out->odometry[topic] = InLogTimeOrder(&logged);
+  out->tf = InLogTimeOrder(&tf_);
+  out->tf_static = InLogTimeOrder(&tf_static_);
+}
+
+// The Footer, when the file ends with one and the closing magic.
+bool FindFooter(const uint8_t* data, uint64_t size, mcap::FooterRecord* footer,
+                uint64_t* footer_offset) {
+  constexpr uint64_t kTail = mcap::kRecordPrefixBytes + mcap::kFooterContentBytes + 8;
+  if (size < sizeof(mcap::kMagic) + kTail || std::memcmp(data + size - 8, mcap::kMagic, 8) != 0) {
+    return false;
+  }
+  *footer_offset = size - kTail;
+  RecordView record;
+  return mcap::ReadRecordAt(data, size - 8, *footer_offset, &record).ok() &&
+         record.opcode == mcap::kFooter && record.length == mcap::kFooterContentBytes &&
+         mcap::ParseFooter(record, footer).ok();
+}
+
+}  // namespace
+
+StatusOr<RobotMessages> ReadMcapBag(const std::string& path, const BagReadOptions& options) {
+  CALIB_ASSIGN_OR_RETURN(const std::string file, BagFile(path));
+  MappedFile mapped;
+  CALIB_RETURN_IF_ERROR(mapped.Open(file));
+  const uint8_t* data = mapped.data();
+  const uint64_t size = mapped.size();
+  if (size < sizeof(mcap::kMagic) || std::memcmp(data, mcap::kMagic, sizeof(mcap::kMagic)) != 0) {
+    return Status::InvalidInput(file + ": not an MCAP file (bad magic at byte 0)");
+  }
+  const std::string where = file + ": ";
+  BagReader reader(data, size, options);
+  mcap::FooterRecord footer;
+  uint64_t footer_offset = 0;
+  bool indexed = false;
+  if (FindFooter(data, size, &footer, &footer_offset) && footer.summary_start != 0) {
+    CALIB_RETURN_IF_ERROR(reader.ReadIndexed(footer, footer_offset, &indexed).Prefixed(where));
+  }
+  if (!indexed) CALIB_RETURN_IF_ERROR(reader.ReadLinear().Prefixed(where));
+  RobotMessages messages;
+  messages.source = file;
+  reader.Finish(&messages);
+  return messages;
+}
+
+}  // namespace calib
