@@ -42,6 +42,11 @@ StatusOr<LaserLog> ParseLaserCsv(const std::string& text, const std::string& sou
 StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometry,
                                        const std::vector<StampedPose>& sensor_poses,
                                        const std::string& source);
+// The same with the two streams' names for messages and diagnostics (a bag's topics).
+StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometry,
+                                       const std::vector<StampedPose>& sensor_poses,
+                                       const std::string& source, const std::string& odometry_name,
+                                       const std::string& poses_name);
 // Reads odometry.csv and sensor_poses.csv: exact duplicate records (same stamp, same values) are
 // dropped and counted; a repeated stamp with different values is an error naming both lines;
 // stamps must otherwise increase strictly and values be finite. `timing` (may be null) receives

@@ -310,10 +310,15 @@ void AppendCsvRow(std::string* out, std::initializer_list<double> values) {
 StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometry,
                                        const std::vector<StampedPose>& sensor_poses,
                                        const std::string& source) {
-  StreamNames names;
-  names.source = source;
-  names.odometry = source + " (odometry)";
-  names.poses = source + " (sensor poses)";
+  return LaserLogFromStreams(odometry, sensor_poses, source, source + " (odometry)",
+                             source + " (sensor poses)");
+}
+
+StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometry,
+                                       const std::vector<StampedPose>& sensor_poses,
+                                       const std::string& source, const std::string& odometry_name,
+                                       const std::string& poses_name) {
+  const StreamNames names{source, odometry_name, poses_name};
   std::vector<StreamTiming> timing;
   std::vector<int> segments;
   for (const StampedPose& p : sensor_poses) segments.push_back(p.segment);

@@ -113,9 +113,11 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
         OdometryParams{options.nominal_wheel_radius_m, options.nominal_wheel_radius_m,
                        options.nominal_wheelbase_m};
   }
-  CALIB_ASSIGN_OR_RETURN(
-      out.scans, LaserLogFromScans(scans, wheels.samples, bag.source + " " + out.topics.scan_topic,
-                                   scan_options));
+  const std::string wheel_topic =
+      out.wheels_from_odometry ? out.topics.odom_topic : out.topics.joint_state_topic;
+  const ScanLogNames names{bag.source, bag.source + " " + wheel_topic,
+                           bag.source + " " + out.topics.scan_topic};
+  CALIB_ASSIGN_OR_RETURN(out.scans, LaserLogFromScans(scans, wheels.samples, names, scan_options));
   out.warnings.insert(out.warnings.end(), out.scans.warnings.begin(), out.scans.warnings.end());
   return out;
 }

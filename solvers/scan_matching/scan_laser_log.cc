@@ -48,18 +48,21 @@ std::string FailureSummary(const ScanOdometryResult& r) {
 
 StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
                                     const std::vector<EncoderSample>& encoders,
-                                    const std::string& source, const ScanLogOptions& options) {
+                                    const ScanLogNames& names, const ScanLogOptions& options) {
+  const std::string& source = names.source;
+  const std::string scans_name = names.scans.empty() ? source + " (scans)" : names.scans;
+  const std::string wheels_name = names.wheels.empty() ? source + " (wheel angles)" : names.wheels;
   if (scans.size() < 3) {
-    return Status::InvalidInput(source + ": " + std::to_string(scans.size()) +
+    return Status::InvalidInput(scans_name + ": " + std::to_string(scans.size()) +
                                 " scan(s): the calibration needs many scans of a moving robot");
   }
   if (encoders.size() < 2) {
-    return Status::InvalidInput(source + ": " + std::to_string(encoders.size()) +
+    return Status::InvalidInput(wheels_name + ": " + std::to_string(encoders.size()) +
                                 " wheel-angle sample(s): at least two are needed");
   }
   for (size_t i = 1; i < scans.size(); ++i) {
     if (!(scans[i].stamp_s > scans[i - 1].stamp_s)) {
-      return Status::InvalidInput(source + ": scan record " + std::to_string(scans[i].record) +
+      return Status::InvalidInput(scans_name + ": record " + std::to_string(scans[i].record) +
                                   ": stamp " + std::to_string(scans[i].stamp_s) +
                                   " does not follow the previous scan's " +
                                   std::to_string(scans[i - 1].stamp_s));
@@ -105,7 +108,8 @@ StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
     out.warnings.push_back("the scan matching lost its track " + std::to_string(out.segments - 1) +
                            " time(s) and restarted: no interval spans a restart");
   }
-  CALIB_ASSIGN_OR_RETURN(out.log, LaserLogFromStreams(encoders, poses, source));
+  CALIB_ASSIGN_OR_RETURN(out.log, LaserLogFromStreams(encoders, poses, source, wheels_name,
+                                                      scans_name + " (scan-matched poses)"));
   return out;
 }
 

@@ -38,10 +38,16 @@ struct ScanLog {
   std::vector<std::string> warnings;
 };
 
-// `source` names the input in messages; the scans must be in stamp order.
+// The names of the input and its two streams in messages ("run.bag", "run.bag /joint_states",
+// "run.bag /scan"); the wheel angles' stream and the scans' when empty: source + " (...)".
+struct ScanLogNames {
+  std::string source, wheels, scans;
+};
+
+// The scans must be in stamp order.
 StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
                                     const std::vector<EncoderSample>& encoders,
-                                    const std::string& source, const ScanLogOptions& options = {});
+                                    const ScanLogNames& names, const ScanLogOptions& options = {});
 
 }  // namespace calib
 

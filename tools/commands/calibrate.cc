@@ -1,14 +1,17 @@
 // `calib calibrate`: reads the log(s), calibrates, writes the contract's OUT.json and prints the
 // summary.
+#include <calib/core/bag/robot_bag.h>
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
 #include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/solvers/scan_matching/robot_bag_log.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
 #include <calib/tools/report/bearing_report.h>
 #include <calib/tools/report/laser_report.h>
 #include <calib/tools/report/latent_timing_report.h>
+#include <calib/tools/report/robot_log_report.h>
 #include <calib/tools/report/verdict.h>
 
 #include <vector>
@@ -16,9 +19,11 @@
 namespace calib::cli {
 namespace {
 
-// One raw-stream log: every sample's true time is estimated with the calibration.
+// One raw-stream log: every sample's true time is estimated with the calibration. `recording`:
+// the bag it was made from, if any.
 int CalibrateLaserStreamLog(const CalibrateOptions& flags, const LaserLog& log,
-                            const LaserCalibrationOptions& options, const Stopwatch& clock) {
+                            const LaserCalibrationOptions& options, const Stopwatch& clock,
+                            const RobotBagLog* recording = nullptr) {
   LaserTimingOptions timing;
   timing.calibration = options;
   timing.sensor_clock = flags.timing;
@@ -29,6 +34,8 @@ int CalibrateLaserStreamLog(const CalibrateOptions& flags, const LaserLog& log,
       LaserResultJson(calibration, flags.input, flags.loss, log.stream_timing);
   json["timing"]["treatment"] = "latent_times";
   json["timing"]["latent_times"] = LatentTimingJson(*result);
+  const NominalWheels nominal{flags.nominal_wheel_radius, flags.nominal_wheelbase};
+  if (recording) json["recording"] = RobotLogJson(*recording, calibration, nominal);
   json["seconds"]["total"] = clock.Seconds();
   VerdictInputs verdict;
   verdict.converged = calibration.converged;
@@ -36,11 +43,40 @@ int CalibrateLaserStreamLog(const CalibrateOptions& flags, const LaserLog& log,
   verdict.disagreements = calibration.consistency.warnings;
   verdict.streams = &log.stream_timing;
   verdict.timing_treated = true;
+  if (recording) {
+    verdict.warnings.insert(verdict.warnings.end(), recording->warnings.begin(),
+                            recording->warnings.end());
+  }
   const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
   const std::string summary =
       LaserResultSummary(calibration, flags.input, flags.loss, log.stream_timing) +
+      (recording ? RobotLogSummary(*recording, calibration, nominal) : "") +
       LatentTimingSummary(*result) + verdict_line;
   return WriteReport(flags.output, json, summary, flags.quiet);
+}
+
+// A robot's bag: its scans are matched into sensor poses and calibrated with their timing.
+int CalibrateRobotBag(const CalibrateOptions& flags, const LaserCalibrationOptions& options,
+                      const Stopwatch& clock) {
+  if (flags.timing == "off") {
+    return Fail(flags.input +
+                ": a bag is calibrated with its timing; --timing off applies to "
+                "logs of intervals and stream directories");
+  }
+  const StatusOr<RobotMessages> bag = ReadRobotBag(flags.input);
+  if (!bag.ok()) return Fail(bag.message());
+  RobotBagOptions bag_options;
+  bag_options.topics.scan_topic = flags.scan_topic;
+  bag_options.topics.joint_state_topic = flags.joint_state_topic;
+  bag_options.topics.odom_topic = flags.odom_topic;
+  bag_options.topics.left_wheel_joint = flags.left_wheel_joint;
+  bag_options.topics.right_wheel_joint = flags.right_wheel_joint;
+  bag_options.base_frame = flags.base_frame;
+  bag_options.nominal_wheel_radius_m = flags.nominal_wheel_radius;
+  bag_options.nominal_wheelbase_m = flags.nominal_wheelbase;
+  const StatusOr<RobotBagLog> recording = LaserLogFromRobotMessages(*bag, bag_options);
+  if (!recording.ok()) return Fail(recording.message());
+  return CalibrateLaserStreamLog(flags, recording->scans.log, options, clock, &*recording);
 }
 
 int CalibrateLaserLogs(const CalibrateOptions& flags) {
@@ -51,6 +87,11 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   const Status timing_flag = CheckTimingFlag(flags.timing);
   if (!timing_flag.ok()) return Fail(timing_flag.message());
   const Stopwatch clock;
+  LaserCalibrationOptions options;
+  options.refinement.loss = *loss;
+  options.refinement.loss_scale = flags.loss_scale;
+  options.progress = ProgressPrinter(clock, flags.quiet);
+  if (LooksLikeRobotBag(flags.input)) return CalibrateRobotBag(flags, options, clock);
   std::vector<LaserLog> logs;
   for (const std::string& path : SplitCommas(flags.input)) {
     StatusOr<LaserLog> log = ReadLaserLog(path, *format);
@@ -65,10 +106,6 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
     streams = streams || !log.streams.sensor_poses.empty();
   }
 
-  LaserCalibrationOptions options;
-  options.refinement.loss = *loss;
-  options.refinement.loss_scale = flags.loss_scale;
-  options.progress = ProgressPrinter(clock, flags.quiet);
   // Raw streams carry their own timing: the latent-time calibration models it (one log), and
   // otherwise the interval-jitter treatment for tuples does not apply to them.
   if (streams && flags.timing != "off") {

@@ -21,6 +21,12 @@ struct CalibrateOptions {
   // Raw laser streams: auto (latent sample times, the clock model chosen by the data), stamps or
   // free_running (that model only), off (stamps taken as sample times).
   std::string timing = "auto";
+  // A robot's bag: topics and joints (empty: picked when unique), the base frame (empty:
+  // base_link, base_footprint), and the driver's nominal wheels (0: unknown; needed when the
+  // wheel angles come from its odometry).
+  std::string scan_topic, joint_state_topic, odom_topic, left_wheel_joint, right_wheel_joint;
+  std::string base_frame;
+  double nominal_wheel_radius = 0.0, nominal_wheelbase = 0.0;
 };
 int RunCalibrate(const CalibrateOptions& options);
 
@@ -70,6 +76,15 @@ struct SimulateOptions {
   double encoder_poll_jitter = 0.0;   // σ of the true poll times (s).
   double encoder_stamp_jitter = 0.0;  // σ of the encoder stamps about the true polls (s).
   double repeat_fraction = 0.0;       // Share of records written twice.
+  // Raw range scans (beams > 0): a lidar robot's recording (core/scan/scan_simulator.h), written
+  // as the bag generators' robot-messages JSON (OUT.json) or a directory with odometry.csv and
+  // scans.csv.
+  int beams = 0;
+  double field_of_view_deg = 360.0;
+  double range_noise = 0.01;      // σ of the ranges (m).
+  double missing_returns = 0.02;  // Share of beams without a return.
+  double sweep = 0.0;             // Duration of one sweep (s); 0: instantaneous.
+  std::string world = "mixed";    // rooms, corridor, clutter or mixed.
 };
 int RunSimulate(const SimulateOptions& options);
 

@@ -8,7 +8,8 @@ const calib::cli::SimulateOptions kSimulate;
 }  // namespace
 
 DEFINE_string(input, "",
-              "A laser log file (tuples or CSV), a laser raw-stream directory, several laser logs "
+              "A laser log file (tuples or CSV), a laser raw-stream directory, a robot's bag "
+              "(ROS 2 .mcap or bag directory, ROS 1 .bag), several laser logs "
               "separated by commas (calibrated jointly), or a bearing log directory "
               "(odometry.csv, bearings.csv, meta.json)");
 DEFINE_string(output, "", "Where to write the JSON result");
@@ -22,6 +23,26 @@ DEFINE_string(timing, kDiagnose.timing.c_str(),
               "with the calibration (the sensor clock model chosen by the data), stamps or "
               "free_running force that clock model, off takes the stamps as sample times; "
               "diagnose then searches on the intervals between the estimated times");
+
+// `calib calibrate` on a robot's bag.
+DEFINE_string(scan_topic, "",
+              "calibrate (bags): the sensor_msgs/LaserScan topic (default: the only one)");
+DEFINE_string(joint_state_topic, "",
+              "calibrate (bags): the sensor_msgs/JointState topic of the wheels (default: the one "
+              "whose joints name a left and a right wheel)");
+DEFINE_string(left_wheel_joint, "", "calibrate (bags): the left wheel's joint name");
+DEFINE_string(right_wheel_joint, "", "calibrate (bags): the right wheel's joint name");
+DEFINE_string(odom_topic, "",
+              "calibrate (bags): the nav_msgs/Odometry topic whose poses give the wheel angles "
+              "when no JointState names the wheels (needs the nominal wheels)");
+DEFINE_double(nominal_wheel_radius, 0.0,
+              "calibrate (bags): the wheel radius (m) the robot's driver uses; with "
+              "--nominal_wheelbase it seeds the scan matching and, for wheel angles from "
+              "odometry, the result gives corrections to it");
+DEFINE_double(nominal_wheelbase, 0.0, "calibrate (bags): the wheelbase (m) the driver uses");
+DEFINE_string(base_frame, "",
+              "calibrate (bags): the robot's base frame in tf (default base_link, else "
+              "base_footprint)");
 
 // `calib diagnose`.
 DEFINE_double(family_alpha, kDiagnose.family_alpha,
@@ -103,6 +124,22 @@ DEFINE_double(encoder_stamp_jitter, kSimulate.encoder_stamp_jitter,
 DEFINE_double(repeat_fraction, kSimulate.repeat_fraction,
               "simulate (streams): share of records written twice (exact duplicate rows), < 0.5");
 
+DEFINE_int32(beams, kSimulate.beams,
+             "simulate (scans): beams per scan; > 0 simulates a lidar robot's raw scans in a "
+             "world of walls (0.1 m wheels, 0.5 m wheelbase, 10 Hz scans, up to 0.5 m/s; "
+             "--intervals, --seed, --trajectory, the effect and logging flags apply) and writes "
+             "OUT.json (the bag generators' robot messages) or a directory with odometry.csv and "
+             "scans.csv");
+DEFINE_double(field_of_view, kSimulate.field_of_view_deg,
+              "simulate (scans): field of view (degrees)");
+DEFINE_double(range_noise, kSimulate.range_noise, "simulate (scans): range noise sigma (m)");
+DEFINE_double(missing_returns, kSimulate.missing_returns,
+              "simulate (scans): share of beams without a return");
+DEFINE_double(sweep, kSimulate.sweep,
+              "simulate (scans): duration of one sweep (s); each beam is cast at its own time");
+DEFINE_string(world, kSimulate.world.c_str(),
+              "simulate (scans): rooms, corridor, clutter or mixed");
+
 namespace calib::cli {
 
 void ParseFlags(const char* usage, int* argc, char*** argv) {
@@ -119,6 +156,14 @@ CalibrateOptions CalibrateOptionsFromFlags() {
   options.loss_scale = FLAGS_loss_scale;
   options.quiet = FLAGS_quiet;
   options.timing = FLAGS_timing;
+  options.scan_topic = FLAGS_scan_topic;
+  options.joint_state_topic = FLAGS_joint_state_topic;
+  options.odom_topic = FLAGS_odom_topic;
+  options.left_wheel_joint = FLAGS_left_wheel_joint;
+  options.right_wheel_joint = FLAGS_right_wheel_joint;
+  options.base_frame = FLAGS_base_frame;
+  options.nominal_wheel_radius = FLAGS_nominal_wheel_radius;
+  options.nominal_wheelbase = FLAGS_nominal_wheelbase;
   return options;
 }
 
@@ -166,6 +211,12 @@ SimulateOptions SimulateOptionsFromFlags() {
   options.encoder_poll_jitter = FLAGS_encoder_poll_jitter;
   options.encoder_stamp_jitter = FLAGS_encoder_stamp_jitter;
   options.repeat_fraction = FLAGS_repeat_fraction;
+  options.beams = FLAGS_beams;
+  options.field_of_view_deg = FLAGS_field_of_view;
+  options.range_noise = FLAGS_range_noise;
+  options.missing_returns = FLAGS_missing_returns;
+  options.sweep = FLAGS_sweep;
+  options.world = FLAGS_world;
   return options;
 }
 

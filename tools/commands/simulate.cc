@@ -5,6 +5,7 @@
 #include <calib/core/timing/logging_model.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
+#include <calib/tools/commands/simulate_scans.h>
 #include <calib/tools/report/json_output.h>
 #include <calib/tools/report/laser_report.h>
 #include <calib/tools/report/stream_timing_report.h>
@@ -155,6 +156,7 @@ int RunSimulate(const SimulateOptions& flags) {
   if (!options.ok()) return Fail(options.message());
   const StatusOr<LoggingModel> model = LoggingModelFromFlags(flags);
   if (!model.ok()) return Fail(model.message());
+  if (flags.beams > 0) return SimulateScanRobot(flags, *options, *model);
   const StatusOr<LaserFormat> format = OutputFormat(flags);
   if (!format.ok()) return Fail(format.message());
   LaserSimTruth truth;

@@ -42,7 +42,7 @@ TEST(ScanLaserLog, ScansToCalibrationRecoverTheTruth) {
       options.nominal = OdometryParams{0.102, 0.098, 0.52};  // A few % off.
       options.nominal_base_T_sensor = Pose2d(0.18, 0.06, 0.12);
     }
-    const StatusOr<ScanLog> log = LaserLogFromScans(sim->scans, sim->encoders, "sim", options);
+    const StatusOr<ScanLog> log = LaserLogFromScans(sim->scans, sim->encoders, {"sim"}, options);
     ASSERT_TRUE(log.ok()) << log.message();
     EXPECT_EQ(log->failed_matches, 0);
     EXPECT_EQ(log->segments, 1);
@@ -102,12 +102,13 @@ TEST(ScanLaserLog, TooFewScansOrStampsOutOfOrderAreErrors) {
   StatusOr<ScanSimulation> sim = SimulateScans(Robot(20, 4));
   ASSERT_TRUE(sim.ok()) << sim.message();
   std::vector<LaserScan> scans(sim->scans.begin(), sim->scans.begin() + 2);
-  StatusOr<ScanLog> log = LaserLogFromScans(scans, sim->encoders, "run.mcap /scan");
+  StatusOr<ScanLog> log =
+      LaserLogFromScans(scans, sim->encoders, {"run.mcap", "", "run.mcap /scan"});
   ASSERT_FALSE(log.ok());
   EXPECT_NE(log.message().find("run.mcap /scan"), std::string::npos);
   scans = sim->scans;
   std::swap(scans[5], scans[6]);
-  log = LaserLogFromScans(scans, sim->encoders, "run.mcap /scan");
+  log = LaserLogFromScans(scans, sim->encoders, {"run.mcap", "", "run.mcap /scan"});
   ASSERT_FALSE(log.ok());
   EXPECT_NE(log.message().find("does not follow"), std::string::npos) << log.message();
 }

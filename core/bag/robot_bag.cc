@@ -1,0 +1,57 @@
+#include <calib/core/bag/robot_bag.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
+namespace calib {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr char kMcapMagic[] = "\x89MCAP0\r\n";
+constexpr char kRos1Magic[] = "#ROSBAG V";
+
+std::string FirstBytes(const std::string& path, size_t count) {
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes(count, '\0');
+  in.read(bytes.data(), static_cast<std::streamsize>(count));
+  bytes.resize(static_cast<size_t>(std::max<std::streamsize>(0, in.gcount())));
+  return bytes;
+}
+
+bool StartsWith(const std::string& bytes, const char* magic) {
+  return bytes.compare(0, std::char_traits<char>::length(magic), magic) == 0;
+}
+
+bool BagDirectory(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_directory(path, ec)) return false;
+  if (fs::exists(fs::path(path) / "metadata.yaml", ec)) return true;
+  for (const fs::directory_entry& e : fs::directory_iterator(path, ec)) {
+    if (e.path().extension() == ".mcap") return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+bool LooksLikeRobotBag(const std::string& path) {
+  if (BagDirectory(path)) return true;
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return false;
+  const std::string bytes = FirstBytes(path, 16);
+  return StartsWith(bytes, kMcapMagic) || StartsWith(bytes, kRos1Magic);
+}
+
+StatusOr<RobotMessages> ReadRobotBag(const std::string& path, const BagReadOptions& options) {
+  if (BagDirectory(path)) return ReadMcapBag(path, options);
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return Status::Io(path + ": no such file or directory");
+  const std::string bytes = FirstBytes(path, 16);
+  if (StartsWith(bytes, kRos1Magic)) return ReadRos1Bag(path, options);
+  if (StartsWith(bytes, kMcapMagic)) return ReadMcapBag(path, options);
+  return Status::InvalidInput(path + ": not a bag (neither an MCAP file nor a ROS 1 bag)");
+}
+
+}  // namespace calib

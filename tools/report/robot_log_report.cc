@@ -1,0 +1,82 @@
+#include <calib/tools/report/robot_log_report.h>
+
+#include <cmath>
+#include <cstdio>
+
+namespace calib {
+namespace {
+
+constexpr double kDegrees = 180.0 / 3.14159265358979323846;
+
+std::string Format(const char* format, double a, double b = 0.0, double c = 0.0, double d = 0.0) {
+  char text[256];
+  std::snprintf(text, sizeof(text), format, a, b, c, d);
+  return text;
+}
+
+}  // namespace
+
+nlohmann::ordered_json RobotLogJson(const RobotBagLog& log, const LaserCalibrationResult& result,
+                                    const NominalWheels& nominal) {
+  nlohmann::ordered_json out;
+  out["scan_topic"] = log.topics.scan_topic;
+  out["wheel_angles"] = log.wheel_source;
+  out["base_frame"] = log.base_frame;
+  out["sensor_frame"] = log.sensor_frame;
+  const ScanLog& s = log.scans;
+  out["scan_matching"] = {{"scans", s.matching.size()},
+                          {"failed", s.failed_matches},
+                          {"segments", s.segments},
+                          {"keyframes", s.keyframes},
+                          {"seconds", s.matching_seconds}};
+  const LaserParamVector v = result.estimate.ToVector();
+  if (log.nominal_mounting) {
+    const Pose2d& m = log.nominal_mounting->base_T_sensor;
+    out["nominal_mounting"] = {{"source", "tf: " + log.nominal_mounting->chain},
+                               {"sensor_x", m(0)},
+                               {"sensor_y", m(1)},
+                               {"sensor_theta", m(2)},
+                               {"upside_down", log.nominal_mounting->upside_down}};
+    out["mounting_minus_nominal"] = {{"sensor_x", v(3) - m(0)},
+                                     {"sensor_y", v(4) - m(1)},
+                                     {"sensor_theta", std::remainder(v(5) - m(2), 2 * M_PI)}};
+  }
+  if (nominal.wheel_radius_m > 0.0 && nominal.wheelbase_m > 0.0) {
+    out["nominal_wheels"] = {{"wheel_radius", nominal.wheel_radius_m},
+                             {"wheelbase", nominal.wheelbase_m}};
+    // Calibrated over nominal: what to multiply the driver's values by.
+    out["corrections"] = {{"r_l", v(0) / nominal.wheel_radius_m},
+                          {"r_r", v(1) / nominal.wheel_radius_m},
+                          {"b", v(2) / nominal.wheelbase_m}};
+  }
+  out["warnings"] = log.warnings;
+  return out;
+}
+
+std::string RobotLogSummary(const RobotBagLog& log, const LaserCalibrationResult& result,
+                            const NominalWheels& nominal) {
+  const ScanLog& s = log.scans;
+  std::string out = "  recording: scans " + log.topics.scan_topic + " (" + log.sensor_frame +
+                    "), wheel angles " + log.wheel_source + "\n";
+  out += "  scan matching: " + std::to_string(s.matching.size()) + " scans, " +
+         std::to_string(s.failed_matches) + " failed, " + std::to_string(s.keyframes) +
+         " keyframes, " + std::to_string(s.segments) + " segment(s)" +
+         Format(", %.2f s\n", s.matching_seconds);
+  const LaserParamVector v = result.estimate.ToVector();
+  if (log.nominal_mounting) {
+    const Pose2d& m = log.nominal_mounting->base_T_sensor;
+    out += "  mounting from tf (" + log.nominal_mounting->chain + "): " +
+           Format("x %.1f mm, y %.1f mm, θ %.2f°", 1e3 * m(0), 1e3 * m(1), kDegrees * m(2)) +
+           Format("; calibrated − tf: x %+.1f mm, y %+.1f mm, θ %+.2f°\n", 1e3 * (v(3) - m(0)),
+                  1e3 * (v(4) - m(1)), kDegrees * std::remainder(v(5) - m(2), 2 * M_PI));
+  }
+  if (nominal.wheel_radius_m > 0.0 && nominal.wheelbase_m > 0.0) {
+    out += Format("  against the nominal wheels: r_l × %.5f, r_r × %.5f, b × %.5f\n",
+                  v(0) / nominal.wheel_radius_m, v(1) / nominal.wheel_radius_m,
+                  v(2) / nominal.wheelbase_m);
+  }
+  for (const std::string& w : log.warnings) out += "  warning: " + w + "\n";
+  return out;
+}
+
+}  // namespace calib
