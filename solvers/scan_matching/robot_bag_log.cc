@@ -108,7 +108,10 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
                            "': the nominal mounting is unknown (the calibration does not need "
                            "it); if the sensor is mounted upside down, its scans are mirrored");
   }
-  if (options.nominal_wheel_radius_m > 0.0 && options.nominal_wheelbase_m > 0.0) {
+  if (options.calibrated) {
+    scan_options.nominal = options.calibrated->odometry;
+    scan_options.nominal_base_T_sensor = options.calibrated->base_T_sensor;
+  } else if (options.nominal_wheel_radius_m > 0.0 && options.nominal_wheelbase_m > 0.0) {
     scan_options.nominal =
         OdometryParams{options.nominal_wheel_radius_m, options.nominal_wheel_radius_m,
                        options.nominal_wheelbase_m};
@@ -119,6 +122,25 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
                            bag.source + " " + out.topics.scan_topic};
   CALIB_ASSIGN_OR_RETURN(out.scans, LaserLogFromScans(scans, wheels.samples, names, scan_options));
   out.warnings.insert(out.warnings.end(), out.scans.warnings.begin(), out.scans.warnings.end());
+  return out;
+}
+
+StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& bag,
+                                                     const RobotBagOptions& options,
+                                                     const LaserTimingOptions& timing) {
+  RobotBagCalibration out;
+  CALIB_ASSIGN_OR_RETURN(out.log, LaserLogFromRobotMessages(bag, options));
+  CALIB_ASSIGN_OR_RETURN(out.result, CalibrateLaserStreams(out.log.scans.log.streams, timing));
+  bool sweeps = false;
+  for (const LaserScan& scan : bag.scans.at(out.log.topics.scan_topic)) {
+    sweeps = sweeps || scan.time_increment_s != 0.0;
+  }
+  if (!sweeps) return out;
+  RobotBagOptions second = options;
+  second.calibrated = out.result.calibration.estimate;
+  CALIB_ASSIGN_OR_RETURN(out.log, LaserLogFromRobotMessages(bag, second));
+  CALIB_ASSIGN_OR_RETURN(out.result, CalibrateLaserStreams(out.log.scans.log.streams, timing));
+  out.log.matching_passes = 2;
   return out;
 }
 

@@ -4,8 +4,10 @@
 #include <calib/core/bag/robot_messages.h>
 #include <calib/core/bag/robot_topics.h>
 #include <calib/core/bag/tf_tree.h>
+#include <calib/core/laser/laser_params.h>
 #include <calib/core/status.h>
 #include <calib/solvers/scan_matching/scan_laser_log.h>
+#include <calib/solvers/timing/laser_timing_calibration.h>
 
 #include <optional>
 #include <string>
@@ -24,6 +26,9 @@ struct RobotBagOptions {
   double nominal_wheelbase_m = 0.0;
   std::string base_frame;  // Empty: base_link, else base_footprint, else Odometry's child frame.
   ScanOdometryOptions matching;
+  // A calibration of this robot (a first pass): the matcher's guesses and the de-skewing of each
+  // sweep then go through it instead of the nominal values.
+  std::optional<LaserCalibration> calibrated;
 };
 
 struct RobotBagLog {
@@ -33,11 +38,25 @@ struct RobotBagLog {
   std::string wheel_source;  // For the summary: "/joint_states (left_wheel_joint, ...)".
   std::string base_frame, sensor_frame;
   std::optional<PlanarMounting> nominal_mounting;  // From tf, when it connects the two frames.
+  // 2 when the scans were matched again de-skewed through a first calibration.
+  int matching_passes = 1;
   std::vector<std::string> warnings;
 };
 
 StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
                                                 const RobotBagOptions& options = {});
+
+struct RobotBagCalibration {
+  RobotBagLog log;           // Of the last pass.
+  LaserTimingResult result;  // The timing-aware calibration of the last pass.
+};
+
+// The bag's laser calibration, with its timing. Where the scans sweep (beams at their own times),
+// a second pass matches them again de-skewed through the first pass's calibration: without it a
+// 10 Hz sweep of a robot at 0.5 m/s put b 4.6 σ off on a 600-scan log.
+StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& bag,
+                                                     const RobotBagOptions& options,
+                                                     const LaserTimingOptions& timing);
 
 // A laser scan seen from its mirror image (y → −y): the scans of a sensor mounted upside down,
 // in a frame whose z axis points up like the base's. Beams keep increasing angles (reversed

@@ -19,21 +19,24 @@
 namespace calib::cli {
 namespace {
 
-// One raw-stream log: every sample's true time is estimated with the calibration. `recording`:
-// the bag it was made from, if any.
-int CalibrateLaserStreamLog(const CalibrateOptions& flags, const LaserLog& log,
-                            const LaserCalibrationOptions& options, const Stopwatch& clock,
-                            const RobotBagLog* recording = nullptr) {
+LaserTimingOptions TimingOptions(const CalibrateOptions& flags,
+                                 const LaserCalibrationOptions& options) {
   LaserTimingOptions timing;
   timing.calibration = options;
   timing.sensor_clock = flags.timing;
-  const StatusOr<LaserTimingResult> result = CalibrateLaserStreams(log.streams, timing);
-  if (!result.ok()) return Fail(flags.input + ": " + result.message());
-  const LaserCalibrationResult& calibration = result->calibration;
+  return timing;
+}
+
+// The JSON and summary of a timing-aware calibration of `log`; `recording`: the bag it was made
+// from, if any.
+int ReportLaserStreamResult(const CalibrateOptions& flags, const LaserLog& log,
+                            const LaserTimingResult& result, const Stopwatch& clock,
+                            const RobotBagLog* recording = nullptr) {
+  const LaserCalibrationResult& calibration = result.calibration;
   nlohmann::ordered_json json =
       LaserResultJson(calibration, flags.input, flags.loss, log.stream_timing);
   json["timing"]["treatment"] = "latent_times";
-  json["timing"]["latent_times"] = LatentTimingJson(*result);
+  json["timing"]["latent_times"] = LatentTimingJson(result);
   const NominalWheels nominal{flags.nominal_wheel_radius, flags.nominal_wheelbase};
   if (recording) json["recording"] = RobotLogJson(*recording, calibration, nominal);
   json["seconds"]["total"] = clock.Seconds();
@@ -51,8 +54,17 @@ int CalibrateLaserStreamLog(const CalibrateOptions& flags, const LaserLog& log,
   const std::string summary =
       LaserResultSummary(calibration, flags.input, flags.loss, log.stream_timing) +
       (recording ? RobotLogSummary(*recording, calibration, nominal) : "") +
-      LatentTimingSummary(*result) + verdict_line;
+      LatentTimingSummary(result) + verdict_line;
   return WriteReport(flags.output, json, summary, flags.quiet);
+}
+
+// One raw-stream log: every sample's true time is estimated with the calibration.
+int CalibrateLaserStreamLog(const CalibrateOptions& flags, const LaserLog& log,
+                            const LaserCalibrationOptions& options, const Stopwatch& clock) {
+  const StatusOr<LaserTimingResult> result =
+      CalibrateLaserStreams(log.streams, TimingOptions(flags, options));
+  if (!result.ok()) return Fail(flags.input + ": " + result.message());
+  return ReportLaserStreamResult(flags, log, *result, clock);
 }
 
 // A robot's bag: its scans are matched into sensor poses and calibrated with their timing.
@@ -74,9 +86,11 @@ int CalibrateRobotBag(const CalibrateOptions& flags, const LaserCalibrationOptio
   bag_options.base_frame = flags.base_frame;
   bag_options.nominal_wheel_radius_m = flags.nominal_wheel_radius;
   bag_options.nominal_wheelbase_m = flags.nominal_wheelbase;
-  const StatusOr<RobotBagLog> recording = LaserLogFromRobotMessages(*bag, bag_options);
-  if (!recording.ok()) return Fail(recording.message());
-  return CalibrateLaserStreamLog(flags, recording->scans.log, options, clock, &*recording);
+  const StatusOr<RobotBagCalibration> calibrated =
+      CalibrateRobotMessages(*bag, bag_options, TimingOptions(flags, options));
+  if (!calibrated.ok()) return Fail(flags.input + ": " + calibrated.message());
+  return ReportLaserStreamResult(flags, calibrated->log.scans.log, calibrated->result, clock,
+                                 &calibrated->log);
 }
 
 int CalibrateLaserLogs(const CalibrateOptions& flags) {

@@ -24,11 +24,9 @@ nlohmann::ordered_json RobotLogJson(const RobotBagLog& log, const LaserCalibrati
   out["base_frame"] = log.base_frame;
   out["sensor_frame"] = log.sensor_frame;
   const ScanLog& s = log.scans;
-  out["scan_matching"] = {{"scans", s.matching.size()},
-                          {"failed", s.failed_matches},
-                          {"segments", s.segments},
-                          {"keyframes", s.keyframes},
-                          {"seconds", s.matching_seconds}};
+  out["scan_matching"] = {{"scans", s.matching.size()},    {"failed", s.failed_matches},
+                          {"segments", s.segments},        {"keyframes", s.keyframes},
+                          {"passes", log.matching_passes}, {"seconds", s.matching_seconds}};
   const LaserParamVector v = result.estimate.ToVector();
   if (log.nominal_mounting) {
     const Pose2d& m = log.nominal_mounting->base_T_sensor;
@@ -61,7 +59,9 @@ std::string RobotLogSummary(const RobotBagLog& log, const LaserCalibrationResult
   out += "  scan matching: " + std::to_string(s.matching.size()) + " scans, " +
          std::to_string(s.failed_matches) + " failed, " + std::to_string(s.keyframes) +
          " keyframes, " + std::to_string(s.segments) + " segment(s)" +
-         Format(", %.2f s\n", s.matching_seconds);
+         Format(", %.2f s", s.matching_seconds) +
+         (log.matching_passes > 1 ? "; matched again de-skewed through the first calibration\n"
+                                  : "\n");
   const LaserParamVector v = result.estimate.ToVector();
   if (log.nominal_mounting) {
     const Pose2d& m = log.nominal_mounting->base_T_sensor;
