@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <set>
 
@@ -44,14 +45,8 @@ std::string FailureSummary(const ScanOdometryResult& r) {
   return out + "): those scans are left out, as gaps";
 }
 
-}  // namespace
-
-StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
-                                    const std::vector<EncoderSample>& encoders,
-                                    const ScanLogNames& names, const ScanLogOptions& options) {
-  const std::string& source = names.source;
-  const std::string scans_name = names.scans.empty() ? source + " (scans)" : names.scans;
-  const std::string wheels_name = names.wheels.empty() ? source + " (wheel angles)" : names.wheels;
+Status CheckInputs(const std::vector<LaserScan>& scans, const std::vector<EncoderSample>& encoders,
+                   const std::string& scans_name, const std::string& wheels_name) {
   if (scans.size() < 3) {
     return Status::InvalidInput(scans_name + ": " + std::to_string(scans.size()) +
                                 " scan(s): the calibration needs many scans of a moving robot");
@@ -68,14 +63,29 @@ StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
                                   std::to_string(scans[i - 1].stamp_s));
     }
   }
+  return Status::Ok();
+}
+
+// The same sample picked up again (a driver or logger that republishes the latest scan): the
+// same beams and ranges, bit for bit (NaN included).
+bool SameSample(const LaserScan& a, const LaserScan& b) {
+  return a.angle_min_rad == b.angle_min_rad && a.angle_increment_rad == b.angle_increment_rad &&
+         a.ranges_m.size() == b.ranges_m.size() &&
+         std::memcmp(a.ranges_m.data(), b.ranges_m.data(), a.ranges_m.size() * sizeof(float)) == 0;
+}
+
+// Matches the distinct scans, each seeded (and de-skewed) through the nominal wheels when known.
+StatusOr<ScanOdometryResult> MatchScans(const std::vector<const LaserScan*>& scans,
+                                        const std::vector<EncoderSample>& encoders,
+                                        const ScanLogOptions& options) {
   const bool nominal = HasNominal(options);
-  const auto start = std::chrono::steady_clock::now();
   ScanOdometry odometry(options.matching);
   for (size_t i = 0; i < scans.size(); ++i) {
-    const LaserScan& scan = scans[i];
+    const LaserScan& scan = *scans[i];
     Pose2d guess = Pose2d::Zero();
-    if (i > 0 && nominal)
-      guess = NominalSensorMotion(encoders, scans[i - 1].stamp_s, scan.stamp_s, options);
+    if (i > 0 && nominal) {
+      guess = NominalSensorMotion(encoders, scans[i - 1]->stamp_s, scan.stamp_s, options);
+    }
     std::optional<Twist2d> sweep;
     const double sweep_s = scan.time_increment_s * static_cast<double>(scan.ranges_m.size());
     if (options.deskew && nominal && sweep_s > 0.0) {
@@ -84,22 +94,50 @@ StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
     }
     CALIB_RETURN_IF_ERROR(odometry.AddScan(scan, guess, sweep));
   }
+  return odometry.result();
+}
+
+}  // namespace
+
+StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
+                                    const std::vector<EncoderSample>& encoders,
+                                    const ScanLogNames& names, const ScanLogOptions& options) {
+  const std::string& source = names.source;
+  const std::string scans_name = names.scans.empty() ? source + " (scans)" : names.scans;
+  const std::string wheels_name = names.wheels.empty() ? source + " (wheel angles)" : names.wheels;
+  CALIB_RETURN_IF_ERROR(CheckInputs(scans, encoders, scans_name, wheels_name));
+  // A repeated sample is not matched again: it gets its original's pose, which the streams then
+  // count as a held repeat (its stamp is a pick-up time).
+  std::vector<const LaserScan*> distinct;
+  std::vector<int> distinct_of(scans.size());
+  for (size_t i = 0; i < scans.size(); ++i) {
+    if (distinct.empty() || !SameSample(scans[i], *distinct.back())) distinct.push_back(&scans[i]);
+    distinct_of[i] = static_cast<int>(distinct.size()) - 1;
+  }
+  const auto start = std::chrono::steady_clock::now();
   ScanLog out;
-  out.matching = odometry.result();
+  CALIB_ASSIGN_OR_RETURN(out.matching, MatchScans(distinct, encoders, options));
   out.matching_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const ScanOdometryResult& r = out.matching;
   out.failed_matches = static_cast<int>(r.failed.size());
   std::set<int> segments, keyframes;
   std::vector<StampedPose> poses;
-  for (int i = 0; i < r.size(); ++i) {
-    if (r.chain[i] < 0) continue;
-    StampedPose p = r.poses[i];
+  for (size_t i = 0; i < scans.size(); ++i) {
+    const int d = distinct_of[i];
+    if (r.chain[d] < 0) continue;
+    StampedPose p = r.poses[d];
+    p.t_s = scans[i].stamp_s;
     p.line = static_cast<int>(scans[i].record) + 1;  // 1-based, as a line.
-    p.segment = r.chain[i];
+    p.segment = r.chain[d];
     segments.insert(p.segment);
-    if (r.keyframe_of[i] >= 0) keyframes.insert(r.keyframe_of[i]);
+    if (r.keyframe_of[d] >= 0) keyframes.insert(r.keyframe_of[d]);
     poses.push_back(p);
+  }
+  if (keyframes.empty()) {  // No scan was matched against another.
+    return Status::InvalidInput(scans_name +
+                                ": no two scans could be matched: " + FailureSummary(r) +
+                                "; are the ranges valid (within range_min and range_max)?");
   }
   out.segments = static_cast<int>(segments.size());
   out.keyframes = static_cast<int>(keyframes.size());

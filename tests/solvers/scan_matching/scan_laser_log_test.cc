@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <limits>
 
 namespace calib {
 namespace {
@@ -121,6 +122,14 @@ TEST(ScanLaserLog, TooFewScansOrStampsOutOfOrderAreErrors) {
       LaserLogFromScans(scans, sim->encoders, {"run.mcap", "", "run.mcap /scan"});
   ASSERT_FALSE(log.ok());
   EXPECT_NE(log.message().find("run.mcap /scan"), std::string::npos);
+  scans = sim->scans;
+  for (LaserScan& scan : scans) {
+    for (float& range : scan.ranges_m) range = std::numeric_limits<float>::quiet_NaN();
+  }
+  log = LaserLogFromScans(scans, sim->encoders, {"run.mcap", "", "run.mcap /scan"});
+  ASSERT_FALSE(log.ok());
+  EXPECT_NE(log.message().find("run.mcap /scan: no two scans could be matched"), std::string::npos)
+      << log.message();
   scans = sim->scans;
   std::swap(scans[5], scans[6]);
   log = LaserLogFromScans(scans, sim->encoders, {"run.mcap", "", "run.mcap /scan"});

@@ -1,0 +1,90 @@
+// `calib calibrate` on a robot's bag, as a user runs it: bags written by the reference
+// implementations from a simulated lidar robot (data/bags/README.md), and bad bags.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "tests/tools/cli_runner.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+using ::calib::testing::CliRun;
+using ::calib::testing::ReadFile;
+
+const fs::path kBags = fs::path(CALIB_SOURCE_DIR) / "data" / "bags";
+
+class BagCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = ::calib::testing::MakeScratchDir("bag_cli_test_"); }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  CliRun Calibrate(const fs::path& input, const std::string& flags = "") {
+    return ::calib::testing::RunCalib("calibrate --quiet --input " + input.string() + " --output " +
+                                          (dir_ / "out.json").string() + " " + flags,
+                                      dir_);
+  }
+
+  void ExpectFailure(const fs::path& input, const std::string& flags,
+                     const std::vector<std::string>& needles) {
+    const CliRun run = Calibrate(input, flags);
+    EXPECT_GT(run.exit_code, 0) << input << " " << flags;
+    EXPECT_LT(run.exit_code, 128) << "crashed: " << input << " " << flags;
+    for (const std::string& needle : needles) {
+      EXPECT_NE(run.err.find(needle), std::string::npos) << "stderr lacks '" << needle << "':\n"
+                                                         << run.err;
+    }
+  }
+
+  fs::path dir_;
+};
+
+// Every parameter within 3σ of the simulator's truth, from the ROS 2 bag (zstd chunks, written
+// by @mcap/core), a bag directory holding it, and the ROS 1 bag (lz4 chunks, python3-rosbag).
+TEST_F(BagCliTest, BagsOfTheReferenceWritersCalibrateWithinThreeSigma) {
+  const nlohmann::json truth =
+      nlohmann::json::parse(ReadFile(kBags / "sim_robot_truth.json"))["estimate"];
+  const fs::path directory = dir_ / "rosbag2_run";
+  fs::create_directories(directory);
+  fs::copy_file(kBags / "sim_robot_zstd.mcap", directory / "run_0.mcap");
+  std::ofstream(directory / "metadata.yaml") << "rosbag2_bagfile_information:\n  version: 5\n";
+  for (const fs::path& bag :
+       {kBags / "sim_robot_zstd.mcap", directory, kBags / "sim_robot_lz4.bag"}) {
+    SCOPED_TRACE(bag.string());
+    const CliRun run = Calibrate(bag);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+    for (const auto& [name, value] : truth.items()) {
+      EXPECT_LT(std::abs(json["estimate"][name].get<double>() - value.get<double>()),
+                3.0 * json["stddev"][name].get<double>())
+          << name;
+    }
+    const nlohmann::json& recording = json["recording"];
+    EXPECT_EQ(recording["scan_topic"], "/scan");
+    EXPECT_EQ(recording["scan_matching"]["failed"], 0);
+    EXPECT_EQ(recording["scan_matching"]["passes"], 2);  // The sweeps are de-skewed.
+    EXPECT_LT(std::abs(recording["mounting_minus_nominal"]["sensor_x"].get<double>()), 0.01);
+    EXPECT_EQ(json["timing"]["latent_times"]["sensor_clock"], "free_running");
+  }
+}
+
+TEST_F(BagCliTest, BadBagsAndTopicsAreNamed) {
+  const fs::path bag = kBags / "sim_robot_lz4.bag";
+  ExpectFailure(bag, "--scan_topic /front_scan", {"'/front_scan'", "/scan (sensor_msgs/LaserScan"});
+  ExpectFailure(bag, "--left_wheel_joint wheel_l --right_wheel_joint wheel_r",
+                {"'wheel_l'", "left_wheel_joint"});
+  ExpectFailure(bag, "--odom_topic /odom", {"--nominal_wheel_radius"});
+  for (const fs::path& source : {bag, kBags / "sim_robot_zstd.mcap"}) {
+    const std::string bytes = ReadFile(source);
+    const fs::path cut = dir_ / ("cut" + source.extension().string());
+    std::ofstream(cut, std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+    ExpectFailure(cut, "", {cut.string(), "truncated"});
+  }
+}
+
+}  // namespace
