@@ -53,6 +53,9 @@ StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometr
 // one StreamTiming per stream ("odometry", "sensor_poses"). Samples keep their source lines.
 StatusOr<LaserStreams> ReadLaserStreamSamples(const std::string& directory,
                                               std::vector<StreamTiming>* timing);
+// odometry.csv alone (t,left,right) with its lines; duplicates, order and values are checked
+// where the streams are put together (LaserLogFromStreams).
+StatusOr<std::vector<EncoderSample>> ReadOdometryCsv(const std::string& path);
 // ReadLaserStreamSamples + LaserLogFromStreams; the log carries the streams and their timing.
 StatusOr<LaserLog> ReadLaserStream(const std::string& directory);
 

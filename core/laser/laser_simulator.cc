@@ -248,7 +248,10 @@ LaserStreams SimulateLaserStreams(const LaserSimOptions& options, double encoder
   };
   if (encoder_rate_hz > 0.0) {
     const double end = simulation.boundaries.back();
-    const size_t count = static_cast<size_t>(std::ceil(end * encoder_rate_hz - 1e-9)) + 1;
+    size_t count = static_cast<size_t>(std::ceil(end * encoder_rate_hz - 1e-9)) + 1;
+    // The last sample at or after the last scan (the boundaries are sums that can overshoot a
+    // whole number of encoder periods by a few ulps).
+    if (static_cast<double>(count - 1) / encoder_rate_hz < end) ++count;
     streams.odometry.reserve(count);
     for (size_t j = 0; j < count; ++j) {
       streams.odometry.push_back(sample(static_cast<double>(j) / encoder_rate_hz));

@@ -351,6 +351,19 @@ StatusOr<LaserStreams> ReadLaserStreamSamples(const std::string& directory,
   return PrepareStreams(std::move(odometry), std::move(poses), names, timing);
 }
 
+StatusOr<std::vector<EncoderSample>> ReadOdometryCsv(const std::string& path) {
+  std::string text;
+  CALIB_RETURN_IF_ERROR(ReadWholeFile(path, &text));
+  CALIB_ASSIGN_OR_RETURN(const StreamRecords records, ReadRecords(text, path, {"left", "right"}));
+  std::vector<EncoderSample> samples;
+  for (size_t k = 0; k < records.stamps_s.size(); ++k) {
+    const int line = records.lines.empty() ? 0 : records.lines[k];
+    samples.push_back(
+        EncoderSample{records.stamps_s[k], records.values[2 * k], records.values[2 * k + 1], line});
+  }
+  return samples;
+}
+
 StatusOr<LaserLog> ReadLaserStream(const std::string& directory) {
   std::vector<StreamTiming> timing;
   CALIB_ASSIGN_OR_RETURN(LaserStreams streams, ReadLaserStreamSamples(directory, &timing));

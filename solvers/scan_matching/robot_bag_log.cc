@@ -102,7 +102,7 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
                              "' upside down: its scans were "
                              "mirrored so that they turn counter-clockwise like the base");
     }
-  } else {
+  } else if (!bag.tf.empty() || !bag.tf_static.empty()) {
     out.warnings.push_back("tf gives no transform from '" + out.base_frame + "' to '" +
                            out.sensor_frame +
                            "': the nominal mounting is unknown (the calibration does not need "

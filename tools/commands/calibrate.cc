@@ -2,6 +2,7 @@
 // summary.
 #include <calib/core/bag/robot_bag.h>
 #include <calib/core/laser/laser_log_io.h>
+#include <calib/core/scan/scan_directory.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
 #include <calib/solvers/laser/calibrate_laser.h>
 #include <calib/solvers/scan_matching/robot_bag_log.h>
@@ -67,7 +68,8 @@ int CalibrateLaserStreamLog(const CalibrateOptions& flags, const LaserLog& log,
   return ReportLaserStreamResult(flags, log, *result, clock);
 }
 
-// A robot's bag: its scans are matched into sensor poses and calibrated with their timing.
+// A robot's bag (or a directory of scans.csv and odometry.csv): its scans are matched into
+// sensor poses and calibrated with their timing.
 int CalibrateRobotBag(const CalibrateOptions& flags, const LaserCalibrationOptions& options,
                       const Stopwatch& clock) {
   if (flags.timing == "off") {
@@ -75,7 +77,8 @@ int CalibrateRobotBag(const CalibrateOptions& flags, const LaserCalibrationOptio
                 ": a bag is calibrated with its timing; --timing off applies to "
                 "logs of intervals and stream directories");
   }
-  const StatusOr<RobotMessages> bag = ReadRobotBag(flags.input);
+  const StatusOr<RobotMessages> bag =
+      IsScanDirectory(flags.input) ? ReadScanDirectory(flags.input) : ReadRobotBag(flags.input);
   if (!bag.ok()) return Fail(bag.message());
   RobotBagOptions bag_options;
   bag_options.topics.scan_topic = flags.scan_topic;
@@ -88,7 +91,7 @@ int CalibrateRobotBag(const CalibrateOptions& flags, const LaserCalibrationOptio
   bag_options.nominal_wheelbase_m = flags.nominal_wheelbase;
   const StatusOr<RobotBagCalibration> calibrated =
       CalibrateRobotMessages(*bag, bag_options, TimingOptions(flags, options));
-  if (!calibrated.ok()) return Fail(flags.input + ": " + calibrated.message());
+  if (!calibrated.ok()) return Fail(calibrated.message());
   return ReportLaserStreamResult(flags, calibrated->log.scans.log, calibrated->result, clock,
                                  &calibrated->log);
 }
@@ -105,7 +108,9 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   options.refinement.loss = *loss;
   options.refinement.loss_scale = flags.loss_scale;
   options.progress = ProgressPrinter(clock, flags.quiet);
-  if (LooksLikeRobotBag(flags.input)) return CalibrateRobotBag(flags, options, clock);
+  if (LooksLikeRobotBag(flags.input) || IsScanDirectory(flags.input)) {
+    return CalibrateRobotBag(flags, options, clock);
+  }
   std::vector<LaserLog> logs;
   for (const std::string& path : SplitCommas(flags.input)) {
     StatusOr<LaserLog> log = ReadLaserLog(path, *format);

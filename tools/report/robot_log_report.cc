@@ -54,8 +54,9 @@ nlohmann::ordered_json RobotLogJson(const RobotBagLog& log, const LaserCalibrati
 std::string RobotLogSummary(const RobotBagLog& log, const LaserCalibrationResult& result,
                             const NominalWheels& nominal) {
   const ScanLog& s = log.scans;
-  std::string out = "  recording: scans " + log.topics.scan_topic + " (" + log.sensor_frame +
-                    "), wheel angles " + log.wheel_source + "\n";
+  const std::string frame = log.sensor_frame.empty() ? "" : " (" + log.sensor_frame + ")";
+  std::string out = "  recording: scans " + log.topics.scan_topic + frame + ", wheel angles " +
+                    log.wheel_source + "\n";
   out += "  scan matching: " + std::to_string(s.matching.size()) + " scans, " +
          std::to_string(s.failed_matches) + " failed, " + std::to_string(s.keyframes) +
          " keyframes, " + std::to_string(s.segments) + " segment(s)" +
