@@ -38,6 +38,11 @@ nlohmann::json RunSpeed(const BenchConfig& config);
 // code.
 int RunSpeedChild(const std::string& path, int64_t intervals);
 
+// Section scans: the scan matcher's speed and accuracy (360 and 1081 beams), the two-stage
+// calibration's coverage over seeds, and a long recording (18 000 scans; 1200 with quick) end to
+// end in process.
+nlohmann::ordered_json RunScansBench(const BenchConfig& config);
+
 // Google Benchmark micro-benchmarks: one LaserResidual evaluation with Jacobians, and
 // CensiClosedForm on 1000 intervals. Prints Google Benchmark's console table; returns the runs.
 nlohmann::json RunMicroBenchmarks();

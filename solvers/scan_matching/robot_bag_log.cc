@@ -125,16 +125,32 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
   return out;
 }
 
+// The first pass of a long log, which only has to de-skew the second, is calibrated on this
+// many scans from its start (300 s at 10 Hz).
+constexpr size_t kFirstPassScans = 3000;
+
 StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& bag,
                                                      const RobotBagOptions& options,
                                                      const LaserTimingOptions& timing) {
-  RobotBagCalibration out;
-  CALIB_ASSIGN_OR_RETURN(out.log, LaserLogFromRobotMessages(bag, options));
-  CALIB_ASSIGN_OR_RETURN(out.result, CalibrateLaserStreams(out.log.scans.log.streams, timing));
+  CALIB_ASSIGN_OR_RETURN(const PickedTopics topics, PickRobotTopics(bag, options.topics));
+  const std::vector<LaserScan>& scans = bag.scans.at(topics.scan_topic);
   bool sweeps = false;
-  for (const LaserScan& scan : bag.scans.at(out.log.topics.scan_topic)) {
-    sweeps = sweeps || scan.time_increment_s != 0.0;
+  for (const LaserScan& scan : scans) sweeps = sweeps || scan.time_increment_s != 0.0;
+  RobotBagCalibration out;
+  if (sweeps && scans.size() > 2 * kFirstPassScans) {
+    RobotMessages start;
+    start.source = bag.source;
+    start.topics = bag.topics;
+    start.joint_states = bag.joint_states;
+    start.odometry = bag.odometry;
+    start.tf = bag.tf;
+    start.tf_static = bag.tf_static;
+    start.scans[topics.scan_topic].assign(scans.begin(), scans.begin() + kFirstPassScans);
+    CALIB_ASSIGN_OR_RETURN(out.log, LaserLogFromRobotMessages(start, options));
+  } else {
+    CALIB_ASSIGN_OR_RETURN(out.log, LaserLogFromRobotMessages(bag, options));
   }
+  CALIB_ASSIGN_OR_RETURN(out.result, CalibrateLaserStreams(out.log.scans.log.streams, timing));
   if (!sweeps) return out;
   RobotBagOptions second = options;
   second.calibrated = out.result.calibration.estimate;

@@ -2,9 +2,11 @@
 #include <calib/core/timing/encoder_integration.h>
 #include <calib/solvers/scan_matching/scan_laser_log.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <future>
 #include <map>
 #include <set>
 
@@ -74,16 +76,16 @@ bool SameSample(const LaserScan& a, const LaserScan& b) {
          std::memcmp(a.ranges_m.data(), b.ranges_m.data(), a.ranges_m.size() * sizeof(float)) == 0;
 }
 
-// Matches the distinct scans, each seeded (and de-skewed) through the nominal wheels when known.
-StatusOr<ScanOdometryResult> MatchScans(const std::vector<const LaserScan*>& scans,
-                                        const std::vector<EncoderSample>& encoders,
-                                        const ScanLogOptions& options) {
+// Matches scans [begin, end), each seeded (and de-skewed) through the nominal wheels when known.
+StatusOr<ScanOdometryResult> MatchRun(const std::vector<const LaserScan*>& scans, size_t begin,
+                                      size_t end, const std::vector<EncoderSample>& encoders,
+                                      const ScanLogOptions& options) {
   const bool nominal = HasNominal(options);
   ScanOdometry odometry(options.matching);
-  for (size_t i = 0; i < scans.size(); ++i) {
+  for (size_t i = begin; i < end; ++i) {
     const LaserScan& scan = *scans[i];
     Pose2d guess = Pose2d::Zero();
-    if (i > 0 && nominal) {
+    if (i > begin && nominal) {
       guess = NominalSensorMotion(encoders, scans[i - 1]->stamp_s, scan.stamp_s, options);
     }
     std::optional<Twist2d> sweep;
@@ -95,6 +97,45 @@ StatusOr<ScanOdometryResult> MatchScans(const std::vector<const LaserScan*>& sca
     CALIB_RETURN_IF_ERROR(odometry.AddScan(scan, guess, sweep));
   }
   return odometry.result();
+}
+
+// `tail` after `head`: its scans' indices shift by head's size and its chains follow head's.
+void Append(ScanOdometryResult tail, ScanOdometryResult* head) {
+  const int offset = head->size();
+  int chains = 0;
+  for (const int c : head->chain) chains = std::max(chains, c + 1);
+  for (int& k : tail.keyframe_of) k = k >= 0 ? k + offset : k;
+  for (int& c : tail.chain) c = c >= 0 ? c + chains : c;
+  for (int& f : tail.failed) f += offset;
+  const auto append = [](auto& to, const auto& from) {
+    to.insert(to.end(), from.begin(), from.end());
+  };
+  append(head->poses, tail.poses);
+  append(head->matches, tail.matches);
+  append(head->keyframe_of, tail.keyframe_of);
+  append(head->covariances, tail.covariances);
+  append(head->chain, tail.chain);
+  append(head->failed, tail.failed);
+}
+
+// Long logs are matched in two halves on two threads: the halves are separate pose segments, so
+// one interval (at the split) is lost.
+constexpr size_t kScansPerThread = 1000;
+
+StatusOr<ScanOdometryResult> MatchScans(const std::vector<const LaserScan*>& scans,
+                                        const std::vector<EncoderSample>& encoders,
+                                        const ScanLogOptions& options) {
+  if (scans.size() < 2 * kScansPerThread)
+    return MatchRun(scans, 0, scans.size(), encoders, options);
+  const size_t half = scans.size() / 2;
+  auto second = std::async(std::launch::async,
+                           [&] { return MatchRun(scans, half, scans.size(), encoders, options); });
+  StatusOr<ScanOdometryResult> first = MatchRun(scans, 0, half, encoders, options);
+  StatusOr<ScanOdometryResult> rest = second.get();
+  if (!first.ok()) return first;
+  if (!rest.ok()) return rest;
+  Append(std::move(rest).value(), &*first);
+  return first;
 }
 
 }  // namespace
