@@ -80,7 +80,8 @@ nlohmann::ordered_json CoverageRow(double sweep_s, int seeds, int scans) {
     RobotMessages bag = ScanSimulationMessages(*sim);
     bag.source = "sim";
     const Stopwatch clock;
-    const StatusOr<RobotBagCalibration> r = CalibrateRobotMessages(bag, {}, {});
+    const StatusOr<RobotBagCalibration> r =
+        CalibrateRobotMessages(bag, RobotBagOptions(), LaserTimingOptions());
     seconds += clock.Seconds();
     if (!r.ok()) continue;
     LaserCalibration truth;
@@ -113,7 +114,8 @@ nlohmann::ordered_json EndToEnd(int scans, int beams) {
   RobotMessages bag = ScanSimulationMessages(*sim);
   bag.source = "long";
   const Stopwatch clock;
-  const StatusOr<RobotBagCalibration> r = CalibrateRobotMessages(bag, {}, {});
+  const StatusOr<RobotBagCalibration> r =
+      CalibrateRobotMessages(bag, RobotBagOptions(), LaserTimingOptions());
   const double seconds = clock.Seconds();
   if (!r.ok()) return {{"error", r.message()}};
   const double matching = r->log.scans.matching_seconds;

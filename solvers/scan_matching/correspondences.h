@@ -7,8 +7,9 @@
 #include <vector>
 
 // Point-to-segment correspondences for PL-ICP: each current point (already expressed in the
-// reference frame) is paired with its nearest reference point and the nearer of that point's two
-// beam neighbours, the segment whose line the point should lie on.
+// reference frame) is paired with its nearest reference point and, on the side of the nearer of
+// its two beam neighbours, the first point at least min_segment_length_m away: the segment whose
+// line the point should lie on.
 namespace calib {
 
 struct Correspondence {
@@ -20,6 +21,7 @@ struct Correspondence {
 struct CorrespondenceOptions {
   double max_distance_m = 0.5;        // Farther nearest points are no correspondence.
   double max_segment_length_m = 0.5;  // Longer segments span a depth jump.
+  double min_segment_length_m = 0.1;  // Shorter ones go on along the beams (dense scans).
 };
 
 // Finds the nearest reference point by walking the reference's beams outward from the point's

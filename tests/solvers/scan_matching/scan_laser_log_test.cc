@@ -10,6 +10,8 @@
 namespace calib {
 namespace {
 
+const LaserTimingOptions kTiming;
+
 ScanSimOptions Robot(int scans, uint64_t seed) {
   ScanSimOptions o;
   o.laser = DefaultScanLaserOptions();
@@ -43,13 +45,14 @@ TEST(ScanLaserLog, ScansToCalibrationRecoverTheTruth) {
       options.nominal = OdometryParams{0.102, 0.098, 0.52};  // A few % off.
       options.nominal_base_T_sensor = Pose2d(0.18, 0.06, 0.12);
     }
-    const StatusOr<ScanLog> log = LaserLogFromScans(sim->scans, sim->encoders, {"sim"}, options);
+    const StatusOr<ScanLog> log =
+        LaserLogFromScans(sim->scans, sim->encoders, {"sim", "", ""}, options);
     ASSERT_TRUE(log.ok()) << log.message();
     EXPECT_EQ(log->failed_matches, 0);
     EXPECT_EQ(log->segments, 1);
     std::printf("guessed %d: %zu intervals, %d keyframes, matching %.3f s\n", guessed,
                 log->log.intervals.size(), log->keyframes, log->matching_seconds);
-    const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(log->log.streams);
+    const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(log->log.streams, kTiming);
     ASSERT_TRUE(r.ok()) << r.message();
     EXPECT_LE(WorstZ(r->calibration, sim->truth), 3.0);
   }
@@ -69,7 +72,7 @@ TEST(ScanLaserLog, RobotMessagesToCalibration) {
   EXPECT_FALSE(log->wheels_from_odometry);
   ASSERT_TRUE(log->nominal_mounting.has_value());
   EXPECT_LT((log->nominal_mounting->base_T_sensor - sim->truth.base_T_sensor).norm(), 1e-9);
-  const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(log->scans.log.streams);
+  const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(log->scans.log.streams, kTiming);
   ASSERT_TRUE(r.ok()) << r.message();
   EXPECT_LE(WorstZ(r->calibration, sim->truth), 3.0);
 
@@ -95,7 +98,8 @@ TEST(ScanLaserLog, SweepingScansAreDeskewedThroughAFirstCalibration) {
   ASSERT_TRUE(sim.ok()) << sim.message();
   RobotMessages bag = ScanSimulationMessages(*sim);
   bag.source = "sweep.bag";
-  const StatusOr<RobotBagCalibration> r = CalibrateRobotMessages(bag, {}, {});
+  const StatusOr<RobotBagCalibration> r =
+      CalibrateRobotMessages(bag, RobotBagOptions(), kTiming);
   ASSERT_TRUE(r.ok()) << r.message();
   EXPECT_EQ(r->log.matching_passes, 2);
   EXPECT_LE(WorstZ(r->result.calibration, sim->truth), 3.0);
