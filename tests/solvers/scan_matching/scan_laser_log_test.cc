@@ -98,8 +98,7 @@ TEST(ScanLaserLog, SweepingScansAreDeskewedThroughAFirstCalibration) {
   ASSERT_TRUE(sim.ok()) << sim.message();
   RobotMessages bag = ScanSimulationMessages(*sim);
   bag.source = "sweep.bag";
-  const StatusOr<RobotBagCalibration> r =
-      CalibrateRobotMessages(bag, RobotBagOptions(), kTiming);
+  const StatusOr<RobotBagCalibration> r = CalibrateRobotMessages(bag, RobotBagOptions(), kTiming);
   ASSERT_TRUE(r.ok()) << r.message();
   EXPECT_EQ(r->log.matching_passes, 2);
   EXPECT_LE(WorstZ(r->result.calibration, sim->truth), 3.0);
