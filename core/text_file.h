@@ -1,9 +1,9 @@
 #ifndef CALIB_CORE_TEXT_FILE_H_
 #define CALIB_CORE_TEXT_FILE_H_
 
-#include <string>
-
 #include <calib/core/status.h>
+
+#include <string>
 
 namespace calib {
 

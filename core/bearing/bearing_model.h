@@ -3,9 +3,9 @@
 
 #include <calib/core/bearing/bearing_log.h>
 #include <calib/core/bearing/bearing_params.h>
-#include <calib/core/timing/encoder_integration.h>
 #include <calib/core/diff_drive.h>
 #include <calib/core/se2.h>
+#include <calib/core/timing/encoder_integration.h>
 
 #include <Eigen/Core>
 #include <algorithm>

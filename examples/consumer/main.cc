@@ -1,11 +1,11 @@
 // Calibrates a laser log in a few lines and, given OUT.json, writes the same report as
 // `calib calibrate` through the report library: calib_consumer LOG [OUT.json]
-#include <cstdio>
-
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/solvers/laser/calibrate_laser.h>
 #include <calib/tools/report/json_output.h>
 #include <calib/tools/report/laser_report.h>
+
+#include <cstdio>
 
 int main(int argc, char** argv) {
   if (argc != 2 && argc != 3) {

@@ -1,18 +1,18 @@
 #ifndef CALIB_PROBLEMS_LASER_LASER_RESIDUAL_H_
 #define CALIB_PROBLEMS_LASER_LASER_RESIDUAL_H_
 
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/se2.h>
 #include <ceres/autodiff_cost_function.h>
 
 #include <Eigen/Core>
-
-#include <calib/core/laser/laser_log.h>
-#include <calib/core/se2.h>
 
 namespace calib {
 
 // The mismatch ŝ ⊖ ŝ_pred between a measured and a predicted sensor displacement, expressed in
 // the sensor frame at the interval start, where the scan matcher reports ŝ and its noise lives:
-//   e = R(ŝ_pred,θ)·(ŝ_pred⁻¹ ∘ ŝ)_xy , wrap(ŝ_θ − ŝ_pred,θ)  =  (ŝ_xy − ŝ_pred,xy, wrap(ŝ_θ − ŝ_pred,θ)).
+//   e = R(ŝ_pred,θ)·(ŝ_pred⁻¹ ∘ ŝ)_xy , wrap(ŝ_θ − ŝ_pred,θ)  =  (ŝ_xy − ŝ_pred,xy, wrap(ŝ_θ −
+//   ŝ_pred,θ)).
 // (Whitening ŝ_pred⁻¹ ∘ ŝ itself would apply an anisotropic noise model in a frame rotated by
 // ŝ_pred,θ.)
 template <typename T>

@@ -37,12 +37,9 @@ Status ApplyTimingModel(const BearingLog& log, const BearingCalibrationOptions& 
 // fit, `inlier` its flags); when the log shows the clock and fixes its period, the calibration
 // re-run on the clock's times (τ always modelled there) replaces `stamps` unless its bearing noise
 // is significantly worse. Records the estimate and the re-fit in the result's timing either way.
-StatusOr<BearingCalibrationResult> TrySensorClock(const BearingLog& log,
-                                                  const BearingCalibrationOptions& options,
-                                                  const Progress& progress,
-                                                  const BearingProblem& problem,
-                                                  const BearingMask& inlier,
-                                                  BearingCalibrationResult stamps);
+StatusOr<BearingCalibrationResult> TrySensorClock(
+    const BearingLog& log, const BearingCalibrationOptions& options, const Progress& progress,
+    const BearingProblem& problem, const BearingMask& inlier, BearingCalibrationResult stamps);
 
 // A warning for each stream whose stamp diagnostics (log.stream_timing, from the reader) show that
 // its stamps cannot be the sample times.

@@ -1,11 +1,10 @@
 #include <calib/solvers/stats/change_point.h>
+#include <calib/solvers/stats/score_test.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numeric>
-
-#include <calib/solvers/stats/score_test.h>
 
 namespace calib {
 namespace {

@@ -1,6 +1,6 @@
+#include <calib/core/text_format.h>
 #include <calib/tools/report/json_output.h>
 #include <calib/tools/report/svg_plot.h>
-#include <calib/core/text_format.h>
 
 #include <algorithm>
 #include <cmath>

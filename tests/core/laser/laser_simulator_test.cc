@@ -1,15 +1,13 @@
+#include <calib/core/diff_drive.h>
+#include <calib/core/laser/laser_log.h>
 #include <calib/core/laser/laser_simulator.h>
-
+#include <calib/core/se2.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <vector>
-
-#include <calib/core/diff_drive.h>
-#include <calib/core/laser/laser_log.h>
-#include <calib/core/se2.h>
 
 namespace calib {
 namespace {

@@ -1,12 +1,10 @@
+#include <calib/core/whitening.h>
 #include <calib/problems/laser/laser_residual.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 #include <random>
-
-#include <calib/core/whitening.h>
 
 namespace calib {
 namespace {

@@ -1,17 +1,15 @@
 // The bearing bundle adjustment (solvers/bearing_bundle_adjustment.h), its residuals and the
 // Cramér–Rao bound, on simulated logs with known truth.
+#include <calib/core/bearing/bearing_simulator.h>
+#include <calib/problems/bearing/bearing_observation_residual.h>
+#include <calib/problems/bearing/bearing_odometry_residual.h>
 #include <calib/solvers/bearing/bearing_bundle_adjustment.h>
-
+#include <calib/solvers/bearing/bearing_crlb.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <memory>
 #include <vector>
-
-#include <calib/core/bearing/bearing_simulator.h>
-#include <calib/problems/bearing/bearing_observation_residual.h>
-#include <calib/problems/bearing/bearing_odometry_residual.h>
-#include <calib/solvers/bearing/bearing_crlb.h>
 
 namespace calib {
 namespace {

@@ -1,10 +1,8 @@
+#include <calib/core/se2.h>
 #include <calib/solvers/laser/censi_closed_form.h>
-
 #include <gtest/gtest.h>
 
 #include <random>
-
-#include <calib/core/se2.h>
 
 namespace calib {
 namespace {

@@ -1,14 +1,13 @@
 // The published recordings of Censi et al. (../shared/data/censi2013): our calibration against
 // the authors' published results, and the three disjoint subsets of each set against each other.
+#include <calib/core/laser/laser_log_io.h>
+#include <calib/solvers/laser/calibrate_laser.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-
-#include <calib/core/laser/laser_log_io.h>
-#include <calib/solvers/laser/calibrate_laser.h>
 
 namespace calib {
 namespace {

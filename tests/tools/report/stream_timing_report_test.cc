@@ -40,9 +40,9 @@ TEST(StreamTimingReportTest, JsonHoldsEveryStreamAndField) {
   EXPECT_EQ(json[0]["stamps_are_sample_times"], true);
   EXPECT_EQ(json[1]["jitter_s"], 0.017);
   EXPECT_EQ(json[1]["stamps_are_sample_times"], false);
-  for (const char* key : {"repeated_values", "gaps", "longest_gap_s", "multiple_fraction",
-                          "free_running_signature", "interval_correlation", "pickup_scatter_s",
-                          "step_multiple_fraction", "notes"}) {
+  for (const char* key :
+       {"repeated_values", "gaps", "longest_gap_s", "multiple_fraction", "free_running_signature",
+        "interval_correlation", "pickup_scatter_s", "step_multiple_fraction", "notes"}) {
     EXPECT_TRUE(json[1].contains(key)) << key;
   }
   EXPECT_EQ(json[1]["notes"].back(), streams[1].notes.back());
@@ -57,8 +57,7 @@ TEST(StreamTimingReportTest, CalibrateJsonAndSummaryCarryTheTimingOnlyWhenGiven)
   EXPECT_EQ(json["timing"]["streams"].size(), 2u);
   EXPECT_EQ(json["timing"]["streams"][1]["stream"], "sensor_poses");
   const std::string text = LaserResultSummary(laser, "in", "cauchy", streams);
-  EXPECT_NE(text.find("timing of dir/odometry.csv: 200 samples, period 100 ms"),
-            std::string::npos)
+  EXPECT_NE(text.find("timing of dir/odometry.csv: 200 samples, period 100 ms"), std::string::npos)
       << text;
   EXPECT_NE(text.find("stamps are NOT sample times"), std::string::npos) << text;
   EXPECT_NE(text.find("pick-up times, not sample times"), std::string::npos) << text;
