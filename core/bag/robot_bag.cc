@@ -40,6 +40,8 @@ bool LooksLikeRobotBag(const std::string& path) {
   if (BagDirectory(path)) return true;
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return false;
+  const std::string extension = fs::path(path).extension().string();
+  if (extension == ".mcap" || extension == ".bag") return true;  // Read as one, or said not to be.
   const std::string bytes = FirstBytes(path, 16);
   return StartsWith(bytes, kMcapMagic) || StartsWith(bytes, kRos1Magic);
 }
@@ -51,7 +53,9 @@ StatusOr<RobotMessages> ReadRobotBag(const std::string& path, const BagReadOptio
   const std::string bytes = FirstBytes(path, 16);
   if (StartsWith(bytes, kRos1Magic)) return ReadRos1Bag(path, options);
   if (StartsWith(bytes, kMcapMagic)) return ReadMcapBag(path, options);
-  return Status::InvalidInput(path + ": not a bag (neither an MCAP file nor a ROS 1 bag)");
+  return Status::InvalidInput(path + ": not a bag: " +
+                              (bytes.empty() ? std::string("the file is empty")
+                                             : "it starts with neither MCAP's nor ROS 1's magic"));
 }
 
 }  // namespace calib

@@ -10,8 +10,8 @@
 // or a bag directory holding one and metadata.yaml) or a ROS 1 bag (v2.0).
 namespace calib {
 
-// Whether `path` is a bag: its first bytes are MCAP's or ROS 1's magic, or it is a directory
-// holding metadata.yaml or an .mcap file. Reads a few bytes only.
+// Whether `path` is a bag: it is named .mcap or .bag, its first bytes are MCAP's or ROS 1's
+// magic, or it is a directory holding metadata.yaml or an .mcap file. Reads a few bytes only.
 bool LooksLikeRobotBag(const std::string& path);
 
 StatusOr<RobotMessages> ReadRobotBag(const std::string& path, const BagReadOptions& options = {});

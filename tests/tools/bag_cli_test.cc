@@ -109,6 +109,8 @@ TEST_F(BagCliTest, BadBagsAndTopicsAreNamed) {
   ExpectFailure(bag, "--left_wheel_joint wheel_l --right_wheel_joint wheel_r",
                 {"'wheel_l'", "left_wheel_joint"});
   ExpectFailure(bag, "--odom_topic /odom", {"--nominal_wheel_radius"});
+  std::ofstream(dir_ / "empty.mcap").flush();
+  ExpectFailure(dir_ / "empty.mcap", "", {"empty.mcap: not a bag: the file is empty"});
   for (const fs::path& source : {bag, kBags / "sim_robot_zstd.mcap"}) {
     const std::string bytes = ReadFile(source);
     const fs::path cut = dir_ / ("cut" + source.extension().string());
