@@ -1,6 +1,8 @@
 // `calib diagnose`: reads one log, searches for the physics the base model leaves out, writes the
 // contract's OUT.json, the plots and the summary.
+#include <calib/core/bag/robot_bag.h>
 #include <calib/core/laser/laser_log_io.h>
+#include <calib/core/scan/scan_directory.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
@@ -86,6 +88,10 @@ StatusOr<LaserDiagnosisOptions> LaserOptions(const DiagnoseOptions& flags) {
 int DiagnoseLaserLog(const DiagnoseOptions& flags) {
   const StatusOr<LaserFormat> format = ParseLaserFormat(flags.format);
   if (!format.ok()) return Fail(format.message());
+  if (LooksLikeRobotBag(flags.input) || IsScanDirectory(flags.input)) {
+    return Fail(flags.input +
+                ": diagnose does not read bags or scan directories yet; `calib calibrate` does");
+  }
   StatusOr<LaserDiagnosisOptions> options = LaserOptions(flags);
   if (!options.ok()) return Fail(options.message());
   const Stopwatch clock;
