@@ -104,6 +104,36 @@ TEST(ScanLaserLog, SweepingScansAreDeskewedThroughAFirstCalibration) {
   EXPECT_LE(WorstZ(r->result.calibration, sim->truth), 3.0);
 }
 
+// A lidar mounted upside down: its raw scans turn clockwise, and tf says so (the sensor's z axis
+// down). The scans are mirrored back and the calibration is right, with a warning.
+TEST(ScanLaserLog, AnUpsideDownLidarIsMirroredThroughTf) {
+  const StatusOr<ScanSimulation> sim = SimulateScans(Robot(400, 6));
+  ASSERT_TRUE(sim.ok()) << sim.message();
+  RobotMessages bag = ScanSimulationMessages(*sim);
+  bag.source = "upside_down.bag";
+  for (LaserScan& scan : bag.scans.at("/scan")) scan = MirroredScan(scan);
+  ASSERT_EQ(bag.tf_static.size(), 1u);
+  TransformStamped& mount = bag.tf_static.front();
+  mount.rotation =
+      mount.rotation * Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
+  const StatusOr<RobotBagLog> log = LaserLogFromRobotMessages(bag);
+  ASSERT_TRUE(log.ok()) << log.message();
+  ASSERT_TRUE(log->nominal_mounting.has_value());
+  EXPECT_TRUE(log->nominal_mounting->upside_down);
+  ASSERT_FALSE(log->warnings.empty());
+  EXPECT_NE(log->warnings.front().find("upside down"), std::string::npos);
+  const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(log->scans.log.streams, kTiming);
+  ASSERT_TRUE(r.ok()) << r.message();
+  EXPECT_LE(WorstZ(r->calibration, sim->truth), 3.0);
+  // Without tf's word the mirrored scans give a wrong mounting: the sign matters.
+  bag.tf_static.clear();
+  const StatusOr<RobotBagLog> unmirrored = LaserLogFromRobotMessages(bag);
+  ASSERT_TRUE(unmirrored.ok()) << unmirrored.message();
+  const StatusOr<LaserTimingResult> wrong =
+      CalibrateLaserStreams(unmirrored->scans.log.streams, kTiming);
+  EXPECT_TRUE(!wrong.ok() || WorstZ(wrong->calibration, sim->truth) > 10.0);
+}
+
 // A scan seen in a mirror: every return at the mirrored angle, same range.
 TEST(ScanLaserLog, MirroredScanFlipsTheAngles) {
   LaserScan scan;
