@@ -143,6 +143,7 @@ nlohmann::ordered_json RunScansBench(const BenchConfig& config) {
   std::printf("Match then calibrate with the timing, %d seeds of 600 scans of 360 beams:\n", seeds);
   out["coverage"].push_back(CoverageRow(0.0, seeds, 600));
   out["coverage"].push_back(CoverageRow(0.1, seeds, 600));
+  out["scan_points"] = RunScanPointComparison(config);
   std::printf("End to end in process:\n");
   out["end_to_end"] = EndToEnd(config.quick ? 1200 : 18000, 1081);
   return out;

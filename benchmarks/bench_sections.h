@@ -42,6 +42,8 @@ int RunSpeedChild(const std::string& path, int64_t intervals);
 // calibration's coverage over seeds, and a long recording (18 000 scans; 1200 with quick) end to
 // end in process.
 nlohmann::ordered_json RunScansBench(const BenchConfig& config);
+// Part of it: the two-stage route against the refinement on the scan points.
+nlohmann::ordered_json RunScanPointComparison(const BenchConfig& config);
 
 // Google Benchmark micro-benchmarks: one LaserResidual evaluation with Jacobians, and
 // CensiClosedForm on 1000 intervals. Prints Google Benchmark's console table; returns the runs.

@@ -1,4 +1,5 @@
 #include <calib/core/bag/wheel_angles.h>
+#include <calib/solvers/scan_calibration/robot_scan_points.h>
 #include <calib/solvers/scan_matching/robot_bag_log.h>
 
 #include <algorithm>
@@ -98,6 +99,7 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
     scan_options.nominal_base_T_sensor = mounting->base_T_sensor;
     if (mounting->upside_down) {
       for (LaserScan& scan : scans) scan = MirroredScan(scan);
+      out.mirrored = true;
       out.warnings.push_back("tf mounts '" + out.sensor_frame +
                              "' upside down: its scans were "
                              "mirrored so that they turn counter-clockwise like the base");
@@ -151,12 +153,23 @@ StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& bag,
     CALIB_ASSIGN_OR_RETURN(out.log, LaserLogFromRobotMessages(bag, options));
   }
   CALIB_ASSIGN_OR_RETURN(out.result, CalibrateLaserStreams(out.log.scans.log.streams, timing));
-  if (!sweeps) return out;
-  RobotBagOptions second = options;
-  second.calibrated = out.result.calibration.estimate;
-  CALIB_ASSIGN_OR_RETURN(out.log, LaserLogFromRobotMessages(bag, second));
-  CALIB_ASSIGN_OR_RETURN(out.result, CalibrateLaserStreams(out.log.scans.log.streams, timing));
-  out.log.matching_passes = 2;
+  if (sweeps) {
+    RobotBagOptions second = options;
+    second.calibrated = out.result.calibration.estimate;
+    CALIB_ASSIGN_OR_RETURN(out.log, LaserLogFromRobotMessages(bag, second));
+    CALIB_ASSIGN_OR_RETURN(out.result, CalibrateLaserStreams(out.log.scans.log.streams, timing));
+    out.log.matching_passes = 2;
+  }
+  if (options.scan_points) {
+    StatusOr<ScanPointCalibration> refined =
+        RefineRobotOnScanPoints(bag, out, *options.scan_points);
+    if (refined.ok()) {
+      out.scan_points = std::move(refined).value();
+    } else {
+      out.scan_point_warnings.push_back("the refinement on the scan points failed (" +
+                                        refined.message() + "): the two-stage result stands");
+    }
+  }
   return out;
 }
 

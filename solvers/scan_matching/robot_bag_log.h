@@ -6,6 +6,7 @@
 #include <calib/core/bag/tf_tree.h>
 #include <calib/core/laser/laser_params.h>
 #include <calib/core/status.h>
+#include <calib/solvers/scan_calibration/scan_point_calibration.h>
 #include <calib/solvers/scan_matching/scan_laser_log.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 
@@ -29,6 +30,8 @@ struct RobotBagOptions {
   // A calibration of this robot (a first pass): the matcher's guesses and the de-skewing of each
   // sweep then go through it instead of the nominal values.
   std::optional<LaserCalibration> calibrated;
+  // When set, the calibration is refined against the scan points after the two-stage route.
+  std::optional<ScanPointOptions> scan_points;
 };
 
 struct RobotBagLog {
@@ -38,6 +41,7 @@ struct RobotBagLog {
   std::string wheel_source;  // For the summary: "/joint_states (left_wheel_joint, ...)".
   std::string base_frame, sensor_frame;
   std::optional<PlanarMounting> nominal_mounting;  // From tf, when it connects the two frames.
+  bool mirrored = false;  // The scans were mirrored (an upside-down sensor).
   // 2 when the scans were matched again de-skewed through a first calibration.
   int matching_passes = 1;
   std::vector<std::string> warnings;
@@ -48,7 +52,11 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
 
 struct RobotBagCalibration {
   RobotBagLog log;           // Of the last pass.
-  LaserTimingResult result;  // The timing-aware calibration of the last pass.
+  LaserTimingResult result;  // The timing-aware calibration of the last pass (two-stage).
+  // The refinement against the scan points, when asked for and possible (else a warning in
+  // scan_point_warnings says why).
+  std::optional<ScanPointCalibration> scan_points;
+  std::vector<std::string> scan_point_warnings;
 };
 
 // The bag's laser calibration, with its timing. Where the scans sweep (beams at their own times),

@@ -149,14 +149,17 @@ StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
   CALIB_RETURN_IF_ERROR(CheckInputs(scans, encoders, scans_name, wheels_name));
   // A repeated sample is not matched again: it gets its original's pose, which the streams then
   // count as a held repeat (its stamp is a pick-up time).
+  ScanLog out;
   std::vector<const LaserScan*> distinct;
   std::vector<int> distinct_of(scans.size());
   for (size_t i = 0; i < scans.size(); ++i) {
-    if (distinct.empty() || !SameSample(scans[i], *distinct.back())) distinct.push_back(&scans[i]);
+    if (distinct.empty() || !SameSample(scans[i], *distinct.back())) {
+      distinct.push_back(&scans[i]);
+      out.distinct_scans.push_back(static_cast<int>(i));
+    }
     distinct_of[i] = static_cast<int>(distinct.size()) - 1;
   }
   const auto start = std::chrono::steady_clock::now();
-  ScanLog out;
   CALIB_ASSIGN_OR_RETURN(out.matching, MatchScans(distinct, encoders, options));
   out.matching_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

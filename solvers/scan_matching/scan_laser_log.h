@@ -33,6 +33,7 @@ struct ScanLogOptions {
 struct ScanLog {
   LaserLog log;  // Intervals, the streams (sensor poses with segments) and their timing.
   ScanOdometryResult matching;
+  std::vector<int> distinct_scans;  // Per matched scan: its index in the input (repeats skipped).
   int failed_matches = 0, segments = 0, keyframes = 0;
   double matching_seconds = 0.0;
   std::vector<std::string> warnings;

@@ -73,6 +73,32 @@ TEST_F(BagCliTest, BagsOfTheReferenceWritersCalibrateWithinThreeSigma) {
   }
 }
 
+// --scan_points: the estimate refined against the scan points is the result, within 3σ of the
+// truth with smaller σ than the two-stage route's, which the JSON keeps beside it.
+TEST_F(BagCliTest, RefinedOnTheScanPointsWithinThreeSigma) {
+  const nlohmann::json truth =
+      nlohmann::json::parse(ReadFile(kBags / "sim_robot_truth.json"))["estimate"];
+  for (const fs::path& bag : {kBags / "sim_robot_zstd.mcap", kBags / "sim_robot_lz4.bag"}) {
+    SCOPED_TRACE(bag.string());
+    const CliRun run = Calibrate(bag, "--scan_points");
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+    const nlohmann::json& refined = json["scan_points"];
+    ASSERT_TRUE(refined["refined"].get<bool>()) << refined.dump();
+    EXPECT_TRUE(refined["converged"].get<bool>());
+    EXPECT_GT(refined["pairs"].get<int>(), 300);
+    for (const auto& [name, value] : truth.items()) {
+      EXPECT_EQ(json["estimate"][name], refined["estimate"][name]) << name;
+      EXPECT_LT(std::abs(json["estimate"][name].get<double>() - value.get<double>()),
+                3.0 * json["stddev"][name].get<double>())
+          << name;
+      EXPECT_LT(refined["stddev"][name].get<double>(),
+                refined["two_stage_stddev"][name].get<double>())
+          << name;
+    }
+  }
+}
+
 // Logs from anything that is not a bag: a directory of scans.csv and odometry.csv, as `calib
 // simulate --beams` writes it (beams at their own times over a 0.1 s sweep).
 TEST_F(BagCliTest, AScansCsvDirectoryCalibratesWithinThreeSigma) {

@@ -32,14 +32,23 @@ LaserTimingOptions TimingOptions(const CalibrateOptions& flags,
 // from, if any.
 int ReportLaserStreamResult(const CalibrateOptions& flags, const LaserLog& log,
                             const LaserTimingResult& result, const Stopwatch& clock,
-                            const RobotBagLog* recording = nullptr) {
-  const LaserCalibrationResult& calibration = result.calibration;
+                            const RobotBagCalibration* bag = nullptr) {
+  const RobotBagLog* recording = bag ? &bag->log : nullptr;
+  const std::optional<ScanPointCalibration>* scan_points = bag ? &bag->scan_points : nullptr;
+  // Refined on the scan points: their estimate is the result; the two-stage one stays beside it.
+  LaserCalibrationResult calibration = result.calibration;
+  if (scan_points && scan_points->has_value()) {
+    calibration.estimate = (*scan_points)->estimate;
+    calibration.covariance = (*scan_points)->covariance;
+    calibration.stddev = (*scan_points)->stddev;
+  }
   nlohmann::ordered_json json =
       LaserResultJson(calibration, flags.input, flags.loss, log.stream_timing);
   json["timing"]["treatment"] = "latent_times";
   json["timing"]["latent_times"] = LatentTimingJson(result);
   const NominalWheels nominal{flags.nominal_wheel_radius, flags.nominal_wheelbase};
   if (recording) json["recording"] = RobotLogJson(*recording, calibration, nominal);
+  if (bag && flags.scan_points) json["scan_points"] = ScanPointJson(*bag);
   json["seconds"]["total"] = clock.Seconds();
   VerdictInputs verdict;
   verdict.converged = calibration.converged;
@@ -50,12 +59,15 @@ int ReportLaserStreamResult(const CalibrateOptions& flags, const LaserLog& log,
   if (recording) {
     verdict.warnings.insert(verdict.warnings.end(), recording->warnings.begin(),
                             recording->warnings.end());
+    const std::vector<std::string> refinement = ScanPointWarnings(*bag);
+    verdict.warnings.insert(verdict.warnings.end(), refinement.begin(), refinement.end());
   }
   const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
   const std::string summary =
       LaserResultSummary(calibration, flags.input, flags.loss, log.stream_timing) +
       (recording ? RobotLogSummary(*recording, calibration, nominal) : "") +
-      LatentTimingSummary(result) + verdict_line;
+      (bag && flags.scan_points ? ScanPointSummary(*bag) : "") + LatentTimingSummary(result) +
+      verdict_line;
   return WriteReport(flags.output, json, summary, flags.quiet);
 }
 
@@ -89,11 +101,12 @@ int CalibrateRobotBag(const CalibrateOptions& flags, const LaserCalibrationOptio
   bag_options.base_frame = flags.base_frame;
   bag_options.nominal_wheel_radius_m = flags.nominal_wheel_radius;
   bag_options.nominal_wheelbase_m = flags.nominal_wheelbase;
+  if (flags.scan_points) bag_options.scan_points = ScanPointOptions();
   const StatusOr<RobotBagCalibration> calibrated =
       CalibrateRobotMessages(*bag, bag_options, TimingOptions(flags, options));
   if (!calibrated.ok()) return Fail(calibrated.message());
   return ReportLaserStreamResult(flags, calibrated->log.scans.log, calibrated->result, clock,
-                                 &calibrated->log);
+                                 &*calibrated);
 }
 
 int CalibrateLaserLogs(const CalibrateOptions& flags) {

@@ -43,6 +43,10 @@ DEFINE_double(nominal_wheelbase, 0.0, "calibrate (bags): the wheelbase (m) the d
 DEFINE_string(base_frame, "",
               "calibrate (bags): the robot's base frame in tf (default base_link, else "
               "base_footprint)");
+DEFINE_bool(scan_points, false,
+            "calibrate (bags, scan directories): refine the calibration against the scan points "
+            "themselves (point-to-line distances between neighbouring scans, each beam placed "
+            "at its own time through the calibrated odometry) after matching them");
 
 // `calib diagnose`.
 DEFINE_double(family_alpha, kDiagnose.family_alpha,
@@ -164,6 +168,7 @@ CalibrateOptions CalibrateOptionsFromFlags() {
   options.base_frame = FLAGS_base_frame;
   options.nominal_wheel_radius = FLAGS_nominal_wheel_radius;
   options.nominal_wheelbase = FLAGS_nominal_wheelbase;
+  options.scan_points = FLAGS_scan_points;
   return options;
 }
 

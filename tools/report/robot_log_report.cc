@@ -1,3 +1,4 @@
+#include <calib/tools/report/laser_report.h>
 #include <calib/tools/report/robot_log_report.h>
 
 #include <cmath>
@@ -77,6 +78,60 @@ std::string RobotLogSummary(const RobotBagLog& log, const LaserCalibrationResult
                   v(2) / nominal.wheelbase_m);
   }
   for (const std::string& w : log.warnings) out += "  warning: " + w + "\n";
+  return out;
+}
+
+nlohmann::ordered_json ScanPointJson(const RobotBagCalibration& bag) {
+  if (!bag.scan_points) return {{"refined", false}, {"warnings", bag.scan_point_warnings}};
+  const ScanPointCalibration& r = *bag.scan_points;
+  const LaserCalibrationResult& two_stage = bag.result.calibration;
+  const LaserParamVector moved =
+      (r.estimate.ToVector() - two_stage.estimate.ToVector()).cwiseQuotient(two_stage.stddev);
+  return {{"refined", true},
+          {"estimate", LaserParamJson(r.estimate.ToVector())},
+          {"stddev", LaserParamJson(r.stddev)},
+          {"two_stage_estimate", LaserParamJson(two_stage.estimate.ToVector())},
+          {"two_stage_stddev", LaserParamJson(two_stage.stddev)},
+          {"moved_in_two_stage_sigmas", LaserParamJson(moved)},
+          {"pairs", r.pairs},
+          {"lines", r.lines},
+          {"rounds", r.rounds},
+          {"converged", r.converged},
+          {"range_sigma", r.range_sigma_m},
+          {"inlier_fraction", r.inlier_fraction},
+          {"correlation_inflation", r.correlation_inflation},
+          {"seconds", r.seconds},
+          {"warnings", r.warnings}};
+}
+
+std::string ScanPointSummary(const RobotBagCalibration& bag) {
+  if (!bag.scan_points) {
+    std::string out;
+    for (const std::string& w : bag.scan_point_warnings) out += "  warning: " + w + "\n";
+    return out;
+  }
+  const ScanPointCalibration& r = *bag.scan_points;
+  const LaserCalibrationResult& two_stage = bag.result.calibration;
+  const LaserParamVector moved =
+      (r.estimate.ToVector() - two_stage.estimate.ToVector()).cwiseQuotient(two_stage.stddev);
+  std::string out =
+      "  refined on the scan points (the estimate above): " + std::to_string(r.pairs) +
+      " scan pairs, " + std::to_string(r.lines) + " point-to-line distances" +
+      Format(", σ̂ %.1f mm, %.0f %% inliers, %.1f s; moved from the two-stage estimate by",
+             1e3 * r.range_sigma_m, 100.0 * r.inlier_fraction, r.seconds);
+  for (int i = 0; i < kNumLaserParams; ++i) {
+    out += (i ? ", " : " ") + kLaserParamNames[i] + Format(" %+.1fσ", moved(i));
+  }
+  out += "\n";
+  for (const std::string& w : r.warnings) out += "  warning: " + w + "\n";
+  return out;
+}
+
+std::vector<std::string> ScanPointWarnings(const RobotBagCalibration& bag) {
+  std::vector<std::string> out = bag.scan_point_warnings;
+  if (bag.scan_points) {
+    out.insert(out.end(), bag.scan_points->warnings.begin(), bag.scan_points->warnings.end());
+  }
   return out;
 }
 

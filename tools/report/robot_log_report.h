@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 // What calib made of a robot's recording (a bag), in the calibrate JSON ("recording": {...}) and
 // the summary: the topics read, where the wheel angles came from, the scan matching, and the
@@ -22,6 +23,14 @@ nlohmann::ordered_json RobotLogJson(const RobotBagLog& log, const LaserCalibrati
 
 std::string RobotLogSummary(const RobotBagLog& log, const LaserCalibrationResult& result,
                             const NominalWheels& nominal);
+
+// The refinement on the scan points ("scan_points": {...}): its estimate and σ, the two-stage
+// estimate it started from and how far it moved (in the two-stage σ), its pairs and lines; or
+// why it failed.
+nlohmann::ordered_json ScanPointJson(const RobotBagCalibration& bag);
+std::string ScanPointSummary(const RobotBagCalibration& bag);
+// Its warnings and failure, for the verdict.
+std::vector<std::string> ScanPointWarnings(const RobotBagCalibration& bag);
 
 }  // namespace calib
 

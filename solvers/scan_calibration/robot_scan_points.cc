@@ -1,0 +1,57 @@
+#include <calib/solvers/scan_calibration/robot_scan_points.h>
+
+#include <algorithm>
+#include <unordered_map>
+
+namespace calib {
+
+StatusOr<ScanPointCalibration> RefineRobotOnScanPoints(const RobotMessages& bag,
+                                                       const RobotBagCalibration& two_stage,
+                                                       const ScanPointOptions& options) {
+  const RobotBagLog& log = two_stage.log;
+  const LaserTimingResult& timing = two_stage.result;
+  const std::vector<LaserScan>& scans = bag.scans.at(log.topics.scan_topic);
+  // The timing's samples are named by their line, the scan's record + 1.
+  std::unordered_map<int64_t, double> time_of_line;
+  for (size_t k = 0; k < timing.sample_line.size() && k < timing.sample_time_s.size(); ++k) {
+    time_of_line[timing.sample_line[k]] = timing.sample_time_s[k];
+  }
+  std::vector<double> corrections;
+  for (const int i : log.scans.distinct_scans) {
+    const auto it = time_of_line.find(scans[i].record + 1);
+    if (it != time_of_line.end()) corrections.push_back(it->second - scans[i].stamp_s);
+  }
+  double median_correction_s = 0.0;
+  if (!corrections.empty()) {
+    auto middle = corrections.begin() + corrections.size() / 2;
+    std::nth_element(corrections.begin(), middle, corrections.end());
+    median_correction_s = *middle;
+  }
+  std::vector<LaserScan> mirrored;
+  if (log.mirrored) mirrored.reserve(log.scans.distinct_scans.size());
+  ScanPointInput input;
+  input.encoders = &log.scans.log.streams.odometry;
+  input.source = bag.source + " " + log.topics.scan_topic;
+  for (const int i : log.scans.distinct_scans) {
+    const auto it = time_of_line.find(scans[i].record + 1);
+    const double t = it != time_of_line.end() ? it->second : scans[i].stamp_s + median_correction_s;
+    // A scan the timing did not place may fall out of order with its timed neighbours.
+    if (!input.first_beam_time_s.empty() && !(t > input.first_beam_time_s.back())) continue;
+    if (!log.mirrored) {
+      input.scans.push_back(&scans[i]);
+      input.first_beam_time_s.push_back(t);
+      continue;
+    }
+    // Mirrored, the beams keep their times: the first is the last measured.
+    const double sweep_s =
+        scans[i].time_increment_s * (static_cast<double>(scans[i].ranges_m.size()) - 1.0);
+    mirrored.push_back(MirroredScan(scans[i]));
+    mirrored.back().time_increment_s = -scans[i].time_increment_s;
+    mirrored.back().stamp_s += sweep_s;
+    input.scans.push_back(&mirrored.back());
+    input.first_beam_time_s.push_back(t + sweep_s);
+  }
+  return CalibrateOnScanPoints(input, timing.calibration.estimate, options);
+}
+
+}  // namespace calib
