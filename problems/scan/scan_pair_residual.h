@@ -11,14 +11,20 @@
 namespace calib {
 
 // Two scans of one pair, their beams placed through the odometry: every beam's point p_k (in the
-// laser frame at the beam's own time t_k) goes to the base frame at the pair's start time t₀,
-//   x_k = o(t₀ → t_k; r_l, r_r, b) ∘ ℓ ∘ p_k,
-// o the wheel arcs between the encoder knots from t₀ (the last one cut at t_k), ℓ = base_T_laser.
+// laser frame at the beam's own time t_k, shifted by the sensor's time offset δ) goes to the base
+// frame at the timeline's start t₀,
+//   x_k = o(t₀ → t_k + δ; r_l, r_r, b) ∘ ℓ ∘ p_k,
+// o the wheel arcs between the encoder knots from t₀ (the last one cut at t_k + δ, the wheels
+// turning at that step's constant speed), ℓ = base_T_laser. (δ also moves t₀, but that moves
+// every point of the pair rigidly, which no point-to-line distance sees.)
 struct ScanPairGeometry {
-  std::vector<WheelStep> steps;  // The wheels' turns between consecutive knots from t₀ on.
+  std::vector<WheelStep> steps;   // The wheels' turns between consecutive knots from t₀ on.
+  double located_offset_s = 0.0;  // The δ at which each beam's step was located.
   struct Beam {
-    int step = 0;           // The knot interval t_k falls in (steps.size(): the last knot).
-    double fraction = 0.0;  // Of that step's turns done at t_k.
+    int step = 0;  // The knot interval t_k + δ falls in (steps.size(): the last knot).
+    // Of that step's turns done at t_k + located_offset_s, and d(fraction)/dδ.
+    double fraction = 0.0;
+    double fraction_per_s = 0.0;
     Eigen::Vector2d point_m = Eigen::Vector2d::Zero();  // p_k.
   };
   std::vector<Beam> beams;  // Every beam a line uses.
@@ -34,7 +40,7 @@ struct ScanPairGeometry {
 // correspondence search).
 template <typename T>
 void PlaceBeams(const ScanPairGeometry& g, const T* odometry, const T* base_T_laser,
-                std::vector<Eigen::Matrix<T, 2, 1>>* out) {
+                const T& time_offset_s, std::vector<Eigen::Matrix<T, 2, 1>>* out) {
   using std::cos;
   using std::sin;
   std::vector<Pose2<T>> knots(g.steps.size() + 1);
@@ -45,15 +51,17 @@ void PlaceBeams(const ScanPairGeometry& g, const T* odometry, const T* base_T_la
                                                 T(g.steps[s].left_rad), T(g.steps[s].right_rad)));
   }
   const Pose2<T> mounting(base_T_laser[0], base_T_laser[1], base_T_laser[2]);
+  const T shift_s = time_offset_s - T(g.located_offset_s);
   out->resize(g.beams.size());
   for (size_t k = 0; k < g.beams.size(); ++k) {
     const ScanPairGeometry::Beam& beam = g.beams[k];
     Pose2<T> base = knots[beam.step];
-    if (beam.fraction > 0.0) {
+    if (beam.step < static_cast<int>(g.steps.size())) {
       const WheelStep& step = g.steps[beam.step];
-      base = Compose(base, WheelStepDisplacement(odometry[0], odometry[1], odometry[2],
-                                                 T(beam.fraction * step.left_rad),
-                                                 T(beam.fraction * step.right_rad)));
+      const T fraction = T(beam.fraction) + T(beam.fraction_per_s) * shift_s;
+      base =
+          Compose(base, WheelStepDisplacement(odometry[0], odometry[1], odometry[2],
+                                              fraction * step.left_rad, fraction * step.right_rad));
     }
     const Pose2<T> laser = Compose(base, mounting);
     const T c = cos(laser(2));
@@ -67,7 +75,8 @@ void PlaceBeams(const ScanPairGeometry& g, const T* odometry, const T* base_T_la
 // the odometry instead of a matcher): for a line (c; a, b),
 //   r = w · n̂(x_b − x_a) · (x_c − x_a),   n̂(d) = (−d_y, d_x)/‖d‖,
 // w = 1/(σ·√v) whitening the range noise σ of its three points (v from their beam directions),
-// times a robust weight. Parameter blocks: odometry = (r_l, r_r, b), base_T_laser = (x, y, θ).
+// times a robust weight. Parameter blocks: odometry = (r_l, r_r, b), base_T_laser = (x, y, θ),
+// time offset δ (s).
 // The geometry is held by pointer and must outlive the cost function.
 class ScanPairResidual {
  public:
@@ -77,7 +86,7 @@ class ScanPairResidual {
   bool operator()(T const* const* parameters, T* residuals) const {
     using std::sqrt;
     std::vector<Eigen::Matrix<T, 2, 1>> x;
-    PlaceBeams(*geometry_, parameters[0], parameters[1], &x);
+    PlaceBeams(*geometry_, parameters[0], parameters[1], parameters[2][0], &x);
     for (size_t i = 0; i < geometry_->lines.size(); ++i) {
       const ScanPairGeometry::Line& line = geometry_->lines[i];
       const Eigen::Matrix<T, 2, 1> d = x[line.b] - x[line.a];
@@ -87,12 +96,13 @@ class ScanPairResidual {
     return true;
   }
 
-  // Stride 6: both parameter blocks' derivatives in one pass.
+  // Stride 7: every parameter's derivative in one pass.
   static ceres::CostFunction* Create(const ScanPairGeometry* geometry) {
     auto* cost =
-        new ceres::DynamicAutoDiffCostFunction<ScanPairResidual, 6>(new ScanPairResidual(geometry));
+        new ceres::DynamicAutoDiffCostFunction<ScanPairResidual, 7>(new ScanPairResidual(geometry));
     cost->AddParameterBlock(3);
     cost->AddParameterBlock(3);
+    cost->AddParameterBlock(1);
     cost->SetNumResiduals(static_cast<int>(geometry->lines.size()));
     return cost;
   }

@@ -20,13 +20,18 @@ Eigen::Vector2d Rotate(double angle, const Eigen::Vector2d& v) {
   return {c * v.x() - s * v.y(), s * v.x() + c * v.y()};
 }
 
-// The beam of a scan point in the pair's geometry, added on first use.
+// The beam of a scan point in the pair's geometry, added on first use (located at its time
+// shifted by the geometry's offset).
 int BeamOf(const PairTimeline& timeline, const LaserScan& scan, double first_beam_s,
            const ScanPoints& raw, int point, std::vector<int>* beam_of_point, ScanPairGeometry* g) {
   int& beam = (*beam_of_point)[point];
   if (beam >= 0) return beam;
   ScanPairGeometry::Beam b;
-  timeline.Locate(first_beam_s + raw.beams[point] * scan.time_increment_s, &b.step, &b.fraction);
+  timeline.Locate(first_beam_s + raw.beams[point] * scan.time_increment_s + g->located_offset_s,
+                  &b.step, &b.fraction);
+  if (b.step < static_cast<int>(timeline.steps.size())) {
+    b.fraction_per_s = 1.0 / timeline.StepSeconds(b.step);
+  }
   b.point_m = raw.points_m[point];
   beam = static_cast<int>(g->beams.size());
   g->beams.push_back(b);
@@ -91,12 +96,14 @@ void FindBeamCorrespondences(const ScanPoints& ref, const std::vector<Eigen::Vec
 
 }  // namespace
 
-Status FindPairLines(const ScanPointInput& input, const LaserCalibration& c,
+Status FindPairLines(const ScanPointInput& input, const LaserCalibration& c, double time_offset_s,
                      const ScanPointOptions& options, ScanPair* pair) {
   const LaserScan& ref = *input.scans[pair->reference];
   const LaserScan& cur = *input.scans[pair->current];
-  const double t_ref = input.first_beam_time_s[pair->reference];
-  const double t_cur = input.first_beam_time_s[pair->current];
+  // Beam 0's time as given, and shifted by the sensor's time offset.
+  const double first_ref = input.first_beam_time_s[pair->reference];
+  const double first_cur = input.first_beam_time_s[pair->current];
+  const double t_ref = first_ref + time_offset_s, t_cur = first_cur + time_offset_s;
   const std::vector<Pose2d> knots = KnotPoses(pair->timeline, c.odometry);
   // Everything in the laser frame at the reference's stamp (its beam 0): the reference de-skewed
   // there for the search (the residual places its beams exactly), the current scan's points
@@ -123,6 +130,7 @@ Status FindPairLines(const ScanPointInput& input, const LaserCalibration& c,
   ScanPairGeometry& g = pair->geometry;
   g = ScanPairGeometry();
   g.steps = pair->timeline.steps;
+  g.located_offset_s = time_offset_s;
   pair->variance_factor.clear();
   std::vector<int> ref_beam(ref_raw.points_m.size(), -1), cur_beam(cur_raw.points_m.size(), -1);
   const size_t stride = std::max<size_t>(
@@ -139,16 +147,16 @@ Status FindPairLines(const ScanPointInput& input, const LaserCalibration& c,
     const double da = (1.0 - alpha) * n.dot(ref_points.directions[f.reference_a]);
     const double db = alpha * n.dot(ref_points.directions[f.reference_b]);
     ScanPairGeometry::Line line;
-    line.current = BeamOf(pair->timeline, cur, t_cur, cur_raw, f.current, &cur_beam, &g);
-    line.a = BeamOf(pair->timeline, ref, t_ref, ref_raw, f.reference_a, &ref_beam, &g);
-    line.b = BeamOf(pair->timeline, ref, t_ref, ref_raw, f.reference_b, &ref_beam, &g);
+    line.current = BeamOf(pair->timeline, cur, first_cur, cur_raw, f.current, &cur_beam, &g);
+    line.a = BeamOf(pair->timeline, ref, first_ref, ref_raw, f.reference_a, &ref_beam, &g);
+    line.b = BeamOf(pair->timeline, ref, first_ref, ref_raw, f.reference_b, &ref_beam, &g);
     g.lines.push_back(line);
     pair->variance_factor.push_back(std::max(dc * dc + da * da + db * db, 1e-6));
   }
   pair->distance_m.assign(g.lines.size(), 0.0);
   if (g.lines.empty()) return Status::Ok();
   const LaserParamVector v = c.ToVector();
-  const double* parameters[2] = {v.data(), v.data() + 3};
+  const double* parameters[3] = {v.data(), v.data() + 3, &time_offset_s};
   const ScanPairResidual distances(&g);
   distances(parameters, pair->distance_m.data());
   return Status::Ok();

@@ -22,9 +22,10 @@ struct ScanPair {
   std::vector<double> distance_m;
 };
 
-// Finds the current scan's correspondences in the reference (both placed through `c`), at most
-// max_lines_per_pair of them, each with weight 1. Fails only on a malformed scan.
-Status FindPairLines(const ScanPointInput& input, const LaserCalibration& c,
+// Finds the current scan's correspondences in the reference (both placed through `c` with the
+// beams' times shifted by time_offset_s), at most max_lines_per_pair of them, each with weight
+// 1. Fails only on a malformed scan.
+Status FindPairLines(const ScanPointInput& input, const LaserCalibration& c, double time_offset_s,
                      const ScanPointOptions& options, ScanPair* pair);
 
 // Drops the lines beyond gate_sigmas and weights the rest: w = √ρ'(z²)/(σ√v), z = d/(σ√v), ρ

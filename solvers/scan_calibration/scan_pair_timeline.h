@@ -19,6 +19,7 @@ struct PairTimeline {
   // The step that t_s falls in and the fraction of it done (clamped to [t₀, t_end]); the last
   // knot is (steps.size(), 0).
   void Locate(double t_s, int* step, double* fraction) const;
+  double StepSeconds(int step) const { return knot_time_s[step + 1] - knot_time_s[step]; }
 };
 
 // `encoders` sorted by time and non-empty; t₀ < t_end.

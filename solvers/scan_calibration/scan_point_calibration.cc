@@ -94,8 +94,9 @@ std::vector<ScanPair> SelectPairs(const ScanPointInput& in, const LaserCalibrati
     pairs[k].reference = i;
     pairs[k].current = j;
     pairs[k].cluster = static_cast<int>(k) / per_cluster;
-    pairs[k].timeline = MakePairTimeline(*in.encoders, BeamTime(in, i, false),
-                                         std::max(BeamTime(in, i, true), BeamTime(in, j, true)));
+    pairs[k].timeline = MakePairTimeline(
+        *in.encoders, BeamTime(in, i, false) - o.max_time_offset_s,
+        std::max(BeamTime(in, i, true), BeamTime(in, j, true)) + o.max_time_offset_s);
   }
   return pairs;
 }
@@ -114,13 +115,20 @@ double RobustRangeSigma(const std::vector<ScanPair>& pairs) {
   return 1.4826 * *middle;
 }
 
-// Finds and weights every pair's lines at `c`; the lines of the pairs that keep enough.
-StatusOr<int> FindLines(const ScanPointInput& in, const LaserCalibration& c,
+// The six parameters and the sensor's time offset.
+using ScanPointParams = Eigen::Matrix<double, kNumLaserParams + 1, 1>;
+constexpr int kTimeOffset = kNumLaserParams;
+
+// Finds and weights every pair's lines at `p`; the lines of the pairs that keep enough.
+StatusOr<int> FindLines(const ScanPointInput& in, const ScanPointParams& p,
                         const ScanPointOptions& o, std::vector<ScanPair>* pairs,
                         double* range_sigma_m, double* inlier_fraction) {
+  const LaserCalibration c = LaserCalibration::FromVector(p.head<kNumLaserParams>());
   std::vector<Status> status(pairs->size());
   ParallelChunks(pairs->size(), o.num_threads, 8, [&](int, size_t begin, size_t end) {
-    for (size_t k = begin; k < end; ++k) status[k] = FindPairLines(in, c, o, &(*pairs)[k]);
+    for (size_t k = begin; k < end; ++k) {
+      status[k] = FindPairLines(in, c, p(kTimeOffset), o, &(*pairs)[k]);
+    }
   });
   for (const Status& s : status) CALIB_RETURN_IF_ERROR(s);
   *range_sigma_m = RobustRangeSigma(*pairs);
@@ -128,44 +136,47 @@ StatusOr<int> FindLines(const ScanPointInput& in, const LaserCalibration& c,
     return Status::NotObservable(in.source + ": no scan pair has correspondences");
   }
   int found = 0, kept = 0;
-  for (ScanPair& p : *pairs) {
-    found += static_cast<int>(p.geometry.lines.size());
-    const int lines = WeighPairLines(*range_sigma_m, o, &p);
-    if (lines < o.min_lines_per_pair) p.geometry.lines.clear();
-    kept += static_cast<int>(p.geometry.lines.size());
+  for (ScanPair& pair : *pairs) {
+    found += static_cast<int>(pair.geometry.lines.size());
+    const int lines = WeighPairLines(*range_sigma_m, o, &pair);
+    if (lines < o.min_lines_per_pair) pair.geometry.lines.clear();
+    kept += static_cast<int>(pair.geometry.lines.size());
   }
   *inlier_fraction = found > 0 ? static_cast<double>(kept) / found : 0.0;
   return kept;
 }
 
+// H = Σ JᵀJ and each cluster's gradient Σ Jᵀr of the weighted residuals, over the first
+// `estimated` parameters (the time offset last).
 struct Sums {
-  LaserParamMatrix hessian = LaserParamMatrix::Zero();
-  std::vector<LaserParamVector> cluster_gradient;
+  explicit Sums(int estimated) : hessian(Eigen::MatrixXd::Zero(estimated, estimated)) {}
+  Eigen::MatrixXd hessian;
+  std::vector<Eigen::VectorXd> cluster_gradient;
   double cost = 0.0;  // Σ r² of the weighted residuals.
   int residuals = 0;
 };
 
-// H = Σ JᵀJ and each cluster's gradient Σ Jᵀr of the weighted residuals at `v`.
 Sums Linearize(const std::vector<ScanPair>& pairs,
                const std::vector<std::unique_ptr<ceres::CostFunction>>& costs,
-               const LaserParamVector& v) {
-  Sums s;
-  const double* parameters[2] = {v.data(), v.data() + 3};
+               const ScanPointParams& p, int estimated) {
+  Sums s(estimated);
+  const double* parameters[3] = {p.data(), p.data() + 3, p.data() + kTimeOffset};
   for (size_t k = 0; k < pairs.size(); ++k) {
     if (costs[k] == nullptr) continue;
     const int n = static_cast<int>(pairs[k].geometry.lines.size());
-    Eigen::VectorXd r(n);
+    Eigen::VectorXd r(n), j2(n);
     Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> j0(n, 3), j1(n, 3);
-    double* jacobians[2] = {j0.data(), j1.data()};
+    double* jacobians[3] = {j0.data(), j1.data(), j2.data()};
     if (!costs[k]->Evaluate(parameters, r.data(), jacobians)) continue;
-    Eigen::Matrix<double, Eigen::Dynamic, 6> j(n, 6);
-    j << j0, j1;
+    Eigen::MatrixXd j(n, kNumLaserParams + 1);
+    j << j0, j1, j2;
+    const auto used = j.leftCols(estimated);
     const int cluster = pairs[k].cluster;
     if (static_cast<int>(s.cluster_gradient.size()) <= cluster) {
-      s.cluster_gradient.resize(cluster + 1, LaserParamVector::Zero());
+      s.cluster_gradient.resize(cluster + 1, Eigen::VectorXd::Zero(estimated));
     }
-    s.hessian += j.transpose() * j;
-    s.cluster_gradient[cluster] += j.transpose() * r;
+    s.hessian += used.transpose() * used;
+    s.cluster_gradient[cluster] += used.transpose() * r;
     s.cost += r.squaredNorm();
     s.residuals += n;
   }
@@ -174,27 +185,29 @@ Sums Linearize(const std::vector<ScanPair>& pairs,
 
 // The cluster sandwich, held to at least the independent-noise model.
 Status Covariance(const Sums& s, ScanPointCalibration* out) {
-  LaserParamMatrix meat = LaserParamMatrix::Zero();
+  const int d = static_cast<int>(s.hessian.rows());
+  Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(d, d);
   int clusters = 0;
-  for (const LaserParamVector& g : s.cluster_gradient) {
+  for (const Eigen::VectorXd& g : s.cluster_gradient) {
     if (g.isZero(0.0)) continue;
     meat += g * g.transpose();
     ++clusters;
   }
   out->clusters = clusters;
-  CALIB_ASSIGN_OR_RETURN(
-      const auto sandwich,
-      SandwichCovariance<LaserParamMatrix>(s.hessian, meat, clusters, clusters - kNumLaserParams));
-  const LaserParamMatrix model = s.hessian.inverse() * s.cost / (s.residuals - kNumLaserParams);
-  const DominatingCovarianceResult d = DominatingCovariance(model, sandwich.covariance);
-  out->covariance = d.covariance;
-  out->correlation_inflation = d.largest_ratio;
+  CALIB_ASSIGN_OR_RETURN(const auto sandwich, SandwichCovariance<Eigen::MatrixXd>(
+                                                  s.hessian, meat, clusters, clusters - d));
+  const Eigen::MatrixXd model = s.hessian.inverse() * s.cost / (s.residuals - d);
+  const DominatingCovarianceResult dominating = DominatingCovariance(model, sandwich.covariance);
+  out->covariance = dominating.covariance.topLeftCorner<kNumLaserParams, kNumLaserParams>();
+  out->correlation_inflation = dominating.largest_ratio;
   out->stddev = out->covariance.diagonal().cwiseSqrt();
+  out->time_offset_stddev_s =
+      d > kNumLaserParams ? std::sqrt(dominating.covariance(kTimeOffset, kTimeOffset)) : 0.0;
   return Status::Ok();
 }
 
 // One Ceres solve over the pairs' fixed lines and weights.
-Status SolveRound(std::vector<ScanPair>* pairs, const ScanPointOptions& o, LaserParamVector* v,
+Status SolveRound(std::vector<ScanPair>* pairs, const ScanPointOptions& o, ScanPointParams* p,
                   ScanPointCalibration* out) {
   std::vector<std::unique_ptr<ceres::CostFunction>> costs(pairs->size());
   ceres::Problem::Options problem_options;
@@ -202,19 +215,27 @@ Status SolveRound(std::vector<ScanPair>* pairs, const ScanPointOptions& o, Laser
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   PositiveManifold<3> positive;
+  double* blocks[3] = {p->data(), p->data() + 3, p->data() + kTimeOffset};
   for (size_t k = 0; k < pairs->size(); ++k) {
     if ((*pairs)[k].geometry.lines.empty()) continue;
     costs[k].reset(ScanPairResidual::Create(&(*pairs)[k].geometry));
-    problem.AddResidualBlock(costs[k].get(), nullptr, v->data(), v->data() + 3);
+    problem.AddResidualBlock(costs[k].get(), nullptr, blocks[0], blocks[1], blocks[2]);
   }
-  problem.SetManifold(v->data(), &positive);
+  problem.SetManifold(blocks[0], &positive);
+  if (o.estimate_time_offset) {
+    problem.SetParameterLowerBound(blocks[2], 0, -o.max_time_offset_s);
+    problem.SetParameterUpperBound(blocks[2], 0, o.max_time_offset_s);
+  } else {
+    problem.SetParameterBlockConstant(blocks[2]);
+  }
   SolverSettings settings;
   settings.max_iterations = 50;
   settings.num_threads = o.num_threads;
   settings.function_tolerance = 1e-9;
   ceres::Solver::Summary summary;
   CALIB_RETURN_IF_ERROR(Solve(settings, "the scan-point refinement", &problem, &summary));
-  const Sums sums = Linearize(*pairs, costs, *v);
+  const Sums sums =
+      Linearize(*pairs, costs, *p, kNumLaserParams + (o.estimate_time_offset ? 1 : 0));
   out->lines = sums.residuals;
   return Covariance(sums, out);
 }
@@ -234,30 +255,34 @@ StatusOr<ScanPointCalibration> CalibrateOnScanPoints(const ScanPointInput& input
                                  std::to_string(kMinPairs));
   }
   ScanPointCalibration out;
-  LaserParamVector v = initial.ToVector();
+  ScanPointParams p;
+  p << initial.ToVector(), 0.0;
   for (out.rounds = 1; out.rounds <= options.max_rounds; ++out.rounds) {
-    const LaserCalibration current = LaserCalibration::FromVector(v);
-    CALIB_ASSIGN_OR_RETURN(const int lines, FindLines(input, current, options, &pairs,
-                                                      &out.range_sigma_m, &out.inlier_fraction));
+    CALIB_ASSIGN_OR_RETURN(const int lines, FindLines(input, p, options, &pairs, &out.range_sigma_m,
+                                                      &out.inlier_fraction));
     out.pairs = 0;
-    for (const ScanPair& p : pairs) out.pairs += !p.geometry.lines.empty();
+    for (const ScanPair& pair : pairs) out.pairs += !pair.geometry.lines.empty();
     if (out.pairs < kMinPairs || lines < 10 * kNumLaserParams) {
       return Status::NotObservable(input.source + ": only " + std::to_string(out.pairs) +
                                    " scan pairs overlap enough for the scan-point calibration");
     }
-    const LaserParamVector before = v;
-    CALIB_RETURN_IF_ERROR(SolveRound(&pairs, options, &v, &out));
+    const ScanPointParams before = p;
+    CALIB_RETURN_IF_ERROR(SolveRound(&pairs, options, &p, &out));
     // Relative to σ, or to the parameters where σ is at the floats' resolution (clean scans).
-    const double moved = ((v - before).cwiseQuotient(out.stddev)).cwiseAbs().maxCoeff();
+    const LaserParamVector step = (p - before).head<kNumLaserParams>();
+    const double moved = step.cwiseQuotient(out.stddev).cwiseAbs().maxCoeff();
     const double relative =
-        ((v - before).cwiseQuotient(v.cwiseAbs().array().max(0.01).matrix())).cwiseAbs().maxCoeff();
+        step.cwiseQuotient(p.head<kNumLaserParams>().cwiseAbs().array().max(0.01).matrix())
+            .cwiseAbs()
+            .maxCoeff();
     if (out.rounds >= 2 && (moved < options.tolerance_sigmas || relative < 1e-6)) {
       out.converged = true;
       break;
     }
   }
   out.rounds = std::min(out.rounds, options.max_rounds);
-  out.estimate = LaserCalibration::FromVector(v);
+  out.estimate = LaserCalibration::FromVector(p.head<kNumLaserParams>());
+  out.time_offset_s = p(kTimeOffset);
   if (!out.converged) {
     out.warnings.push_back("the scan-point refinement was still moving after " +
                            std::to_string(options.max_rounds) + " rounds of correspondences");

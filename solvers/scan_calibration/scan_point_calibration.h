@@ -47,6 +47,11 @@ struct ScanPointOptions {
   int min_lines_per_pair = 30;     // Fewer: the pair has too little overlap and is left out.
   double loss_scale_sigmas = 3.0;  // Cauchy weights on the whitened distances.
   double gate_sigmas = 8.0;        // Farther correspondences are dropped.
+  // The beams' times shifted by a constant δ estimated with the calibration (what the given
+  // times still miss: a driver's stamp convention, a timing calibration's residual bias).
+  bool estimate_time_offset = true;
+  // The wheels' timeline reaches this far beyond each pair's beams, for δ to move in.
+  double max_time_offset_s = 0.2;
   int max_rounds = 10;
   double tolerance_sigmas = 0.05;  // Stop when no parameter moves more than this in a round.
   // Clusters of consecutive pairs whose errors may be correlated (scans shared between pairs):
@@ -61,6 +66,8 @@ struct ScanPointCalibration {
   // shape, share errors), never smaller than the independent-noise model σ̂²H⁻¹.
   LaserParamMatrix covariance = LaserParamMatrix::Zero();
   LaserParamVector stddev = LaserParamVector::Zero();
+  double time_offset_s = 0.0;  // δ: the true time of a beam is its given time + δ.
+  double time_offset_stddev_s = 0.0;
   // How much larger than the independent-noise model some combination varies (≥ 1).
   double correlation_inflation = 1.0;
   int pairs = 0, lines = 0, rounds = 0, clusters = 0;

@@ -93,6 +93,8 @@ nlohmann::ordered_json ScanPointJson(const RobotBagCalibration& bag) {
           {"two_stage_estimate", LaserParamJson(two_stage.estimate.ToVector())},
           {"two_stage_stddev", LaserParamJson(two_stage.stddev)},
           {"moved_in_two_stage_sigmas", LaserParamJson(moved)},
+          {"time_offset", r.time_offset_s},
+          {"time_offset_stddev", r.time_offset_stddev_s},
           {"pairs", r.pairs},
           {"lines", r.lines},
           {"rounds", r.rounds},
@@ -117,8 +119,11 @@ std::string ScanPointSummary(const RobotBagCalibration& bag) {
   std::string out =
       "  refined on the scan points (the estimate above): " + std::to_string(r.pairs) +
       " scan pairs, " + std::to_string(r.lines) + " point-to-line distances" +
-      Format(", σ̂ %.1f mm, %.0f %% inliers, %.1f s; moved from the two-stage estimate by",
-             1e3 * r.range_sigma_m, 100.0 * r.inlier_fraction, r.seconds);
+      Format(", σ̂ %.1f mm, %.0f %% inliers, %.1f s;", 1e3 * r.range_sigma_m,
+             100.0 * r.inlier_fraction, r.seconds) +
+      Format(" the beams' times %+.2f ± %.2f ms beyond the timing's;", 1e3 * r.time_offset_s,
+             1e3 * r.time_offset_stddev_s) +
+      " moved from the two-stage estimate by";
   for (int i = 0; i < kNumLaserParams; ++i) {
     out += (i ? ", " : " ") + kLaserParamNames[i] + Format(" %+.1fσ", moved(i));
   }
