@@ -62,7 +62,13 @@ double ArcLength(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 StatusOr<WheelAngleStream> WheelAnglesFromJointStates(const std::vector<JointState>& messages,
                                                       const std::string& left_joint,
                                                       const std::string& right_joint,
-                                                      const std::string& where) {
+                                                      const std::string& where,
+                                                      double radians_per_unit) {
+  if (!(radians_per_unit > 0.0) || !std::isfinite(radians_per_unit)) {
+    return Status::InvalidInput(where +
+                                ": the wheel angles' unit must be a positive number of "
+                                "radians");
+  }
   WheelAngleStream out;
   for (const JointState& m : messages) {
     const int left = IndexOf(m.name, left_joint), right = IndexOf(m.name, right_joint);
@@ -80,7 +86,7 @@ StatusOr<WheelAngleStream> WheelAnglesFromJointStates(const std::vector<JointSta
                                   " names but " + std::to_string(m.position.size()) +
                                   " positions: the wheel angles need positions");
     }
-    const double l = m.position[left], r = m.position[right];
+    const double l = m.position[left] * radians_per_unit, r = m.position[right] * radians_per_unit;
     if (!std::isfinite(l) || !std::isfinite(r)) {
       return Status::InvalidInput(record + ": wheel joint position is not finite");
     }

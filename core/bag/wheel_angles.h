@@ -20,12 +20,15 @@ struct WheelAngleStream {
   int half_messages = 0;     // Messages that carry one wheel only: not used.
 };
 
-// From the positions of two joints of a sensor_msgs/JointState topic. A joint reported wrapped
-// into (−π, π] (every position within it, and steps of nearly a full turn) is unwrapped.
+// From the positions of two joints of a sensor_msgs/JointState topic, in radians after
+// multiplying by radians_per_unit (π/180 for degrees, 2π/N for raw counts of N per turn). A joint
+// reported wrapped into (−π, π] (every position within it, and steps of nearly a full turn) is
+// unwrapped.
 StatusOr<WheelAngleStream> WheelAnglesFromJointStates(const std::vector<JointState>& messages,
                                                       const std::string& left_joint,
                                                       const std::string& right_joint,
-                                                      const std::string& where);
+                                                      const std::string& where,
+                                                      double radians_per_unit = 1.0);
 
 // From a nav_msgs/Odometry topic that the robot's driver integrated with its nominal wheel radius
 // and wheelbase: each step between two poses, taken as an arc (chord, heading change, direction

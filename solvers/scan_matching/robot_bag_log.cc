@@ -3,6 +3,7 @@
 #include <calib/solvers/scan_matching/robot_bag_log.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <set>
 
 namespace calib {
@@ -41,7 +42,8 @@ Status WheelAngles(const RobotMessages& bag, const RobotBagOptions& options, Rob
   if (!t.joint_state_topic.empty()) {
     CALIB_ASSIGN_OR_RETURN(
         *wheels, WheelAnglesFromJointStates(bag.joint_states.at(t.joint_state_topic), t.left_joint,
-                                            t.right_joint, bag.source + " " + t.joint_state_topic));
+                                            t.right_joint, bag.source + " " + t.joint_state_topic,
+                                            options.wheel_radians_per_unit));
     out->wheel_source = t.joint_state_topic + " (" + t.left_joint + ", " + t.right_joint + ")";
     if (wheels->unwrapped_turns > 0) {
       out->warnings.push_back("the wheel joints are reported wrapped into (−π, π]: " +
@@ -49,6 +51,12 @@ Status WheelAngles(const RobotMessages& bag, const RobotBagOptions& options, Rob
                               " whole turns were added back");
     }
     return Status::Ok();
+  }
+  if (options.wheel_radians_per_unit != 1.0) {
+    return Status::InvalidInput(bag.source +
+                                ": the wheel angles' unit applies to JointState "
+                                "positions, but the wheels come from the Odometry topic " +
+                                t.odom_topic);
   }
   if (!(options.nominal_wheel_radius_m > 0.0) || !(options.nominal_wheelbase_m > 0.0)) {
     return Status::InvalidInput(
@@ -64,6 +72,25 @@ Status WheelAngles(const RobotMessages& bag, const RobotBagOptions& options, Rob
   out->wheels_from_odometry = true;
   out->wheel_source = t.odom_topic + " (the driver's odometry through the nominal wheels)";
   return Status::Ok();
+}
+
+// Radii far from any robot's say the wheel angles were not in radians.
+std::optional<std::string> WheelUnitWarning(const LaserCalibrationResult& result) {
+  const OdometryParams& o = result.estimate.odometry;
+  const double radius_m = 0.5 * (o.left_radius_m + o.right_radius_m);
+  char text[96];
+  std::snprintf(text, sizeof(text), "the calibrated wheel radius is %.4g mm", 1e3 * radius_m);
+  if (radius_m < 0.003) {
+    return std::string(text) +
+           ": are the wheel angles in degrees or encoder counts? Give their unit "
+           "(--wheel_angle_unit deg or ticks:N for N counts per turn)";
+  }
+  if (radius_m > 3.0) {
+    return std::string(text) +
+           ": are the wheel angles in turns, or not the wheels' at all? Give their unit "
+           "(--wheel_angle_unit)";
+  }
+  return std::nullopt;
 }
 
 }  // namespace
@@ -159,6 +186,9 @@ StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& bag,
     CALIB_ASSIGN_OR_RETURN(out.log, LaserLogFromRobotMessages(bag, second));
     CALIB_ASSIGN_OR_RETURN(out.result, CalibrateLaserStreams(out.log.scans.log.streams, timing));
     out.log.matching_passes = 2;
+  }
+  if (const std::optional<std::string> units = WheelUnitWarning(out.result.calibration)) {
+    out.log.warnings.push_back(*units);
   }
   if (options.scan_points) {
     StatusOr<ScanPointCalibration> refined =

@@ -25,6 +25,9 @@ struct RobotBagOptions {
   // (the calibration then returns corrections to them); otherwise they only seed the matcher.
   double nominal_wheel_radius_m = 0.0;
   double nominal_wheelbase_m = 0.0;
+  // The JointState positions' unit in radians: π/180 for degrees, 2π/N for raw encoder counts of
+  // N per wheel turn.
+  double wheel_radians_per_unit = 1.0;
   std::string base_frame;  // Empty: base_link, else base_footprint, else Odometry's child frame.
   ScanOdometryOptions matching;
   // A calibration of this robot (a first pass): the matcher's guesses and the de-skewing of each

@@ -135,6 +135,8 @@ TEST_F(BagCliTest, BadBagsAndTopicsAreNamed) {
   ExpectFailure(bag, "--left_wheel_joint wheel_l --right_wheel_joint wheel_r",
                 {"'wheel_l'", "left_wheel_joint"});
   ExpectFailure(bag, "--odom_topic /odom", {"--nominal_wheel_radius"});
+  ExpectFailure(bag, "--wheel_angle_unit furlongs", {"--wheel_angle_unit furlongs", "ticks:N"});
+  ExpectFailure(bag, "--wheel_angle_unit ticks:0", {"--wheel_angle_unit ticks:0"});
   std::ofstream(dir_ / "empty.mcap").flush();
   ExpectFailure(dir_ / "empty.mcap", "", {"empty.mcap: not a bag: the file is empty"});
   for (const fs::path& source : {bag, kBags / "sim_robot_zstd.mcap"}) {

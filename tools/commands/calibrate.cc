@@ -102,6 +102,9 @@ int CalibrateRobotBag(const CalibrateOptions& flags, const LaserCalibrationOptio
   bag_options.nominal_wheel_radius_m = flags.nominal_wheel_radius;
   bag_options.nominal_wheelbase_m = flags.nominal_wheelbase;
   if (flags.scan_points) bag_options.scan_points = ScanPointOptions();
+  const StatusOr<double> unit = ParseWheelAngleUnit(flags.wheel_angle_unit);
+  if (!unit.ok()) return Fail(unit.message());
+  bag_options.wheel_radians_per_unit = *unit;
   const StatusOr<RobotBagCalibration> calibrated =
       CalibrateRobotMessages(*bag, bag_options, TimingOptions(flags, options));
   if (!calibrated.ok()) return Fail(calibrated.message());

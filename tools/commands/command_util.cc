@@ -5,6 +5,8 @@
 #include <glog/logging.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <sstream>
 
@@ -40,6 +42,20 @@ Status CheckTimingFlag(const std::string& timing) {
                                 ": expected auto, stamps, free_running or off");
   }
   return Status::Ok();
+}
+
+StatusOr<double> ParseWheelAngleUnit(const std::string& unit) {
+  if (unit == "rad") return 1.0;
+  if (unit == "deg") return M_PI / 180.0;
+  if (unit.rfind("ticks:", 0) == 0) {
+    char* end = nullptr;
+    const double counts = std::strtod(unit.c_str() + 6, &end);
+    if (end != unit.c_str() + 6 && *end == '\0' && counts > 0.0 && std::isfinite(counts)) {
+      return 2.0 * M_PI / counts;
+    }
+  }
+  return Status::InvalidInput("--wheel_angle_unit " + unit +
+                              ": expected rad, deg or ticks:N (N > 0 counts per wheel turn)");
 }
 
 StatusOr<RobustLoss> ParseLossFlags(const std::string& loss, double loss_scale) {

@@ -50,6 +50,9 @@ StatusOr<RobustLoss> ParseLossFlags(const std::string& loss, double loss_scale);
 // --timing: auto, stamps, free_running or off.
 Status CheckTimingFlag(const std::string& timing);
 
+// --wheel_angle_unit: rad, deg or ticks:N (N counts per wheel turn), as radians per unit.
+StatusOr<double> ParseWheelAngleUnit(const std::string& unit);
+
 // The value named `name` among `choices`, or "unknown --FLAG 'NAME' (EXPECTED)".
 template <typename Enum>
 StatusOr<Enum> ParseChoice(const std::string& flag, const std::string& name,

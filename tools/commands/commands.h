@@ -27,6 +27,7 @@ struct CalibrateOptions {
   std::string scan_topic, joint_state_topic, odom_topic, left_wheel_joint, right_wheel_joint;
   std::string base_frame;
   double nominal_wheel_radius = 0.0, nominal_wheelbase = 0.0;
+  std::string wheel_angle_unit = "rad";  // rad, deg, or ticks:N.
   bool scan_points = false;  // Refine against the scan points after the two-stage route.
 };
 int RunCalibrate(const CalibrateOptions& options);

@@ -43,6 +43,9 @@ DEFINE_double(nominal_wheelbase, 0.0, "calibrate (bags): the wheelbase (m) the d
 DEFINE_string(base_frame, "",
               "calibrate (bags): the robot's base frame in tf (default base_link, else "
               "base_footprint)");
+DEFINE_string(wheel_angle_unit, "rad",
+              "calibrate (bags, scan directories): the unit of the wheel joints' positions: rad, "
+              "deg, or ticks:N for raw encoder counts of N per wheel turn");
 DEFINE_bool(scan_points, false,
             "calibrate (bags, scan directories): refine the calibration against the scan points "
             "themselves (point-to-line distances between neighbouring scans, each beam placed "
@@ -169,6 +172,7 @@ CalibrateOptions CalibrateOptionsFromFlags() {
   options.nominal_wheel_radius = FLAGS_nominal_wheel_radius;
   options.nominal_wheelbase = FLAGS_nominal_wheelbase;
   options.scan_points = FLAGS_scan_points;
+  options.wheel_angle_unit = FLAGS_wheel_angle_unit;
   return options;
 }
 

@@ -4,6 +4,8 @@
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <limits>
 
@@ -87,6 +89,56 @@ TEST(ScanLaserLog, RobotMessagesToCalibration) {
   odom = LaserLogFromRobotMessages(bag, options);
   ASSERT_TRUE(odom.ok()) << odom.message();
   EXPECT_TRUE(odom->wheels_from_odometry);
+}
+
+// Wheel joints reported in degrees, or as raw encoder counts (4096 per turn, whole counts): with
+// their unit given the calibration is within 3σ; without it the radius is absurd and a warning
+// names the likely unit. A JointState stream with a 2 s hole still calibrates.
+TEST(ScanLaserLog, WheelJointsInDegreesOrCountsAndWithAGap) {
+  const StatusOr<ScanSimulation> sim = SimulateScans(Robot(400, 8));
+  ASSERT_TRUE(sim.ok()) << sim.message();
+  const RobotMessages radians = ScanSimulationMessages(*sim);
+  const auto rescaled = [&](double units_per_rad, bool round) {
+    RobotMessages bag = radians;
+    for (JointState& m : bag.joint_states.at("/joint_states")) {
+      for (double& p : m.position) p = round ? std::round(p * units_per_rad) : p * units_per_rad;
+    }
+    return bag;
+  };
+  const auto has = [](const std::vector<std::string>& warnings, const std::string& needle) {
+    for (const std::string& w : warnings) {
+      if (w.find(needle) != std::string::npos) return true;
+    }
+    return false;
+  };
+  struct Case {
+    double units_per_rad;
+    bool round;
+  };
+  for (const Case& c : {Case{180.0 / M_PI, false}, Case{4096.0 / (2.0 * M_PI), true}}) {
+    const RobotMessages bag = rescaled(c.units_per_rad, c.round);
+    RobotBagOptions options;
+    options.wheel_radians_per_unit = 1.0 / c.units_per_rad;
+    const StatusOr<RobotBagCalibration> r = CalibrateRobotMessages(bag, options, kTiming);
+    ASSERT_TRUE(r.ok()) << r.message();
+    EXPECT_LE(WorstZ(r->result.calibration, sim->truth), 3.0);
+    EXPECT_FALSE(has(r->log.warnings, "wheel angles in degrees"));
+    const StatusOr<RobotBagCalibration> unitless =
+        CalibrateRobotMessages(bag, RobotBagOptions(), kTiming);
+    ASSERT_TRUE(unitless.ok()) << unitless.message();
+    EXPECT_TRUE(has(unitless->log.warnings, "wheel angles in degrees or encoder counts"));
+  }
+  RobotMessages gap = radians;
+  std::vector<JointState>& joints = gap.joint_states.at("/joint_states");
+  const double hole_start = joints[joints.size() / 2].stamp_s;
+  joints.erase(std::remove_if(joints.begin(), joints.end(),
+                              [&](const JointState& m) {
+                                return m.stamp_s >= hole_start && m.stamp_s < hole_start + 2.0;
+                              }),
+               joints.end());
+  const StatusOr<RobotBagCalibration> r = CalibrateRobotMessages(gap, RobotBagOptions(), kTiming);
+  ASSERT_TRUE(r.ok()) << r.message();
+  EXPECT_LE(WorstZ(r->result.calibration, sim->truth), 3.0);
 }
 
 // A lidar that sweeps for its whole period while the robot moves at 0.5 m/s: the scans are
