@@ -129,6 +129,32 @@ TEST_F(BagCliTest, AScansCsvDirectoryCalibratesWithinThreeSigma) {
   ExpectFailure(log, "", {"scans.csv:3"});
 }
 
+// `calib diagnose` on raw scans: the scans are matched and timed as calibrate does, then
+// searched. A left wheel 1 % larger after 30 s is found and adopted; the clean reference bag
+// adopts nothing.
+TEST_F(BagCliTest, DiagnoseFindsARadiusChangeInRawScans) {
+  const fs::path log = dir_ / "radius_change";
+  const CliRun simulated = ::calib::testing::RunCalib(
+      "simulate --beams 180 --intervals 600 --seed 4 --sweep 0.1 --radius_change_time 30 "
+      "--r_l_after 0.101 --r_r_after 0.1 --output " +
+          log.string() + " --truth " + (dir_ / "truth.json").string(),
+      dir_);
+  ASSERT_EQ(simulated.exit_code, 0) << simulated.err;
+  const auto diagnose = [&](const fs::path& input) {
+    const CliRun run = ::calib::testing::RunCalib(
+        "diagnose --quiet --input " + input.string() + " --output " + (dir_ / "d.json").string(),
+        dir_);
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    return nlohmann::json::parse(ReadFile(dir_ / "d.json"));
+  };
+  const nlohmann::json changed = diagnose(log);
+  EXPECT_EQ(changed["adopted"], nlohmann::json::array({"wheel_radius_change"}))
+      << changed["adopted"];
+  EXPECT_EQ(changed["timing"]["treatment"], "latent_times");
+  const nlohmann::json clean = diagnose(kBags / "sim_robot_zstd.mcap");
+  EXPECT_EQ(clean["adopted"], nlohmann::json::array()) << clean["adopted"];
+}
+
 TEST_F(BagCliTest, BadBagsAndTopicsAreNamed) {
   const fs::path bag = kBags / "sim_robot_lz4.bag";
   ExpectFailure(bag, "--scan_topic /front_scan", {"'/front_scan'", "/scan (sensor_msgs/LaserScan"});

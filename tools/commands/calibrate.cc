@@ -1,14 +1,13 @@
 // `calib calibrate`: reads the log(s), calibrates, writes the contract's OUT.json and prints the
 // summary.
-#include <calib/core/bag/robot_bag.h>
 #include <calib/core/laser/laser_log_io.h>
-#include <calib/core/scan/scan_directory.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
 #include <calib/solvers/laser/calibrate_laser.h>
 #include <calib/solvers/scan_matching/robot_bag_log.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
+#include <calib/tools/commands/robot_input.h>
 #include <calib/tools/report/bearing_report.h>
 #include <calib/tools/report/laser_report.h>
 #include <calib/tools/report/latent_timing_report.h>
@@ -84,29 +83,10 @@ int CalibrateLaserStreamLog(const CalibrateOptions& flags, const LaserLog& log,
 // sensor poses and calibrated with their timing.
 int CalibrateRobotBag(const CalibrateOptions& flags, const LaserCalibrationOptions& options,
                       const Stopwatch& clock) {
-  if (flags.timing == "off") {
-    return Fail(flags.input +
-                ": a bag is calibrated with its timing; --timing off applies to "
-                "logs of intervals and stream directories");
-  }
-  const StatusOr<RobotMessages> bag =
-      IsScanDirectory(flags.input) ? ReadScanDirectory(flags.input) : ReadRobotBag(flags.input);
-  if (!bag.ok()) return Fail(bag.message());
-  RobotBagOptions bag_options;
-  bag_options.topics.scan_topic = flags.scan_topic;
-  bag_options.topics.joint_state_topic = flags.joint_state_topic;
-  bag_options.topics.odom_topic = flags.odom_topic;
-  bag_options.topics.left_wheel_joint = flags.left_wheel_joint;
-  bag_options.topics.right_wheel_joint = flags.right_wheel_joint;
-  bag_options.base_frame = flags.base_frame;
-  bag_options.nominal_wheel_radius_m = flags.nominal_wheel_radius;
-  bag_options.nominal_wheelbase_m = flags.nominal_wheelbase;
-  if (flags.scan_points) bag_options.scan_points = ScanPointOptions();
-  const StatusOr<double> unit = ParseWheelAngleUnit(flags.wheel_angle_unit);
-  if (!unit.ok()) return Fail(unit.message());
-  bag_options.wheel_radians_per_unit = *unit;
+  const StatusOr<RobotInput> input = ReadRobotInput(flags);
+  if (!input.ok()) return Fail(input.message());
   const StatusOr<RobotBagCalibration> calibrated =
-      CalibrateRobotMessages(*bag, bag_options, TimingOptions(flags, options));
+      CalibrateRobotMessages(input->bag, input->options, TimingOptions(flags, options));
   if (!calibrated.ok()) return Fail(calibrated.message());
   return ReportLaserStreamResult(flags, calibrated->log.scans.log, calibrated->result, clock,
                                  &*calibrated);
@@ -124,7 +104,7 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   options.refinement.loss = *loss;
   options.refinement.loss_scale = flags.loss_scale;
   options.progress = ProgressPrinter(clock, flags.quiet);
-  if (LooksLikeRobotBag(flags.input) || IsScanDirectory(flags.input)) {
+  if (IsRobotInput(flags.input)) {
     return CalibrateRobotBag(flags, options, clock);
   }
   std::vector<LaserLog> logs;

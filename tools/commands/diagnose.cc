@@ -1,11 +1,10 @@
 // `calib diagnose`: reads one log, searches for the physics the base model leaves out, writes the
 // contract's OUT.json, the plots and the summary.
-#include <calib/core/bag/robot_bag.h>
 #include <calib/core/laser/laser_log_io.h>
-#include <calib/core/scan/scan_directory.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
+#include <calib/tools/commands/robot_input.h>
 #include <calib/tools/report/bearing_diagnose_report.h>
 #include <calib/tools/report/laser_diagnose_report.h>
 #include <calib/tools/report/latent_timing_report.h>
@@ -85,33 +84,44 @@ StatusOr<LaserDiagnosisOptions> LaserOptions(const DiagnoseOptions& flags) {
   return options;
 }
 
+// A robot's recording: its scans matched into sensor poses and calibrated with their timing (as
+// calibrate does), then searched like a stream directory on that timing.
+StatusOr<LaserLog> RobotLaserLog(const DiagnoseOptions& flags, const LaserTimingOptions& options,
+                                 std::optional<LaserTimingResult>* timing) {
+  CALIB_ASSIGN_OR_RETURN(const RobotInput input, ReadRobotInput(flags));
+  CALIB_ASSIGN_OR_RETURN(RobotBagCalibration calibrated,
+                         CalibrateRobotMessages(input.bag, input.options, options));
+  *timing = std::move(calibrated.result);
+  return std::move(calibrated.log.scans.log);
+}
+
 int DiagnoseLaserLog(const DiagnoseOptions& flags) {
   const StatusOr<LaserFormat> format = ParseLaserFormat(flags.format);
   if (!format.ok()) return Fail(format.message());
-  if (LooksLikeRobotBag(flags.input) || IsScanDirectory(flags.input)) {
-    return Fail(flags.input +
-                ": diagnose does not read bags or scan directories yet; `calib calibrate` does");
-  }
   StatusOr<LaserDiagnosisOptions> options = LaserOptions(flags);
   if (!options.ok()) return Fail(options.message());
   const Stopwatch clock;
   options->progress = ProgressPrinter(clock, flags.quiet);
-  StatusOr<LaserLog> log = ReadLaserLog(flags.input, *format);
+  LaserTimingOptions timing_options;
+  timing_options.calibration = options->calibration;
+  timing_options.sensor_clock = flags.timing;
+  const bool robot = IsRobotInput(flags.input);
+  std::optional<LaserTimingResult> timing;
+  StatusOr<LaserLog> log =
+      robot ? RobotLaserLog(flags, timing_options, &timing) : ReadLaserLog(flags.input, *format);
   if (!log.ok()) return Fail(log.message());
   // Raw streams: their timing (sample times behind the stamps, a free-running sensor clock) is
   // estimated first, and the search runs on the intervals between the estimated times, so that
   // a timing artefact is not taken for slip or a speed-dependent radius.
-  std::optional<LaserTimingResult> timing;
-  if (!log->streams.sensor_poses.empty() && flags.timing != "off") {
-    LaserTimingOptions timing_options;
-    timing_options.calibration = options->calibration;
-    timing_options.sensor_clock = flags.timing;
+  if (!robot && !log->streams.sensor_poses.empty() && flags.timing != "off") {
     StatusOr<LaserTimingResult> result = CalibrateLaserStreams(log->streams, timing_options);
     if (!result.ok()) {
       return Fail(flags.input + ": the timing-aware calibration failed: " + result.message() +
                   " (--timing off searches with the stamps as sample times)");
     }
     timing = std::move(result).value();
+  }
+  if (timing) {
     StatusOr<LaserLog> timed = LaserLogFromStreams(timing->timed_streams.odometry,
                                                    timing->timed_streams.sensor_poses, flags.input);
     if (!timed.ok()) return Fail(flags.input + ": at the estimated times: " + timed.message());
