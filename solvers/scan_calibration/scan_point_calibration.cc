@@ -240,13 +240,9 @@ Status SolveRound(std::vector<ScanPair>* pairs, const ScanPointOptions& o, ScanP
   return Covariance(sums, out);
 }
 
-}  // namespace
-
-StatusOr<ScanPointCalibration> CalibrateOnScanPoints(const ScanPointInput& input,
-                                                     const LaserCalibration& initial,
-                                                     const ScanPointOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  CALIB_RETURN_IF_ERROR(CheckInput(input));
+// The rounds of correspondences and solves from `initial`.
+StatusOr<ScanPointCalibration> Refine(const ScanPointInput& input, const LaserCalibration& initial,
+                                      const ScanPointOptions& options) {
   std::vector<ScanPair> pairs = SelectPairs(input, initial, options);
   if (static_cast<int>(pairs.size()) < kMinPairs) {
     return Status::NotObservable(input.source + ": only " + std::to_string(pairs.size()) +
@@ -292,6 +288,30 @@ StatusOr<ScanPointCalibration> CalibrateOnScanPoints(const ScanPointInput& input
                            " % of the point correspondences fit their lines: the scans may not "
                            "overlap, or the scene moves");
   }
+  return out;
+}
+
+}  // namespace
+
+StatusOr<ScanPointCalibration> CalibrateOnScanPoints(const ScanPointInput& input,
+                                                     const LaserCalibration& initial,
+                                                     const ScanPointOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  CALIB_RETURN_IF_ERROR(CheckInput(input));
+  LaserCalibration from = initial;
+  if (options.warm_start) {
+    // Consecutive scans first: their motion is short, so a start tens of per cent off still
+    // places their points within reach of the right lines.
+    ScanPointOptions near = options;
+    near.warm_start = false;
+    near.pair_distance_m = near.pair_angle_rad = 0.05;
+    near.min_pair_distance_m = near.min_pair_angle_rad = 0.005;
+    near.estimate_time_offset = false;
+    near.max_rounds = 6;
+    const StatusOr<ScanPointCalibration> warm = Refine(input, initial, near);
+    if (warm.ok()) from = warm->estimate;
+  }
+  CALIB_ASSIGN_OR_RETURN(ScanPointCalibration out, Refine(input, from, options));
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

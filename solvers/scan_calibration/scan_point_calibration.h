@@ -53,6 +53,8 @@ struct ScanPointOptions {
   // The wheels' timeline reaches this far beyond each pair's beams, for δ to move in.
   double max_time_offset_s = 0.2;
   int max_rounds = 10;
+  // First a few rounds on consecutive scans (short motion: robust to a start far off).
+  bool warm_start = true;
   double tolerance_sigmas = 0.05;  // Stop when no parameter moves more than this in a round.
   // Clusters of consecutive pairs whose errors may be correlated (scans shared between pairs):
   // four times the pairs' mean span in scans, but at least 15 clusters.

@@ -40,6 +40,9 @@ int ReportLaserStreamResult(const CalibrateOptions& flags, const LaserLog& log,
     calibration.estimate = (*scan_points)->estimate;
     calibration.covariance = (*scan_points)->covariance;
     calibration.stddev = (*scan_points)->stddev;
+    for (std::string& w : calibration.observability.warnings) {
+      w = "two-stage (before the refinement on the scan points): " + w;
+    }
   }
   nlohmann::ordered_json json =
       LaserResultJson(calibration, flags.input, flags.loss, log.stream_timing);
