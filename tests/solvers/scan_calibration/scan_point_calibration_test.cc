@@ -60,6 +60,13 @@ LaserParamVector Z(const ScanPointCalibration& r, const LaserCalibration& truth)
   return z;
 }
 
+// A bag's two-stage calibration refined on its scan points.
+StatusOr<RobotBagCalibration> CalibrateWithScanPoints(const RobotMessages& bag) {
+  RobotBagOptions options;
+  options.scan_points = ScanPointOptions();
+  return CalibrateRobotMessages(bag, options, LaserTimingOptions());
+}
+
 // Noise-free scans of straight walls: the estimate is the truth, from a start a few % off.
 TEST(ScanPointCalibration, NoiseFreeScansGiveTheTruth) {
   const StatusOr<ScanSimulation> sim = SimulateScans(Robot(300, 0.0, 0.1, 2));
@@ -123,10 +130,7 @@ TEST(ScanPointCalibration, ACorridorIsCalibratedOnTheScanPoints) {
   ASSERT_TRUE(sim.ok()) << sim.message();
   RobotMessages bag = ScanSimulationMessages(*sim);
   bag.source = "corridor.bag";
-  RobotBagOptions options;
-  options.scan_points = ScanPointOptions();
-  const StatusOr<RobotBagCalibration> r =
-      CalibrateRobotMessages(bag, options, LaserTimingOptions());
+  const StatusOr<RobotBagCalibration> r = CalibrateWithScanPoints(bag);
   ASSERT_TRUE(r.ok()) << r.message();
   ASSERT_TRUE(r->scan_points.has_value()) << r->scan_point_warnings.front();
   EXPECT_GT(r->log.scans.failed_matches, 300);
@@ -159,10 +163,7 @@ TEST(ScanPointCalibration, RefinesABagOfAnUpsideDownLidar) {
   TransformStamped& mount = bag.tf_static.front();
   mount.rotation =
       mount.rotation * Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
-  RobotBagOptions options;
-  options.scan_points = ScanPointOptions();
-  const StatusOr<RobotBagCalibration> r =
-      CalibrateRobotMessages(bag, options, LaserTimingOptions());
+  const StatusOr<RobotBagCalibration> r = CalibrateWithScanPoints(bag);
   ASSERT_TRUE(r.ok()) << r.message();
   ASSERT_TRUE(r->scan_points.has_value()) << r->scan_point_warnings.front();
   EXPECT_TRUE(r->log.mirrored);
