@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -51,17 +52,27 @@ class MappedFile {
   uint64_t size_ = 0;
 };
 
-// A bag directory (metadata.yaml and its .mcap) resolves to its one .mcap file.
-StatusOr<std::string> BagFile(const std::string& path) {
+// A bag directory's .mcap files (several when rosbag2 split the recording by size or time), in
+// the order their names count them (run_2 before run_10); a file is itself.
+StatusOr<std::vector<std::string>> BagFiles(const std::string& path) {
   std::error_code error;
-  if (!std::filesystem::is_directory(path, error)) return path;
+  if (!std::filesystem::is_directory(path, error)) return std::vector<std::string>{path};
   std::vector<std::string> files;
   for (const auto& entry : std::filesystem::directory_iterator(path, error)) {
     if (entry.path().extension() == ".mcap") files.push_back(entry.path().string());
   }
-  if (files.size() == 1) return files[0];
-  return Status::InvalidInput(path + ": a bag directory should hold one .mcap file; it holds " +
-                              std::to_string(files.size()));
+  if (files.empty()) return Status::InvalidInput(path + ": the bag directory holds no .mcap file");
+  const auto key = [](const std::string& f) {
+    const std::string stem = std::filesystem::path(f).stem().string();
+    size_t digits = stem.size();
+    while (digits > 0 && std::isdigit(static_cast<unsigned char>(stem[digits - 1]))) --digits;
+    const std::string number = stem.substr(digits);
+    return std::make_pair(stem.substr(0, digits),
+                          number.empty() ? -1 : std::stoll(number.substr(0, 18)));
+  };
+  std::sort(files.begin(), files.end(),
+            [&](const std::string& a, const std::string& b) { return key(a) < key(b); });
+  return files;
 }
 
 // "sensor_msgs/msg/LaserScan" → "sensor_msgs/LaserScan".
@@ -414,8 +425,9 @@ bool FindFooter(const uint8_t* data, uint64_t size, mcap::FooterRecord* footer,
 
 }  // namespace
 
-StatusOr<RobotMessages> ReadMcapBag(const std::string& path, const BagReadOptions& options) {
-  CALIB_ASSIGN_OR_RETURN(const std::string file, BagFile(path));
+namespace {
+
+StatusOr<RobotMessages> ReadMcapFile(const std::string& file, const BagReadOptions& options) {
   MappedFile mapped;
   CALIB_RETURN_IF_ERROR(mapped.Open(file));
   const uint8_t* data = mapped.data();
@@ -436,6 +448,78 @@ StatusOr<RobotMessages> ReadMcapBag(const std::string& path, const BagReadOption
   messages.source = file;
   reader.Finish(&messages);
   return messages;
+}
+
+// `part` (the next file of a split bag) appended to `all`: its records numbered on after
+// `record_base`, every topic kept in log-time order.
+template <typename Message>
+void AppendTopics(std::map<std::string, std::vector<Message>>&& part, int64_t record_base,
+                  std::map<std::string, std::vector<Message>>* all) {
+  for (auto& [topic, messages] : part) {
+    std::vector<Message>& to = (*all)[topic];
+    for (Message& m : messages) {
+      m.record += record_base;
+      to.push_back(std::move(m));
+    }
+    std::stable_sort(to.begin(), to.end(), [](const Message& a, const Message& b) {
+      return a.log_time_s < b.log_time_s;
+    });
+  }
+}
+
+int64_t LastRecord(const RobotMessages& m) {
+  int64_t last = -1;
+  const auto scan = [&](const auto& topics) {
+    for (const auto& [topic, messages] : topics) {
+      for (const auto& message : messages) last = std::max<int64_t>(last, message.record);
+    }
+  };
+  scan(m.scans);
+  scan(m.joint_states);
+  scan(m.odometry);
+  for (const auto* list : {&m.tf, &m.tf_static}) {
+    for (const TransformStamped& t : *list) last = std::max<int64_t>(last, t.record);
+  }
+  return last;
+}
+
+void AppendPart(RobotMessages&& part, int64_t record_base, RobotMessages* all) {
+  for (const TopicInfo& t : part.topics) {
+    auto it = std::find_if(all->topics.begin(), all->topics.end(),
+                           [&](const TopicInfo& a) { return a.name == t.name; });
+    if (it == all->topics.end()) {
+      all->topics.push_back(t);
+    } else {
+      it->message_count += t.message_count;
+    }
+  }
+  AppendTopics(std::move(part.scans), record_base, &all->scans);
+  AppendTopics(std::move(part.joint_states), record_base, &all->joint_states);
+  AppendTopics(std::move(part.odometry), record_base, &all->odometry);
+  for (auto* list : {&part.tf, &part.tf_static}) {
+    for (TransformStamped& t : *list) t.record += record_base;
+  }
+  all->tf.insert(all->tf.end(), part.tf.begin(), part.tf.end());
+  all->tf_static.insert(all->tf_static.end(), part.tf_static.begin(), part.tf_static.end());
+}
+
+}  // namespace
+
+StatusOr<RobotMessages> ReadMcapBag(const std::string& path, const BagReadOptions& options) {
+  CALIB_ASSIGN_OR_RETURN(const std::vector<std::string> files, BagFiles(path));
+  if (files.size() == 1) return ReadMcapFile(files[0], options);
+  RobotMessages all;
+  all.source = path;
+  int64_t record_base = 0;
+  for (const std::string& file : files) {
+    CALIB_ASSIGN_OR_RETURN(RobotMessages part, ReadMcapFile(file, options));
+    int64_t records = 0;
+    for (const TopicInfo& t : part.topics) records += t.message_count;
+    const int64_t next_base = record_base + std::max(records, LastRecord(part) + 1);
+    AppendPart(std::move(part), record_base, &all);
+    record_base = next_base;
+  }
+  return all;
 }
 
 }  // namespace calib

@@ -73,6 +73,18 @@ TEST_F(BagCliTest, BagsOfTheReferenceWritersCalibrateWithinThreeSigma) {
   }
 }
 
+// A bag rosbag2 split into three files calibrates exactly as the one file does.
+TEST_F(BagCliTest, ASplitBagCalibratesAsTheWholeOne) {
+  nlohmann::json estimates[2];
+  int k = 0;
+  for (const fs::path& bag : {kBags / "sim_robot_split", kBags / "sim_robot_zstd.mcap"}) {
+    const CliRun run = Calibrate(bag);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    estimates[k++] = nlohmann::json::parse(ReadFile(dir_ / "out.json"))["estimate"];
+  }
+  EXPECT_EQ(estimates[0], estimates[1]);
+}
+
 // --scan_points: the estimate refined against the scan points is the result, within 3σ of the
 // truth with smaller σ than the two-stage route's, which the JSON keeps beside it.
 TEST_F(BagCliTest, RefinedOnTheScanPointsWithinThreeSigma) {
