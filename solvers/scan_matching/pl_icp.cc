@@ -57,8 +57,7 @@ void DescribePairs(const ScanPoints& reference, const ScanPoints& current, const
     pair.alpha = d.dot(along) / length2;
     pair.residual_m = pair.normal.dot(d);
     const double dp = pair.normal.dot(Rotate(c, s, current.directions[pair.c.current]));
-    const double da =
-        (1.0 - pair.alpha) * pair.normal.dot(reference.directions[pair.c.reference_a]);
+    const double da = (1.0 - pair.alpha) * pair.normal.dot(reference.directions[pair.c.reference_a]);
     const double db = pair.alpha * pair.normal.dot(reference.directions[pair.c.reference_b]);
     pair.variance_factor = std::max(dp * dp + da * da + db * db, 1e-6);
     pair.inlier = true;
@@ -344,10 +343,11 @@ StatusOr<ScanMatch> MatchScanPoints(const ScanPoints& reference, const ScanPoint
   std::array<uint64_t, 16> recent_hashes;
   recent_hashes.fill(0);
   std::vector<double> scratch;
+  const CorrespondenceSearch search(reference, options.correspondence);
   ScanMatch m;
   for (m.iterations = 1; m.iterations <= options.max_iterations; ++m.iterations) {
     TransformPoints(current, pose, &moved);
-    FindCorrespondences(reference, moved, options.correspondence, &correspondences);
+    search.Find(moved, 1, &correspondences);
     DescribePairs(reference, current, pose, moved, correspondences, &pairs);
     MarkInliers(settled ? RobustRangeSigma(pairs, &scratch) : kNoRejection, options, &pairs,
                 &scratch);
