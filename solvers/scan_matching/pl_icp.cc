@@ -48,8 +48,8 @@ void DescribePairs(const ScanPoints& reference, const ScanPoints& current, const
   for (size_t k = 0; k < correspondences.size(); ++k) {
     LinePair& pair = (*pairs)[k];
     pair.c = correspondences[k];
-    const Eigen::Vector2d& qa = reference.points_m[pair.c.reference_a];
-    const Eigen::Vector2d& qb = reference.points_m[pair.c.reference_b];
+    const Eigen::Vector2d& qa = reference.points_m[pair.c.line_a];
+    const Eigen::Vector2d& qb = reference.points_m[pair.c.line_b];
     const Eigen::Vector2d along = qb - qa;
     const double length2 = along.squaredNorm();
     pair.normal = Eigen::Vector2d(-along.y(), along.x()) / std::sqrt(length2);
@@ -57,8 +57,8 @@ void DescribePairs(const ScanPoints& reference, const ScanPoints& current, const
     pair.alpha = d.dot(along) / length2;
     pair.residual_m = pair.normal.dot(d);
     const double dp = pair.normal.dot(Rotate(c, s, current.directions[pair.c.current]));
-    const double da = (1.0 - pair.alpha) * pair.normal.dot(reference.directions[pair.c.reference_a]);
-    const double db = pair.alpha * pair.normal.dot(reference.directions[pair.c.reference_b]);
+    const double da = (1.0 - pair.alpha) * pair.normal.dot(reference.directions[pair.c.line_a]);
+    const double db = pair.alpha * pair.normal.dot(reference.directions[pair.c.line_b]);
     pair.variance_factor = std::max(dp * dp + da * da + db * db, 1e-6);
     pair.inlier = true;
   }
@@ -120,7 +120,7 @@ NormalEquations Linearize(const ScanPoints& reference, const ScanPoints& current
   for (const LinePair& pair : pairs) {
     if (!pair.inlier) continue;
     const Eigen::Vector2d rp = Rotate(c, s, current.points_m[pair.c.current]);
-    const double r = pair.normal.dot(rp + pose.head<2>() - reference.points_m[pair.c.reference_a]);
+    const double r = pair.normal.dot(rp + pose.head<2>() - reference.points_m[pair.c.line_a]);
     const Eigen::Vector3d j = ResidualJacobian(pair, rp);
     eq.hessian += j * j.transpose();
     eq.gradient += j * r;
@@ -158,7 +158,7 @@ Pose2d SolveFixedPairs(const ScanPoints& reference, const ScanPoints& current, c
     const Eigen::Vector2d& n = pair.normal;
     Eigen::Matrix<double, 5, 1> v;
     v << n.dot(p), n.x() * p.y() * -1.0 + n.y() * p.x(),
-        -n.dot(reference.points_m[pair.c.reference_a] - pose.head<2>()), n.x(), n.y();
+        -n.dot(reference.points_m[pair.c.line_a] - pose.head<2>()), n.x(), n.y();
     m.selfadjointView<Eigen::Lower>().rankUpdate(v);
     ++count;
   }
@@ -212,10 +212,10 @@ Eigen::Matrix3d CensiCovariance(const ScanPoints& reference, const ScanPoints& c
         ResidualJacobian(pair, Rotate(c, s, current.points_m[pair.c.current]));
     const double d_current = pair.normal.dot(Rotate(c, s, current.directions[pair.c.current]));
     m += (j * d_current) * (j * d_current).transpose();
-    reference_g[pair.c.reference_a] -=
-        j * ((1.0 - pair.alpha) * pair.normal.dot(reference.directions[pair.c.reference_a]));
-    reference_g[pair.c.reference_b] -=
-        j * (pair.alpha * pair.normal.dot(reference.directions[pair.c.reference_b]));
+    reference_g[pair.c.line_a] -=
+        j * ((1.0 - pair.alpha) * pair.normal.dot(reference.directions[pair.c.line_a]));
+    reference_g[pair.c.line_b] -=
+        j * (pair.alpha * pair.normal.dot(reference.directions[pair.c.line_b]));
   }
   for (const Eigen::Vector3d& g : reference_g) m += g * g.transpose();
   const Eigen::Matrix3d h_inverse = SafeInverse(hessian);

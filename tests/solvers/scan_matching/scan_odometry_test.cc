@@ -43,7 +43,9 @@ TEST(ScanOdometryTest, RobotAtRestDoesNotDrift) {
     EXPECT_EQ(result->keyframe_of[i], 0);
     EXPECT_TRUE(result->PairIsValid(i - 1));
   }
-  EXPECT_LT(PoseDifference(result->poses.back().world_T_sensor, pose).norm(), 1e-9);
+  // Not exactly zero: a point's line runs through its neighbours, whose float ranges are rounded
+  // (~0.2 µm at 3 m); one match's error, not a drift.
+  EXPECT_LT(PoseDifference(result->poses.back().world_T_sensor, pose).norm(), 1e-8);
 }
 
 // With noisy scans at rest every scan is matched to the same keyframe: the errors stay those of
