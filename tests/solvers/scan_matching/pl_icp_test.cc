@@ -242,9 +242,9 @@ TEST(CorrespondencesTest, SearchMatchesBruteForceAndLinesStraddleTheNearestPoint
 }
 
 // Consecutive simulated scans (1 cm of range noise, 2 % missing) matched from a zero guess: the
-// implied range noise is unbiased and about 95 % of the errors fall within the 2σ ellipsoid
-// (χ²₃ < 6.18), where a line through the nearest point itself gave σ̂ ≈ 6 mm and 45 % at 1081
-// beams. Without the coarse phase the poses are the same within a small part of their σ.
+// implied range noise is unbiased and the errors' d² = eᵀΣ⁻¹e follow χ²₃ (mean 3, 95.4 % below
+// 8.02, 89.7 % below 6.18), where a line through the nearest point itself gave σ̂ ≈ 6 mm and 45 %
+// below 6.18 at 1081 beams. Without the coarse phase the poses are the same within 0.5σ.
 void ExpectHonestCovarianceOnSimulatedScans(int beams, double fov_rad) {
   ScanSimOptions o;
   o.laser = DefaultScanLaserOptions();
@@ -259,7 +259,7 @@ void ExpectHonestCovarianceOnSimulatedScans(int beams, double fov_rad) {
   ASSERT_TRUE(sim.ok()) << sim.message();
   PlIcpOptions all_points;
   all_points.coarse_points = 0;
-  int pairs = 0, within = 0;
+  int pairs = 0, within = 0, within_3dof = 0;
   double sum_d2 = 0.0, sum_sigma = 0.0;
   for (size_t i = 1; i < sim->scans.size(); ++i) {
     const StatusOr<ScanMatch> m = MatchScans(sim->scans[i - 1], sim->scans[i], Pose2d::Zero());
@@ -271,6 +271,7 @@ void ExpectHonestCovarianceOnSimulatedScans(int beams, double fov_rad) {
     const double d2 = e.dot(m->covariance.ldlt().solve(e));
     sum_d2 += d2;
     within += d2 < 6.18;
+    within_3dof += d2 < 8.02;
     sum_sigma += m->range_sigma_m;
     ++pairs;
     const StatusOr<ScanMatch> fine =
@@ -280,10 +281,11 @@ void ExpectHonestCovarianceOnSimulatedScans(int beams, double fov_rad) {
     d(2) = WrapAngle(d(2));
     EXPECT_LT(d.dot(m->covariance.ldlt().solve(d)), 0.5 * 0.5);
   }
-  std::printf("%d beams: %d of %d pairs within 2 sigma, mean Mahalanobis^2 %.2f, sigma %.4f m\n",
-              beams, within, pairs, sum_d2 / pairs, sum_sigma / pairs);
+  std::printf("%d beams: of %d pairs %d have d2 < 6.18, %d d2 < 8.02; mean d2 %.2f; sigma %.4f m\n",
+              beams, pairs, within, within_3dof, sum_d2 / pairs, sum_sigma / pairs);
   EXPECT_NEAR(sum_sigma / pairs, 0.0105, 0.0015);
-  EXPECT_GE(within, pairs * 80 / 100);
+  EXPECT_GE(within, pairs * 75 / 100);
+  EXPECT_GE(within_3dof, pairs * 85 / 100);
   EXPECT_GT(sum_d2 / pairs, 2.0);
   EXPECT_LT(sum_d2 / pairs, 4.5);
 }
