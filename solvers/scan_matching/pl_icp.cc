@@ -377,6 +377,7 @@ StatusOr<ScanMatch> MatchScanPoints(const ScanPoints& reference, const ScanPoint
     recent_hashes.fill(0);
   };
   ScanMatch m;
+  bool pairs_at_pose = false;
   for (m.iterations = 1; m.iterations <= options.max_iterations; ++m.iterations) {
     TransformPoints(current, pose, &moved);
     search.Find(moved, stride, &correspondences);
@@ -401,6 +402,7 @@ StatusOr<ScanMatch> MatchScanPoints(const ScanPoints& reference, const ScanPoint
     }
     if (repeats()) {
       m.converged = true;
+      pairs_at_pose = true;
       break;
     }
     recent_hashes[m.iterations % recent_hashes.size()] = hash;
@@ -426,14 +428,11 @@ StatusOr<ScanMatch> MatchScanPoints(const ScanPoints& reference, const ScanPoint
         step_sigmas2 < options.step_tolerance_sigmas * options.step_tolerance_sigmas;
     if (was_settled && tiny_step) {
       m.converged = true;
-      TransformPoints(current, pose, &moved);
-      DescribePairs(reference, current, pose, moved, correspondences, &pairs);
-      MarkInliers(RobustRangeSigma(pairs, &scratch), options, &pairs, &scratch);
       break;
     }
   }
   m.iterations = std::min(m.iterations, options.max_iterations);
-  if (!m.converged) {
+  if (!pairs_at_pose) {  // The last solve moved the pose: the final pairs are described there.
     TransformPoints(current, pose, &moved);
     if (stride > 1) search.Find(moved, 1, &correspondences);
     DescribePairs(reference, current, pose, moved, correspondences, &pairs);

@@ -11,8 +11,9 @@
 #include <string>
 
 // Point-to-line ICP (Censi, "An ICP variant using a point-to-line metric", ICRA 2008): each current
-// point is pulled onto the line through its two nearest consecutive reference points, and the
-// pose minimises Σ (nᵢ·(R pᵢ + t − qᵢ))² by Gauss–Newton on (x, y, θ).
+// point is pulled onto the line through the reference points on either side of its nearest one
+// (Correspondence::line_a/line_b), and the pose minimises Σ (nᵢ·(R pᵢ + t − qᵢ))² with the lines
+// fixed, then the correspondences are searched again.
 namespace calib {
 
 enum class ScanMatchQuality {
