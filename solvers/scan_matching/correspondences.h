@@ -4,6 +4,7 @@
 #include <calib/solvers/scan_matching/scan_points.h>
 
 #include <Eigen/Core>
+#include <array>
 #include <vector>
 
 // Point-to-segment correspondences for PL-ICP: each current point (already expressed in the
@@ -16,12 +17,41 @@ struct Correspondence {
   int current = -1;      // Index into the current scan's points.
   int reference_a = -1;  // The nearest reference point.
   int reference_b = -1;  // Its beam neighbour: the segment is (a, b).
+  // The line to hold the point to: through the first points at least min_segment_length_m / 2
+  // from a on either side of it, or (a, b) when a side has none (a depth jump, the scan's end).
+  // It leaves a out: a is the point nearest to the current point, so its range noise is biased
+  // towards it (on dense scans markedly), and so would be the residual.
+  int line_a = -1;
+  int line_b = -1;
 };
 
 struct CorrespondenceOptions {
   double max_distance_m = 0.5;        // Farther nearest points are no correspondence.
   double max_segment_length_m = 0.5;  // Longer segments span a depth jump.
   double min_segment_length_m = 0.1;  // Shorter ones go on along the beams (dense scans).
+};
+
+// The search against one reference scan, repeated (ICP iterations): the segments of every
+// reference point are walked once, here. `reference` must outlive it.
+class CorrespondenceSearch {
+ public:
+  CorrespondenceSearch(const ScanPoints& reference, const CorrespondenceOptions& options);
+  // The correspondences of the current points i = 0, stride, 2·stride, …; `out` is overwritten.
+  void Find(const std::vector<Eigen::Vector2d>& current_in_reference_m, int stride,
+            std::vector<Correspondence>* out) const;
+
+ private:
+  int Nearest(const Eigen::Vector2d& p) const;
+  void Walk(int a, int side);
+
+  const ScanPoints& reference_;
+  CorrespondenceOptions options_;
+  std::vector<Eigen::Vector2d> computed_units_;  // When the reference has no beam_unit.
+  const std::vector<Eigen::Vector2d>* units_ = nullptr;
+  // Per reference point and side (0: beam − 1, 1: beam + 1): the adjacent beam's point when
+  // within max_segment_length_m, the end of the segment walked from it, and the first point at
+  // least min_segment_length_m / 2 away; −1 for none.
+  std::vector<std::array<int, 2>> neighbour_, segment_end_, half_end_;
 };
 
 // Finds the nearest reference point by walking the reference's beams outward from the point's

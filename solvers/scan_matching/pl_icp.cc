@@ -48,8 +48,8 @@ void DescribePairs(const ScanPoints& reference, const ScanPoints& current, const
   for (size_t k = 0; k < correspondences.size(); ++k) {
     LinePair& pair = (*pairs)[k];
     pair.c = correspondences[k];
-    const Eigen::Vector2d& qa = reference.points_m[pair.c.reference_a];
-    const Eigen::Vector2d& qb = reference.points_m[pair.c.reference_b];
+    const Eigen::Vector2d& qa = reference.points_m[pair.c.line_a];
+    const Eigen::Vector2d& qb = reference.points_m[pair.c.line_b];
     const Eigen::Vector2d along = qb - qa;
     const double length2 = along.squaredNorm();
     pair.normal = Eigen::Vector2d(-along.y(), along.x()) / std::sqrt(length2);
@@ -57,9 +57,8 @@ void DescribePairs(const ScanPoints& reference, const ScanPoints& current, const
     pair.alpha = d.dot(along) / length2;
     pair.residual_m = pair.normal.dot(d);
     const double dp = pair.normal.dot(Rotate(c, s, current.directions[pair.c.current]));
-    const double da =
-        (1.0 - pair.alpha) * pair.normal.dot(reference.directions[pair.c.reference_a]);
-    const double db = pair.alpha * pair.normal.dot(reference.directions[pair.c.reference_b]);
+    const double da = (1.0 - pair.alpha) * pair.normal.dot(reference.directions[pair.c.line_a]);
+    const double db = pair.alpha * pair.normal.dot(reference.directions[pair.c.line_b]);
     pair.variance_factor = std::max(dp * dp + da * da + db * db, 1e-6);
     pair.inlier = true;
   }
@@ -121,7 +120,7 @@ NormalEquations Linearize(const ScanPoints& reference, const ScanPoints& current
   for (const LinePair& pair : pairs) {
     if (!pair.inlier) continue;
     const Eigen::Vector2d rp = Rotate(c, s, current.points_m[pair.c.current]);
-    const double r = pair.normal.dot(rp + pose.head<2>() - reference.points_m[pair.c.reference_a]);
+    const double r = pair.normal.dot(rp + pose.head<2>() - reference.points_m[pair.c.line_a]);
     const Eigen::Vector3d j = ResidualJacobian(pair, rp);
     eq.hessian += j * j.transpose();
     eq.gradient += j * r;
@@ -149,8 +148,18 @@ Eigen::Vector3d ReducedCost(const Eigen::Matrix3d& s, double theta) {
 // translation step δt, rᵢ = c·(nᵢ·pᵢ) + s·(nᵢ×pᵢ) + nᵢ·δt − nᵢ·(qᵢ − t₀) is linear in
 // u = (c, s, 1, δt), so Σ rᵢ² = uᵀMu; eliminating δt leaves zᵀSz in z = (c, s, 1). A tiny damping
 // on δt keeps an unconstrained direction (a corridor's axis) where the guess put it.
-Pose2d SolveFixedPairs(const ScanPoints& reference, const ScanPoints& current, const Pose2d& pose,
-                       const std::vector<LinePair>& pairs) {
+struct FixedPairsSolution {
+  Pose2d pose = Pose2d::Zero();
+  // At the starting pose: H = Σ JᵢJᵢᵀ in (x, y, θ) and the mean squared residual, so that
+  // σ²H⁻¹ approximates the pose's covariance.
+  Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
+  double mean_square_m2 = 0.0;
+};
+
+FixedPairsSolution SolveFixedPairs(const ScanPoints& reference, const ScanPoints& current,
+                                   const Pose2d& pose, const std::vector<LinePair>& pairs) {
+  FixedPairsSolution out;
+  out.pose = pose;
   Eigen::Matrix<double, 5, 5> m = Eigen::Matrix<double, 5, 5>::Zero();
   int count = 0;
   for (const LinePair& pair : pairs) {
@@ -158,13 +167,23 @@ Pose2d SolveFixedPairs(const ScanPoints& reference, const ScanPoints& current, c
     const Eigen::Vector2d& p = current.points_m[pair.c.current];
     const Eigen::Vector2d& n = pair.normal;
     Eigen::Matrix<double, 5, 1> v;
-    v << n.dot(p), n.x() * p.y() * -1.0 + n.y() * p.x(),
-        -n.dot(reference.points_m[pair.c.reference_a] - pose.head<2>()), n.x(), n.y();
-    m.selfadjointView<Eigen::Lower>().rankUpdate(v);
+    v << n.dot(p), n.y() * p.x() - n.x() * p.y(),
+        -n.dot(reference.points_m[pair.c.line_a] - pose.head<2>()), n.x(), n.y();
+    m.noalias() += v * v.transpose();
     ++count;
   }
-  if (count < 3) return pose;
-  m = m.selfadjointView<Eigen::Lower>();
+  if (count < 3) return out;
+  // ∂u/∂(x, y, θ) at the starting pose: H = AᵀMA, and Σ rᵢ² = u₀ᵀMu₀.
+  const double c0 = std::cos(pose(2));
+  const double s0 = std::sin(pose(2));
+  Eigen::Matrix<double, 5, 3> a = Eigen::Matrix<double, 5, 3>::Zero();
+  a(3, 0) = a(4, 1) = 1.0;
+  a(0, 2) = -s0;
+  a(1, 2) = c0;
+  out.hessian = a.transpose() * m * a;
+  const Eigen::Matrix<double, 5, 1> u0 =
+      (Eigen::Matrix<double, 5, 1>() << c0, s0, 1, 0, 0).finished();
+  out.mean_square_m2 = u0.dot(m * u0) / count;
   Eigen::Matrix2d mtt = m.bottomRightCorner<2, 2>();
   mtt += (1e-9 * mtt.trace() + 1e-300) * Eigen::Matrix2d::Identity();
   const Eigen::Matrix<double, 2, 3> mtz = m.bottomLeftCorner<2, 3>();
@@ -185,8 +204,8 @@ Pose2d SolveFixedPairs(const ScanPoints& reference, const ScanPoints& current, c
   }
   const Eigen::Vector3d z(std::cos(theta), std::sin(theta), 1.0);
   const Eigen::Vector2d t = pose.head<2>() + t_of_z * z;
-  if (!t.allFinite() || !std::isfinite(theta)) return pose;
-  return Pose2d(t.x(), t.y(), theta);
+  if (t.allFinite() && std::isfinite(theta)) out.pose = Pose2d(t.x(), t.y(), theta);
+  return out;
 }
 
 // H⁻¹ with eigenvalues floored, so that a degenerate H gives a huge but finite covariance.
@@ -213,10 +232,10 @@ Eigen::Matrix3d CensiCovariance(const ScanPoints& reference, const ScanPoints& c
         ResidualJacobian(pair, Rotate(c, s, current.points_m[pair.c.current]));
     const double d_current = pair.normal.dot(Rotate(c, s, current.directions[pair.c.current]));
     m += (j * d_current) * (j * d_current).transpose();
-    reference_g[pair.c.reference_a] -=
-        j * ((1.0 - pair.alpha) * pair.normal.dot(reference.directions[pair.c.reference_a]));
-    reference_g[pair.c.reference_b] -=
-        j * (pair.alpha * pair.normal.dot(reference.directions[pair.c.reference_b]));
+    reference_g[pair.c.line_a] -=
+        j * ((1.0 - pair.alpha) * pair.normal.dot(reference.directions[pair.c.line_a]));
+    reference_g[pair.c.line_b] -=
+        j * (pair.alpha * pair.normal.dot(reference.directions[pair.c.line_b]));
   }
   for (const Eigen::Vector3d& g : reference_g) m += g * g.transpose();
   const Eigen::Matrix3d h_inverse = SafeInverse(hessian);
@@ -260,7 +279,8 @@ Status CheckOptions(const PlIcpOptions& o) {
                   o.outlier_sigmas > 0 && o.trim_fraction >= 0 && o.trim_fraction < 1 &&
                   o.min_correspondences >= 3 && std::isfinite(o.max_rms_residual_m) &&
                   std::isfinite(o.min_information_ratio) && std::isfinite(o.step_tolerance_m) &&
-                  std::isfinite(o.step_tolerance_rad);
+                  std::isfinite(o.step_tolerance_rad) && std::isfinite(o.step_tolerance_sigmas) &&
+                  o.step_tolerance_sigmas >= 0 && o.coarse_points >= 0;
   return ok ? Status::Ok()
             : Status::InvalidInput(
                   "PL-ICP options: distances and outlier_sigmas must be positive, trim_fraction "
@@ -344,10 +364,23 @@ StatusOr<ScanMatch> MatchScanPoints(const ScanPoints& reference, const ScanPoint
   std::array<uint64_t, 16> recent_hashes;
   recent_hashes.fill(0);
   std::vector<double> scratch;
+  const CorrespondenceSearch search(reference, options.correspondence);
+  // Coarse to fine: far from the solution the points pull the pose alike, so until it settles
+  // the iterations use every stride-th point only (about coarse_points of them).
+  int stride =
+      options.coarse_points > 0
+          ? std::max(1, static_cast<int>(std::lround(1.0 * returns / options.coarse_points)))
+          : 1;
+  const auto go_fine = [&] {
+    stride = 1;
+    settled = true;  // Within settle_step of the solution: outliers can be told now.
+    recent_hashes.fill(0);
+  };
   ScanMatch m;
+  bool pairs_at_pose = false;
   for (m.iterations = 1; m.iterations <= options.max_iterations; ++m.iterations) {
     TransformPoints(current, pose, &moved);
-    FindCorrespondences(reference, moved, options.correspondence, &correspondences);
+    search.Find(moved, stride, &correspondences);
     DescribePairs(reference, current, pose, moved, correspondences, &pairs);
     MarkInliers(settled ? RobustRangeSigma(pairs, &scratch) : kNoRejection, options, &pairs,
                 &scratch);
@@ -357,6 +390,10 @@ StatusOr<ScanMatch> MatchScanPoints(const ScanPoints& reference, const ScanPoint
     const auto repeats = [&] {
       return std::find(recent_hashes.begin(), recent_hashes.end(), hash) != recent_hashes.end();
     };
+    if (repeats() && stride > 1) {
+      go_fine();  // The subsample converged: on with every point from the same pose.
+      continue;
+    }
     if (repeats() && !settled) {
       // Converged with every pair: now drop the outliers and go on.
       settled = true;
@@ -365,29 +402,39 @@ StatusOr<ScanMatch> MatchScanPoints(const ScanPoints& reference, const ScanPoint
     }
     if (repeats()) {
       m.converged = true;
+      pairs_at_pose = true;
       break;
     }
     recent_hashes[m.iterations % recent_hashes.size()] = hash;
-    const Pose2d next = SolveFixedPairs(reference, current, pose, pairs);
-    const Pose2d step = next - pose;
-    pose = next;
+    const FixedPairsSolution solution = SolveFixedPairs(reference, current, pose, pairs);
+    const Pose2d step = solution.pose - pose;
+    pose = solution.pose;
     // Outliers are judged against σ̂ only once the pose has settled: far from it the residuals of
     // a whole wall direction can exceed the median and would all be dropped.
     const bool was_settled = settled;
     settled = settled || (step.head<2>().norm() < options.settle_step_m &&
                           std::abs(step(2)) < options.settle_step_rad);
-    if (was_settled && step.head<2>().norm() < options.step_tolerance_m &&
-        std::abs(step(2)) < options.step_tolerance_rad) {
+    if (stride > 1) {
+      if (settled) go_fine();
+      continue;
+    }
+    // Dense scans' correspondences flicker for many iterations at a noise floor of steps far
+    // below the pose's own uncertainty (σ²H⁻¹, σ² the mean squared residual): stop there too.
+    const double step_sigmas2 =
+        step.dot(solution.hessian * step) / std::max(solution.mean_square_m2, 1e-300);
+    const bool tiny_step =
+        (step.head<2>().norm() < options.step_tolerance_m &&
+         std::abs(step(2)) < options.step_tolerance_rad) ||
+        step_sigmas2 < options.step_tolerance_sigmas * options.step_tolerance_sigmas;
+    if (was_settled && tiny_step) {
       m.converged = true;
-      TransformPoints(current, pose, &moved);
-      DescribePairs(reference, current, pose, moved, correspondences, &pairs);
-      MarkInliers(RobustRangeSigma(pairs, &scratch), options, &pairs, &scratch);
       break;
     }
   }
   m.iterations = std::min(m.iterations, options.max_iterations);
-  if (!m.converged) {
+  if (!pairs_at_pose) {  // The last solve moved the pose: the final pairs are described there.
     TransformPoints(current, pose, &moved);
+    if (stride > 1) search.Find(moved, 1, &correspondences);
     DescribePairs(reference, current, pose, moved, correspondences, &pairs);
     MarkInliers(RobustRangeSigma(pairs, &scratch), options, &pairs, &scratch);
   }

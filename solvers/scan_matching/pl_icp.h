@@ -11,8 +11,9 @@
 #include <string>
 
 // Point-to-line ICP (Censi, "An ICP variant using a point-to-line metric", ICRA 2008): each current
-// point is pulled onto the line through its two nearest consecutive reference points, and the
-// pose minimises Σ (nᵢ·(R pᵢ + t − qᵢ))² by Gauss–Newton on (x, y, θ).
+// point is pulled onto the line through the reference points on either side of its nearest one
+// (Correspondence::line_a/line_b), and the pose minimises Σ (nᵢ·(R pᵢ + t − qᵢ))² with the lines
+// fixed, then the correspondences are searched again.
 namespace calib {
 
 enum class ScanMatchQuality {
@@ -49,9 +50,15 @@ struct PlIcpOptions {
   ScanPointsOptions reference_points;  // De-skewing of each scan (used by MatchScans only).
   ScanPointsOptions current_points;
   int max_iterations = 40;
-  // Converged when the correspondences repeat, or the step falls below these.
+  // Converged when the correspondences repeat, or the step falls below these, or below
+  // step_tolerance_sigmas standard deviations of the pose (σ²H⁻¹ with σ² the mean squared
+  // residual; 0 turns this off).
   double step_tolerance_m = 1e-9;
   double step_tolerance_rad = 1e-10;
+  double step_tolerance_sigmas = 0.1;
+  // Until the pose settles only about this many of the current points are matched (every k-th);
+  // 0 matches all of them from the start.
+  int coarse_points = 360;
   // Residuals beyond outlier_sigmas·σ̂ are dropped; then the worst trim_fraction of the rest.
   // Both apply once a step has fallen below settle_step_m and settle_step_rad.
   double outlier_sigmas = 3.0;

@@ -44,15 +44,17 @@ StatusOr<ScanPoints> MakeScanPoints(const LaserScan& scan, const ScanPointsOptio
       num_beams > 2 && span_rad >= 2.0 * M_PI - 0.5 * std::abs(scan.angle_increment_rad);
   out.point_of_beam.assign(num_beams, -1);
   out.beam_angle_rad.resize(num_beams);
+  out.beam_unit.resize(num_beams);
   out.points_m.reserve(num_beams);
   out.directions.reserve(num_beams);
   out.beams.reserve(num_beams);
   for (int i = 0; i < num_beams; ++i) {
     const double angle_rad = scan.BeamAngle(i);
+    Eigen::Vector2d direction(std::cos(angle_rad), std::sin(angle_rad));
     out.beam_angle_rad[i] = angle_rad;
+    out.beam_unit[i] = direction;
     if (!scan.IsReturn(i)) continue;
     const double range_m = scan.ranges_m[i];
-    Eigen::Vector2d direction(std::cos(angle_rad), std::sin(angle_rad));
     Eigen::Vector2d point_m = range_m * direction;
     if (options.sensor_velocity.has_value()) {
       // stamp_T_beam = Exp(ξ·dt); the point seen from the stamp's frame is stamp_T_beam ⊕ point.
@@ -66,6 +68,8 @@ StatusOr<ScanPoints> MakeScanPoints(const LaserScan& scan, const ScanPointsOptio
                                   s * direction.x() + c * direction.y());
       out.beam_angle_rad[i] =
           angle_rad + WrapAngle(std::atan2(point_m.y(), point_m.x()) - angle_rad);
+      out.beam_unit[i] =
+          Eigen::Vector2d(std::cos(out.beam_angle_rad[i]), std::sin(out.beam_angle_rad[i]));
     }
     out.point_of_beam[i] = static_cast<int>(out.points_m.size());
     out.points_m.push_back(point_m);

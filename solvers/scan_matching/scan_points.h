@@ -21,6 +21,9 @@ struct ScanPoints {
   std::vector<int> point_of_beam;
   // Per beam: the polar angle of its point (its nominal angle when it has no return).
   std::vector<double> beam_angle_rad;
+  // Per beam: (cos, sin) of beam_angle_rad, so that searches need no trigonometry. May be left
+  // empty by hand-made ScanPoints (FindCorrespondences then computes it).
+  std::vector<Eigen::Vector2d> beam_unit;
   double angle_min_rad = 0.0;
   double angle_increment_rad = 0.0;
   bool full_circle = false;  // The beams close a whole turn (search windows wrap around).

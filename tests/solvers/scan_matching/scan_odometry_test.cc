@@ -43,7 +43,9 @@ TEST(ScanOdometryTest, RobotAtRestDoesNotDrift) {
     EXPECT_EQ(result->keyframe_of[i], 0);
     EXPECT_TRUE(result->PairIsValid(i - 1));
   }
-  EXPECT_LT(PoseDifference(result->poses.back().world_T_sensor, pose).norm(), 1e-9);
+  // Not exactly zero: a point's line runs through its neighbours, whose float ranges are rounded
+  // (~0.2 µm at 3 m); one match's error, not a drift.
+  EXPECT_LT(PoseDifference(result->poses.back().world_T_sensor, pose).norm(), 1e-8);
 }
 
 // With noisy scans at rest every scan is matched to the same keyframe: the errors stay those of
@@ -68,10 +70,10 @@ TEST(ScanOdometryTest, NoisyScansAtRestStayWithinOneMatchError) {
       worst = std::max(worst, std::abs(result->poses[i].world_T_sensor(k)) / std::sqrt(cov(k, k)));
     }
   }
-  // At rest the beams of both scans align and the heading σ comes out ~3 times too small (see
-  // the report), hence the loose bound; the point here is the absence of growth.
+  // 297 errors of 3 dof, correlated through the keyframe: the worst stays within ~3σ (the bound
+  // was 8σ while the lines ran through the nearest points, whose noise leans towards the point).
   std::printf("worst error at rest: %.2f sigma of one match\n", worst);
-  EXPECT_LT(worst, 8.0);
+  EXPECT_LT(worst, 4.0);
   // Frame to frame (every scan a keyframe) the same data walks away.
   ScanOdometryOptions frame_to_frame;
   frame_to_frame.keyframe_distance_m = 0.0;
