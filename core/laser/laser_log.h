@@ -56,6 +56,9 @@ struct LaserLog {
   // "sensor_poses").
   LaserStreams streams;
   std::vector<StreamTiming> stream_timing;
+  // What the reader corrected on the way, one sentence each (exact duplicate records dropped,
+  // wrapped wheel angles unwrapped); the numbers are right, but the user should know.
+  std::vector<std::string> warnings;
 };
 
 // The robot displacement over an interval for the given odometry parameters.

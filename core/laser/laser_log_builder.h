@@ -8,6 +8,7 @@
 #include <cmath>
 #include <string>
 #include <utility>
+#include <vector>
 
 // Pieces the laser readers and writers share (not part of the API).
 namespace calib {
@@ -55,6 +56,10 @@ class LogBuilder {
       return Status::Ok();
     }
     const LaserInterval& previous = log_.intervals.back();
+    if (IsExactDuplicate(previous, interval, has_t)) {
+      duplicates_.push_back(interval.record);
+      return Status::Ok();
+    }
     const double previous_end = previous.start_s + previous.duration_s;
     if (!has_t) {
       interval.start_s = previous_end;
@@ -84,12 +89,35 @@ class LogBuilder {
       return Status::InvalidInput(log_.source + ": holds no records" + detail);
     }
     log_.has_timestamps = has_t_;
+    if (!duplicates_.empty()) log_.warnings.push_back(DuplicatesWarning());
     return std::move(log_);
   }
 
  private:
+  // The same record written twice: every value equal (t too when given). Without t, a still
+  // robot may log equal records, so only records with motion count.
+  static bool IsExactDuplicate(const LaserInterval& a, const LaserInterval& b, bool has_t) {
+    const bool moves =
+        b.left_speed != 0.0 || b.right_speed != 0.0 || b.sensor_motion != Pose2d::Zero();
+    return (has_t ? a.start_s == b.start_s : moves) && a.duration_s == b.duration_s &&
+           a.left_speed == b.left_speed && a.right_speed == b.right_speed &&
+           a.sensor_motion == b.sensor_motion;
+  }
+
+  std::string DuplicatesWarning() const {
+    std::string records;
+    for (size_t i = 0; i < duplicates_.size() && i < 5; ++i) {
+      records += (i > 0 ? ", " : "") + std::to_string(duplicates_[i]);
+    }
+    if (duplicates_.size() > 5) records += ", ...";
+    return log_.source + ": " + std::to_string(duplicates_.size()) +
+           " exact duplicate record(s) dropped (record " + records +
+           " repeats the record before it)";
+  }
+
   LaserLog log_;
   bool has_t_ = false;
+  std::vector<int> duplicates_;  // Records dropped as exact duplicates.
 };
 
 inline bool Finite(const LaserInterval& interval) {

@@ -1,6 +1,7 @@
 #include <calib/core/csv.h>
 #include <calib/core/laser/laser_log_builder.h>
 #include <calib/core/laser/laser_log_io.h>
+#include <calib/core/laser/wheel_readings.h>
 #include <calib/core/text_file.h>
 #include <calib/core/text_number.h>
 #include <calib/core/timing/stamp_timing.h>
@@ -202,10 +203,21 @@ StreamNames DirectoryNames(const std::string& directory) {
 
 // Drops exact duplicates (an error for a repeated stamp with other values), validates, and
 // appends the timing of each stream as given to `timing` (may be null).
+// Wrapped wheel angles are unwrapped first, and both corrections are told in `warnings` (may be
+// null).
 StatusOr<LaserStreams> PrepareStreams(StreamRecords odometry, StreamRecords poses,
                                       const StreamNames& names, std::vector<StreamTiming>* timing,
+                                      std::vector<std::string>* warnings,
                                       const std::vector<int>& segments = {}) {
   const std::vector<double> given_stamps = poses.stamps_s;
+  const int turns =
+      UnwrapWheelAngles(&odometry.values, 2, 0) + UnwrapWheelAngles(&odometry.values, 2, 1);
+  if (turns > 0 && warnings != nullptr) {
+    warnings->push_back(names.odometry +
+                        ": the wheel angles were wrapped to one turn (the format wants "
+                        "cumulative angles): " +
+                        std::to_string(turns) + " jumps of 2π were unwrapped");
+  }
   if (timing != nullptr) {
     // The records as given: the analysis counts the duplicates itself.
     timing->push_back(
@@ -215,8 +227,16 @@ StatusOr<LaserStreams> PrepareStreams(StreamRecords odometry, StreamRecords pose
   }
   DropUnknownLines(&odometry);
   DropUnknownLines(&poses);
-  CALIB_RETURN_IF_ERROR(DropExactDuplicates(names.odometry, &odometry));
-  CALIB_RETURN_IF_ERROR(DropExactDuplicates(names.poses, &poses));
+  int dropped[2] = {0, 0};
+  CALIB_RETURN_IF_ERROR(DropExactDuplicates(names.odometry, &odometry, &dropped[0]));
+  CALIB_RETURN_IF_ERROR(DropExactDuplicates(names.poses, &poses, &dropped[1]));
+  for (int i = 0; i < 2; ++i) {
+    if (dropped[i] == 0 || warnings == nullptr) continue;
+    warnings->push_back((i == 0 ? names.odometry : names.poses) + ": " +
+                        std::to_string(dropped[i]) +
+                        " exact duplicate record(s) dropped (same stamp and values as the "
+                        "record before)");
+  }
   LaserStreams streams;
   for (size_t k = 0; k < odometry.stamps_s.size(); ++k) {
     const double* v = &odometry.values[2 * k];
@@ -322,18 +342,23 @@ StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometr
   std::vector<StreamTiming> timing;
   std::vector<int> segments;
   for (const StampedPose& p : sensor_poses) segments.push_back(p.segment);
+  std::vector<std::string> warnings;
   CALIB_ASSIGN_OR_RETURN(LaserStreams streams,
                          PrepareStreams(OdometryRecords(odometry), PoseRecords(sensor_poses), names,
-                                        &timing, segments));
+                                        &timing, &warnings, segments));
   CALIB_ASSIGN_OR_RETURN(LaserLog log,
                          BuildFromStreams(streams.odometry, streams.sensor_poses, names));
   log.streams = std::move(streams);
   log.stream_timing = std::move(timing);
+  log.warnings = std::move(warnings);
   return log;
 }
 
-StatusOr<LaserStreams> ReadLaserStreamSamples(const std::string& directory,
-                                              std::vector<StreamTiming>* timing) {
+namespace {
+
+StatusOr<LaserStreams> ReadStreamSamples(const std::string& directory,
+                                         std::vector<StreamTiming>* timing,
+                                         std::vector<std::string>* warnings) {
   std::error_code ec;
   if (!fs::is_directory(directory, ec)) {
     return Status::Io(directory +
@@ -348,7 +373,14 @@ StatusOr<LaserStreams> ReadLaserStreamSamples(const std::string& directory,
                          ReadRecords(text, names.odometry, {"left", "right"}));
   CALIB_RETURN_IF_ERROR(ReadWholeFile(names.poses, &text));
   CALIB_ASSIGN_OR_RETURN(StreamRecords poses, ReadRecords(text, names.poses, {"x", "y", "theta"}));
-  return PrepareStreams(std::move(odometry), std::move(poses), names, timing);
+  return PrepareStreams(std::move(odometry), std::move(poses), names, timing, warnings);
+}
+
+}  // namespace
+
+StatusOr<LaserStreams> ReadLaserStreamSamples(const std::string& directory,
+                                              std::vector<StreamTiming>* timing) {
+  return ReadStreamSamples(directory, timing, nullptr);
 }
 
 StatusOr<std::vector<EncoderSample>> ReadOdometryCsv(const std::string& path) {
@@ -366,12 +398,14 @@ StatusOr<std::vector<EncoderSample>> ReadOdometryCsv(const std::string& path) {
 
 StatusOr<LaserLog> ReadLaserStream(const std::string& directory) {
   std::vector<StreamTiming> timing;
-  CALIB_ASSIGN_OR_RETURN(LaserStreams streams, ReadLaserStreamSamples(directory, &timing));
+  std::vector<std::string> warnings;
+  CALIB_ASSIGN_OR_RETURN(LaserStreams streams, ReadStreamSamples(directory, &timing, &warnings));
   const StreamNames names = DirectoryNames(directory);
   CALIB_ASSIGN_OR_RETURN(LaserLog log,
                          BuildFromStreams(streams.odometry, streams.sensor_poses, names));
   log.streams = std::move(streams);
   log.stream_timing = std::move(timing);
+  log.warnings = std::move(warnings);
   return log;
 }
 

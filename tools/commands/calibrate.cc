@@ -7,6 +7,7 @@
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
+#include <calib/tools/commands/laser_input.h>
 #include <calib/tools/commands/robot_input.h>
 #include <calib/tools/report/bearing_report.h>
 #include <calib/tools/report/laser_report.h>
@@ -54,7 +55,9 @@ int ReportLaserStreamResult(const CalibrateOptions& flags, const LaserLog& log,
   json["seconds"]["total"] = clock.Seconds();
   VerdictInputs verdict;
   verdict.converged = calibration.converged;
-  verdict.warnings = calibration.observability.warnings;
+  verdict.warnings = log.warnings;
+  verdict.warnings.insert(verdict.warnings.end(), calibration.observability.warnings.begin(),
+                          calibration.observability.warnings.end());
   verdict.disagreements = calibration.consistency.warnings;
   verdict.streams = &log.stream_timing;
   verdict.timing_treated = true;
@@ -69,7 +72,7 @@ int ReportLaserStreamResult(const CalibrateOptions& flags, const LaserLog& log,
       LaserResultSummary(calibration, flags.input, flags.loss, log.stream_timing) +
       (recording ? RobotLogSummary(*recording, calibration, nominal) : "") +
       (bag && flags.scan_points ? ScanPointSummary(*bag) : "") + LatentTimingSummary(result) +
-      verdict_line;
+      WarningLines(log.warnings) + verdict_line;
   return WriteReport(flags.output, json, summary, flags.quiet);
 }
 
@@ -110,13 +113,9 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   if (IsRobotInput(flags.input)) {
     return CalibrateRobotBag(flags, options, clock);
   }
-  std::vector<LaserLog> logs;
-  for (const std::string& path : SplitCommas(flags.input)) {
-    StatusOr<LaserLog> log = ReadLaserLog(path, *format);
-    if (!log.ok()) return Fail(log.message());
-    logs.push_back(std::move(log).value());
-  }
-  if (logs.empty()) return Fail("--input names no file");
+  StatusOr<std::vector<LaserLog>> read = ReadCheckedLaserLogs(flags, *format);
+  if (!read.ok()) return Fail(read.message());
+  const std::vector<LaserLog>& logs = *read;
   std::vector<const std::vector<LaserInterval>*> intervals;
   bool streams = false;
   for (const LaserLog& log : logs) {
@@ -147,12 +146,15 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   json["seconds"]["total"] = clock.Seconds();
   VerdictInputs verdict;
   verdict.converged = result->converged;
-  verdict.warnings = result->observability.warnings;
+  verdict.warnings = ReaderWarnings(logs);
+  verdict.warnings.insert(verdict.warnings.end(), result->observability.warnings.begin(),
+                          result->observability.warnings.end());
   verdict.disagreements = result->consistency.warnings;
   verdict.streams = &timing;
   const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
   return WriteReport(flags.output, json,
-                     LaserResultSummary(*result, flags.input, flags.loss, timing) + verdict_line,
+                     LaserResultSummary(*result, flags.input, flags.loss, timing) +
+                         WarningLines(ReaderWarnings(logs)) + verdict_line,
                      flags.quiet);
 }
 

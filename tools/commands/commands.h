@@ -28,7 +28,8 @@ struct CalibrateOptions {
   std::string base_frame;
   double nominal_wheel_radius = 0.0, nominal_wheelbase = 0.0;
   std::string wheel_angle_unit = "rad";  // rad, deg, or ticks:N.
-  bool scan_points = false;  // Refine against the scan points after the two-stage route.
+  double ticks_per_rev = 0.0;  // > 0: wheel readings are encoder ticks, this many per turn.
+  bool scan_points = false;    // Refine against the scan points after the two-stage route.
 };
 int RunCalibrate(const CalibrateOptions& options);
 

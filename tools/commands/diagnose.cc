@@ -4,6 +4,7 @@
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
+#include <calib/tools/commands/laser_input.h>
 #include <calib/tools/commands/robot_input.h>
 #include <calib/tools/report/bearing_diagnose_report.h>
 #include <calib/tools/report/laser_diagnose_report.h>
@@ -84,6 +85,12 @@ StatusOr<LaserDiagnosisOptions> LaserOptions(const DiagnoseOptions& flags) {
   return options;
 }
 
+// One laser log, read and checked as calibrate does.
+StatusOr<LaserLog> ReadCheckedLaserLog(const DiagnoseOptions& flags, LaserFormat format) {
+  CALIB_ASSIGN_OR_RETURN(std::vector<LaserLog> logs, ReadCheckedLaserLogs(flags, format));
+  return std::move(logs.front());
+}
+
 // A robot's recording: its scans matched into sensor poses and calibrated with their timing (as
 // calibrate does), then searched like a stream directory on that timing.
 StatusOr<LaserLog> RobotLaserLog(const DiagnoseOptions& flags, const LaserTimingOptions& options,
@@ -108,7 +115,7 @@ int DiagnoseLaserLog(const DiagnoseOptions& flags) {
   const bool robot = IsRobotInput(flags.input);
   std::optional<LaserTimingResult> timing;
   StatusOr<LaserLog> log =
-      robot ? RobotLaserLog(flags, timing_options, &timing) : ReadLaserLog(flags.input, *format);
+      robot ? RobotLaserLog(flags, timing_options, &timing) : ReadCheckedLaserLog(flags, *format);
   if (!log.ok()) return Fail(log.message());
   // Raw streams: their timing (sample times behind the stamps, a free-running sensor clock) is
   // estimated first, and the search runs on the intervals between the estimated times, so that

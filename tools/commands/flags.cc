@@ -46,6 +46,10 @@ DEFINE_string(base_frame, "",
 DEFINE_string(wheel_angle_unit, "rad",
               "calibrate (bags, scan directories): the unit of the wheel joints' positions: rad, "
               "deg, or ticks:N for raw encoder counts of N per wheel turn");
+DEFINE_double(ticks_per_rev, 0.0,
+              "calibrate, diagnose (laser logs, streams, bags): the wheel readings are encoder "
+              "ticks, this many per wheel turn; they are converted to radians (for bags the same "
+              "as --wheel_angle_unit ticks:N)");
 DEFINE_bool(scan_points, false,
             "calibrate (bags, scan directories): refine the calibration against the scan points "
             "themselves (point-to-line distances between neighbouring scans, each beam placed "
@@ -173,6 +177,7 @@ CalibrateOptions CalibrateOptionsFromFlags() {
   options.nominal_wheelbase = FLAGS_nominal_wheelbase;
   options.scan_points = FLAGS_scan_points;
   options.wheel_angle_unit = FLAGS_wheel_angle_unit;
+  options.ticks_per_rev = FLAGS_ticks_per_rev;
   return options;
 }
 

@@ -1,6 +1,7 @@
 #include <calib/core/bag/robot_bag.h>
 #include <calib/core/scan/scan_directory.h>
 #include <calib/tools/commands/command_util.h>
+#include <calib/tools/commands/laser_input.h>
 #include <calib/tools/commands/robot_input.h>
 
 namespace calib::cli {
@@ -26,7 +27,7 @@ StatusOr<RobotInput> ReadRobotInput(const CalibrateOptions& flags) {
   o.nominal_wheel_radius_m = flags.nominal_wheel_radius;
   o.nominal_wheelbase_m = flags.nominal_wheelbase;
   if (flags.scan_points) o.scan_points = ScanPointOptions();
-  CALIB_ASSIGN_OR_RETURN(o.wheel_radians_per_unit, ParseWheelAngleUnit(flags.wheel_angle_unit));
+  CALIB_ASSIGN_OR_RETURN(o.wheel_radians_per_unit, WheelRadiansPerUnit(flags));
   CALIB_ASSIGN_OR_RETURN(out.bag, IsScanDirectory(flags.input) ? ReadScanDirectory(flags.input)
                                                                : ReadRobotBag(flags.input));
   return out;

@@ -1,0 +1,35 @@
+#ifndef CALIB_SOLVERS_LASER_LASER_INPUT_CHECKS_H_
+#define CALIB_SOLVERS_LASER_LASER_INPUT_CHECKS_H_
+
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/status.h>
+
+// Input mistakes that a calibration would turn into a confident wrong number, told apart from the
+// data before calibrating. The closed form (Censi et al. 2008) is fitted to the log as given;
+// when it finds no robot (no positive radii and wheelbase, or a wheel larger than the wheelbase:
+// the scan rotations far too large for the wheels' rotations), it is fitted to each other
+// reading of the log (left and right swapped, one or both wheels negated, θ in degrees), and the
+// reading that is a robot is what the log means (the closest fit, by the median xy misfit
+// |ℓ ⊕ s − o ⊕ ℓ| over the median |s_xy|, when several are). When the log as given is a robot,
+// its sizes are checked: a wheel no robot has says the wheel readings or the lengths are in
+// another unit (ticks, degrees, turns; millimetres).
+namespace calib {
+
+struct LaserInputCheckOptions {
+  double smallest_radius_m = 0.003;   // Below: wheel readings in ticks or degrees.
+  double largest_radius_m = 3.0;      // Above, with a plausible wheelbase: readings in turns.
+  double largest_wheelbase_m = 20.0;  // Above: lengths in millimetres.
+  // Above: the scan rotations are too large for the wheels' (r/b of robots is about 0.03–0.5).
+  double largest_radius_over_wheelbase = 1.5;
+};
+
+// Ok when the log reads as the contract says; otherwise InvalidInput naming log.source, what
+// looks wrong (with the figures that show it) and what to do. Every finding is a guess about
+// the input, so none is corrected here: the user fixes the file or says its unit
+// (ConvertWheelTicks). A log the closed form cannot fit in any reading passes: the calibration
+// then says what is missing.
+Status CheckLaserInput(const LaserLog& log, const LaserInputCheckOptions& options = {});
+
+}  // namespace calib
+
+#endif  // CALIB_SOLVERS_LASER_LASER_INPUT_CHECKS_H_

@@ -1,0 +1,58 @@
+#include <calib/core/laser/wheel_readings.h>
+#include <calib/solvers/laser/laser_input_checks.h>
+#include <calib/tools/commands/command_util.h>
+#include <calib/tools/commands/laser_input.h>
+
+#include <cmath>
+#include <utility>
+
+namespace calib::cli {
+
+StatusOr<std::vector<LaserLog>> ReadCheckedLaserLogs(const CalibrateOptions& flags,
+                                                     LaserFormat format) {
+  if (flags.ticks_per_rev != 0.0 &&
+      !(flags.ticks_per_rev > 0.0 && std::isfinite(flags.ticks_per_rev))) {
+    return Status::InvalidInput("--ticks_per_rev must be positive (ticks per wheel turn)");
+  }
+  std::vector<LaserLog> logs;
+  for (const std::string& path : SplitCommas(flags.input)) {
+    CALIB_ASSIGN_OR_RETURN(LaserLog log, ReadLaserLog(path, format));
+    if (flags.ticks_per_rev > 0.0) {
+      CALIB_RETURN_IF_ERROR(ConvertWheelTicks(flags.ticks_per_rev, &log));
+    }
+    CALIB_RETURN_IF_ERROR(CheckLaserInput(log));
+    logs.push_back(std::move(log));
+  }
+  if (logs.empty()) return Status::InvalidInput("--input names no file");
+  return logs;
+}
+
+std::vector<std::string> ReaderWarnings(const std::vector<LaserLog>& logs) {
+  std::vector<std::string> warnings;
+  for (const LaserLog& log : logs) {
+    warnings.insert(warnings.end(), log.warnings.begin(), log.warnings.end());
+  }
+  return warnings;
+}
+
+std::string WarningLines(const std::vector<std::string>& warnings) {
+  std::string text;
+  for (const std::string& warning : warnings) text += "  warning: " + warning + "\n";
+  return text;
+}
+
+StatusOr<double> WheelRadiansPerUnit(const CalibrateOptions& flags) {
+  CALIB_ASSIGN_OR_RETURN(const double per_unit, ParseWheelAngleUnit(flags.wheel_angle_unit));
+  if (flags.ticks_per_rev == 0.0) return per_unit;
+  if (!(flags.ticks_per_rev > 0.0 && std::isfinite(flags.ticks_per_rev))) {
+    return Status::InvalidInput("--ticks_per_rev must be positive (ticks per wheel turn)");
+  }
+  if (flags.wheel_angle_unit != "rad") {
+    return Status::InvalidInput("--ticks_per_rev and --wheel_angle_unit " + flags.wheel_angle_unit +
+                                " both give the wheel angles' unit: "
+                                "give one");
+  }
+  return 2.0 * M_PI / flags.ticks_per_rev;
+}
+
+}  // namespace calib::cli
