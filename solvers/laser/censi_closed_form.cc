@@ -101,7 +101,7 @@ StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>
   if (!(x(0) > 0.0) || !x.allFinite()) {
     return Status::NotObservable(
         "the closed form gave a non-positive wheelbase: the data do not fit a "
-        "differential-drive robot (check the sign of the wheel speeds)");
+        "differential-drive robot");
   }
   // r_l = −b·J21 and r_r = +b·J22 (the paper's final formulas print the signs the wrong way).
   result.calibration.odometry = OdometryParams{-x(0) * result.j21, x(0) * result.j22, x(0)};
@@ -112,7 +112,7 @@ StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>
         "the closed form gave a non-positive wheel radius (r_l = " +
         std::to_string(result.calibration.odometry.left_radius_m) +
         ", r_r = " + std::to_string(result.calibration.odometry.right_radius_m) +
-        "): check that positive wheel speeds drive the robot forward");
+        "): the wheel readings do not explain the scan rotations with positive radii");
   }
   return result;
 }

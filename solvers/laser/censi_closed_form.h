@@ -25,7 +25,8 @@ struct CensiClosedFormResult {
 };
 
 // Estimates all six parameters from the intervals with use[k] true (all when `use` is null).
-// Returns an error naming the missing motion on degenerate data; never exits.
+// Returns an error naming the missing motion on degenerate data; never exits. Swapped or
+// sign-reversed wheels and wrong units are named by CheckLaserInput (laser_input_checks.h).
 StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>& intervals,
                                                 const std::vector<bool>* use = nullptr,
                                                 const CensiClosedFormOptions& options = {});
