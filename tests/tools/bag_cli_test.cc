@@ -175,6 +175,9 @@ TEST_F(BagCliTest, BadBagsAndTopicsAreNamed) {
   ExpectFailure(bag, "--odom_topic /odom", {"--nominal_wheel_radius"});
   ExpectFailure(bag, "--wheel_angle_unit furlongs", {"--wheel_angle_unit furlongs", "ticks:N"});
   ExpectFailure(bag, "--wheel_angle_unit ticks:0", {"--wheel_angle_unit ticks:0"});
+  ExpectFailure(bag, "--ticks_per_rev 4096 --wheel_angle_unit deg",
+                {"--ticks_per_rev and --wheel_angle_unit deg", "give one"});
+  ExpectFailure(bag, "--ticks_per_rev -2", {"--ticks_per_rev must be positive"});
   std::ofstream(dir_ / "empty.mcap").flush();
   ExpectFailure(dir_ / "empty.mcap", "", {"empty.mcap: not a bag: the file is empty"});
   for (const fs::path& source : {bag, kBags / "sim_robot_zstd.mcap"}) {

@@ -1,0 +1,195 @@
+// The common input mistakes as a user makes them: a correct simulated log (`calib simulate`)
+// written with wheel ticks, θ in degrees or wrapped wheel angles. The tool says what is wrong and
+// prints no number; --ticks_per_rev turns the ticks into the correct log's result.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tests/tools/cli_runner.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+using ::calib::testing::CliRun;
+using ::calib::testing::ReadFile;
+
+constexpr double kTicksPerRev = 4096.0;
+
+class InputSanityCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = ::calib::testing::MakeScratchDir("input_sanity_cli_test_"); }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  CliRun Calib(const std::string& args) { return ::calib::testing::RunCalib(args, dir_); }
+
+  // `calib simulate` into `name` (a .csv file, or a stream directory without extension).
+  fs::path Simulate(const std::string& name) {
+    const fs::path path = dir_ / name;
+    const std::string encoders = path.has_extension() ? "" : " --encoder_period 0.02";
+    const CliRun run =
+        Calib("simulate --intervals 300 --seed 3" + encoders + " --output " + path.string());
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    return path;
+  }
+
+  // `source` (a CSV with a header) rewritten with `edit` applied to every row's numbers.
+  static void Rewrite(const fs::path& source, const fs::path& target,
+                      const std::function<void(const std::vector<std::string>& header,
+                                               std::vector<double>* row)>& edit) {
+    std::istringstream in(ReadFile(source));
+    std::string line;
+    std::getline(in, line);
+    std::vector<std::string> header;
+    std::stringstream names(line);
+    for (std::string name; std::getline(names, name, ',');) header.push_back(name);
+    std::ostringstream out;
+    out.precision(17);
+    out << line << "\n";
+    while (std::getline(in, line)) {
+      std::vector<double> row;
+      std::stringstream cells(line);
+      for (std::string cell; std::getline(cells, cell, ',');) row.push_back(std::stod(cell));
+      edit(header, &row);
+      for (size_t i = 0; i < row.size(); ++i) out << (i ? "," : "") << row[i];
+      out << "\n";
+    }
+    std::ofstream(target) << out.str();
+  }
+
+  static size_t Column(const std::vector<std::string>& header, const std::string& name) {
+    for (size_t i = 0; i < header.size(); ++i) {
+      if (header[i] == name) return i;
+    }
+    ADD_FAILURE() << "no column " << name;
+    return 0;
+  }
+
+  std::string Calibrate(const fs::path& input, const std::string& extra = "") {
+    fs::remove(dir_ / "out.json");
+    return "calibrate --input " + input.string() + " --output " + (dir_ / "out.json").string() +
+           " " + extra;
+  }
+
+  // A refusal: non-zero exit, every needle on stderr, no JSON and no parameter printed.
+  void ExpectRefused(const CliRun& run, const std::vector<std::string>& needles) {
+    EXPECT_EQ(run.exit_code, 1) << run.err;
+    for (const std::string& needle : needles) {
+      EXPECT_NE(run.err.find(needle), std::string::npos) << "lacks '" << needle << "':\n"
+                                                         << run.err;
+    }
+    EXPECT_EQ(run.err.find("positive wheel speeds drive the robot forward"), std::string::npos)
+        << run.err;
+    EXPECT_EQ(run.out.find("r_l"), std::string::npos) << run.out;
+    EXPECT_FALSE(fs::exists(dir_ / "out.json"));
+  }
+
+  nlohmann::json Result(const CliRun& run) {
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    return nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(InputSanityCliTest, TicksAreRefusedAndTicksPerRevGivesTheCorrectResult) {
+  const fs::path good = Simulate("good.csv");
+  const nlohmann::json expected = Result(Calib(Calibrate(good)));
+  EXPECT_EQ(expected["verdict"], "trusted") << expected["warnings"];
+  const fs::path ticks = dir_ / "ticks.csv";
+  Rewrite(good, ticks, [](const std::vector<std::string>& header, std::vector<double>* row) {
+    for (const char* wheel : {"phi_l", "phi_r"}) {
+      (*row)[Column(header, wheel)] *= kTicksPerRev / (2.0 * M_PI);
+    }
+  });
+  ExpectRefused(Calib(Calibrate(ticks)),
+                {"ticks.csv: the wheel radius comes out at", "encoder ticks", "--ticks_per_rev N"});
+  ExpectRefused(
+      Calib("diagnose --input " + ticks.string() + " --output " + (dir_ / "out.json").string()),
+      {"encoder ticks", "--ticks_per_rev N"});
+
+  const nlohmann::json converted =
+      Result(Calib(Calibrate(ticks, "--ticks_per_rev " + std::to_string(kTicksPerRev))));
+  for (const char* param : {"r_l", "r_r", "b", "sensor_x", "sensor_y", "sensor_theta"}) {
+    EXPECT_NEAR(converted["estimate"][param].get<double>(),
+                expected["estimate"][param].get<double>(),
+                1e-6 * std::abs(expected["estimate"][param].get<double>()))
+        << param;
+  }
+  EXPECT_EQ(converted["verdict"], "trusted") << converted["warnings"];
+  ExpectRefused(Calib(Calibrate(ticks, "--ticks_per_rev -1")), {"--ticks_per_rev"});
+}
+
+TEST_F(InputSanityCliTest, StreamTicksAreConvertedByTicksPerRev) {
+  const fs::path good = Simulate("good_streams");
+  const fs::path ticks = dir_ / "ticks_streams";
+  fs::create_directories(ticks);
+  fs::copy_file(good / "sensor_poses.csv", ticks / "sensor_poses.csv");
+  Rewrite(good / "odometry.csv", ticks / "odometry.csv",
+          [](const std::vector<std::string>&, std::vector<double>* row) {
+            (*row)[1] *= kTicksPerRev / (2.0 * M_PI);
+            (*row)[2] *= kTicksPerRev / (2.0 * M_PI);
+          });
+  ExpectRefused(Calib(Calibrate(ticks, "--timing off")),
+                {"the left column of odometry.csv", "encoder ticks"});
+  const nlohmann::json expected = Result(Calib(Calibrate(good, "--timing off")));
+  const nlohmann::json converted = Result(
+      Calib(Calibrate(ticks, "--timing off --ticks_per_rev " + std::to_string(kTicksPerRev))));
+  EXPECT_NEAR(converted["estimate"]["r_l"].get<double>(), expected["estimate"]["r_l"].get<double>(),
+              1e-8);
+  EXPECT_NEAR(converted["estimate"]["b"].get<double>(), expected["estimate"]["b"].get<double>(),
+              1e-8);
+}
+
+TEST_F(InputSanityCliTest, ThetaInDegreesIsRefused) {
+  const fs::path good = Simulate("good.csv");
+  const fs::path degrees = dir_ / "degrees.csv";
+  Rewrite(good, degrees, [](const std::vector<std::string>& header, std::vector<double>* row) {
+    (*row)[Column(header, "sm_theta")] *= 180.0 / M_PI;
+  });
+  ExpectRefused(Calib(Calibrate(degrees)), {"degrees.csv: sm_theta looks like degrees, not radians",
+                                            "Convert sm_theta to radians"});
+}
+
+TEST_F(InputSanityCliTest, SwappedWheelsAreNamed) {
+  const fs::path good = Simulate("good.csv");
+  const fs::path swapped = dir_ / "swapped.csv";
+  Rewrite(good, swapped, [](const std::vector<std::string>& header, std::vector<double>* row) {
+    std::swap((*row)[Column(header, "phi_l")], (*row)[Column(header, "phi_r")]);
+  });
+  const CliRun run = Calib(Calibrate(swapped));
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("phi_l and phi_r swapped"), std::string::npos) << run.err;
+}
+
+// Wrapped joint angles are unwrapped, and the warning reaches the summary, the JSON and the
+// verdict; the numbers are the correct log's.
+TEST_F(InputSanityCliTest, WrappedWheelAnglesAreUnwrappedWithAWarning) {
+  const fs::path good = Simulate("good_streams");
+  const fs::path wrapped = dir_ / "wrapped_streams";
+  fs::create_directories(wrapped);
+  fs::copy_file(good / "sensor_poses.csv", wrapped / "sensor_poses.csv");
+  Rewrite(good / "odometry.csv", wrapped / "odometry.csv",
+          [](const std::vector<std::string>&, std::vector<double>* row) {
+            (*row)[1] = std::remainder((*row)[1], 2.0 * M_PI);
+            (*row)[2] = std::remainder((*row)[2], 2.0 * M_PI);
+          });
+  const nlohmann::json expected = Result(Calib(Calibrate(good, "--timing off")));
+  const CliRun run = Calib(Calibrate(wrapped, "--timing off"));
+  const nlohmann::json result = Result(run);
+  EXPECT_NEAR(result["estimate"]["r_l"].get<double>(), expected["estimate"]["r_l"].get<double>(),
+              1e-9);
+  EXPECT_NE(run.out.find("jumps of 2π were unwrapped"), std::string::npos) << run.out;
+  EXPECT_NE(result["warnings"].dump().find("jumps of 2π were unwrapped"), std::string::npos)
+      << result["warnings"];
+  EXPECT_NE(result["verdict"], "trusted");
+}
+
+}  // namespace
