@@ -145,8 +145,10 @@ TEST(LaserTuplesTest, ParsesThePublishedLayout) {
 }
 
 TEST(LaserTuplesTest, ReadsAStreamOfValuesNotLines) {
-  // `}{`, `} {`, a record split over lines, compact JSON, tabs and \r\n.
-  const std::string text = std::string(kRecord) + kRecord + " " + kRecord + "\r\n\n" +
+  // `}{`, `} {`, a record split over lines, compact JSON, tabs and \r\n (records that differ: an
+  // exact repeat of the record before is a duplicate).
+  const std::string other = R"({ "T": 0.5, "phi_l": 1, "phi_r": 2.5, "sm": [0.1, 0.2, 0.3] })";
+  const std::string text = std::string(kRecord) + other + " " + kRecord + "\r\n\n" +
                            "{\"T\":0.25,\n\t\"phi_l\" : -1e-3 ,\"phi_r\":3,\r\n \"sm\":[1,\n2,3]}" +
                            "\n" + kRecord;
   const StatusOr<LaserLog> log = ParseLaserTuples(text, "x.tuple");
