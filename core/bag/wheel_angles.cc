@@ -1,4 +1,5 @@
 #include <calib/core/bag/wheel_angles.h>
+#include <calib/core/laser/wheel_readings.h>
 #include <calib/core/se2.h>
 
 #include <algorithm>
@@ -6,8 +7,6 @@
 
 namespace calib {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 double MessageTime(double stamp_s, double log_time_s) {
   return stamp_s > 0.0 ? stamp_s : log_time_s;
@@ -18,24 +17,12 @@ int IndexOf(const std::vector<std::string>& names, const std::string& name) {
   return it == names.end() ? -1 : static_cast<int>(it - names.begin());
 }
 
-// Adds whole turns where a joint reported within (−π, π] jumps by more than π between samples.
+// Adds whole turns where a joint reported wrapped (UnwrapWheelAngles) jumps between samples.
 int Unwrap(std::vector<EncoderSample>* samples, double EncoderSample::*angle) {
-  bool within = true, jumps = false;
-  for (size_t k = 0; k < samples->size(); ++k) {
-    within = within && std::abs((*samples)[k].*angle) <= kPi + 1e-6;
-    if (k > 0) jumps = jumps || std::abs((*samples)[k].*angle - (*samples)[k - 1].*angle) > kPi;
-  }
-  if (!within || !jumps) return 0;
-  int turns = 0;
-  double offset = 0.0, previous = (*samples)[0].*angle;
-  for (EncoderSample& s : *samples) {
-    const double raw = s.*angle;
-    const double step = raw - previous;
-    if (step > kPi) offset -= 2.0 * kPi, ++turns;
-    if (step < -kPi) offset += 2.0 * kPi, ++turns;
-    previous = raw;
-    s.*angle = raw + offset;
-  }
+  std::vector<double> angles;
+  for (const EncoderSample& s : *samples) angles.push_back(s.*angle);
+  const int turns = UnwrapWheelAngles(&angles, 1, 0);
+  for (size_t k = 0; k < angles.size(); ++k) (*samples)[k].*angle = angles[k];
   return turns;
 }
 

@@ -22,8 +22,8 @@ struct WheelAngleStream {
 
 // From the positions of two joints of a sensor_msgs/JointState topic, in radians after
 // multiplying by radians_per_unit (π/180 for degrees, 2π/N for raw counts of N per turn). A joint
-// reported wrapped into (−π, π] (every position within it, and steps of nearly a full turn) is
-// unwrapped.
+// reported wrapped into (−π, π] or [0, 2π) (every position within it, and steps of more than half
+// a turn) is unwrapped.
 StatusOr<WheelAngleStream> WheelAnglesFromJointStates(const std::vector<JointState>& messages,
                                                       const std::string& left_joint,
                                                       const std::string& right_joint,

@@ -4,6 +4,8 @@
 #include <calib/core/laser/laser_log.h>
 #include <calib/core/status.h>
 
+#include <string>
+
 // Input mistakes that a calibration would turn into a confident wrong number, told apart from the
 // data before calibrating. The closed form (Censi et al. 2008) is fitted to the log as given;
 // when it finds no robot (no positive radii and wheelbase, or a wheel larger than the wheelbase:
@@ -21,6 +23,11 @@ struct LaserInputCheckOptions {
   double largest_wheelbase_m = 20.0;  // Above: lengths in millimetres.
   // Above: the scan rotations are too large for the wheels' (r/b of robots is about 0.03–0.5).
   double largest_radius_over_wheelbase = 1.5;
+  // False: only the readings (swapped, negated wheels; θ in degrees) are checked, not the sizes
+  // (a robot's bag warns about its wheel unit itself).
+  bool check_sizes = true;
+  // How the messages name the wheel readings (empty: phi_l, phi_r or the odometry.csv columns).
+  std::string left_name, right_name;
 };
 
 // Ok when the log reads as the contract says; otherwise InvalidInput naming log.source, what

@@ -1,4 +1,5 @@
 #include <calib/core/bag/wheel_angles.h>
+#include <calib/solvers/laser/laser_input_checks.h>
 #include <calib/solvers/scan_calibration/robot_scan_points.h>
 #include <calib/solvers/scan_matching/robot_bag_log.h>
 
@@ -93,6 +94,17 @@ std::optional<std::string> WheelUnitWarning(const LaserCalibrationResult& result
   return std::nullopt;
 }
 
+// Swapped or sign-reversed wheel joints, named before the calibration fails on them (the unit
+// is WheelUnitWarning's).
+Status CheckWheelReadings(const RobotBagLog& log) {
+  if (log.wheels_from_odometry) return Status::Ok();
+  LaserInputCheckOptions check;
+  check.check_sizes = false;
+  check.left_name = "the left wheel joint '" + log.topics.left_joint + "'";
+  check.right_name = "the right wheel joint '" + log.topics.right_joint + "'";
+  return CheckLaserInput(log.scans.log, check);
+}
+
 }  // namespace
 
 LaserScan MirroredScan(const LaserScan& scan) {
@@ -179,6 +191,7 @@ StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& bag,
   } else {
     CALIB_ASSIGN_OR_RETURN(out.log, LaserLogFromRobotMessages(bag, options));
   }
+  CALIB_RETURN_IF_ERROR(CheckWheelReadings(out.log));
   CALIB_ASSIGN_OR_RETURN(out.result, CalibrateLaserStreams(out.log.scans.log.streams, timing));
   if (sweeps) {
     RobotBagOptions second = options;

@@ -193,3 +193,33 @@ TEST_F(InputSanityCliTest, WrappedWheelAnglesAreUnwrappedWithAWarning) {
 }
 
 }  // namespace
+
+// A robot's recording (a scans directory, as a bag's joints) with the wheel joints swapped or one
+// reversed: named before the calibration would fail on it.
+TEST_F(InputSanityCliTest, RecordingWheelJointsSwappedOrReversedAreNamed) {
+  const fs::path good = dir_ / "scans";
+  const CliRun simulated =
+      Calib("simulate --beams 180 --intervals 200 --seed 5 --output " + good.string());
+  ASSERT_EQ(simulated.exit_code, 0) << simulated.err;
+  const auto variant = [&](const std::string& name,
+                           const std::function<void(std::vector<double>*)>& edit) {
+    const fs::path dir = dir_ / name;
+    fs::create_directories(dir);
+    fs::copy_file(good / "scans.csv", dir / "scans.csv");
+    Rewrite(good / "odometry.csv", dir / "odometry.csv",
+            [&](const std::vector<std::string>&, std::vector<double>* row) { edit(row); });
+    return dir;
+  };
+  const fs::path swapped =
+      variant("swapped", [](std::vector<double>* row) { std::swap((*row)[1], (*row)[2]); });
+  ExpectRefused(Calib(Calibrate(swapped)),
+                {"swapped: the wheels turn the robot the wrong way", "'left_wheel'",
+                 "swapped the log fits a robot", "both negated"});
+  const fs::path reversed =
+      variant("reversed", [](std::vector<double>* row) { (*row)[2] = -(*row)[2]; });
+  const CliRun run = Calib(Calibrate(reversed));
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("the right wheel's readings have the wrong sign"), std::string::npos)
+      << run.err;
+  EXPECT_EQ(run.err.find("swapped"), std::string::npos) << run.err;
+}

@@ -10,6 +10,7 @@
 #include <calib/tools/report/laser_diagnose_report.h>
 #include <calib/tools/report/latent_timing_report.h>
 
+#include <cstdio>
 #include <optional>
 #include <string>
 #include <vector>
@@ -88,6 +89,9 @@ StatusOr<LaserDiagnosisOptions> LaserOptions(const DiagnoseOptions& flags) {
 // One laser log, read and checked as calibrate does.
 StatusOr<LaserLog> ReadCheckedLaserLog(const DiagnoseOptions& flags, LaserFormat format) {
   CALIB_ASSIGN_OR_RETURN(std::vector<LaserLog> logs, ReadCheckedLaserLogs(flags, format));
+  for (const std::string& warning : logs.front().warnings) {
+    if (!flags.quiet) std::fprintf(stderr, "calib: warning: %s\n", warning.c_str());
+  }
   return std::move(logs.front());
 }
 
