@@ -230,11 +230,7 @@ Status CheckSizes(const LaserLog& log, const Names& names, const LaserCalibratio
 Status CheckLaserInput(const LaserLog& log, const LaserInputCheckOptions& options) {
   if (log.intervals.empty()) return Status::Ok();
   Fit fits[kNumReadings];
-  for (const Reading reading : {kAsGiven, kSwapped, kLeftNegated, kRightNegated, kBothNegated}) {
-    fits[reading] = FitClosedForm(ReadWheels(log.intervals, reading));
-  }
-  fits[kThetaDegrees] = FitThetaInDegrees(log);
-
+  fits[kAsGiven] = FitClosedForm(log.intervals);
   const Names names = ColumnNames(log, options);
   const Fit& given = fits[kAsGiven];
   if (Plausible(given, options)) {
@@ -242,6 +238,10 @@ Status CheckLaserInput(const LaserLog& log, const LaserInputCheckOptions& option
   }
   // The log as given is no robot: the reading that is one (the closest fit among several) is
   // what it means.
+  for (const Reading reading : {kSwapped, kLeftNegated, kRightNegated, kBothNegated}) {
+    fits[reading] = FitClosedForm(ReadWheels(log.intervals, reading));
+  }
+  fits[kThetaDegrees] = FitThetaInDegrees(log);
   int best = -1;
   for (int r = kSwapped; r < kNumReadings; ++r) {
     if (Plausible(fits[r], options) && (best < 0 || fits[r].misfit < fits[best].misfit)) best = r;
