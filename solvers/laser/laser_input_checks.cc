@@ -86,17 +86,21 @@ Fit FitThetaInDegrees(const LaserLog& log) {
 }
 
 struct Names {
-  std::string left, right, theta, xy;  // The columns, as the user knows them.
+  std::string left, right, wheels, theta, xy;  // The columns, as the user knows them.
 };
 
 Names ColumnNames(const LaserLog& log, const LaserInputCheckOptions& options) {
-  Names names = {"phi_l", "phi_r", "sm_theta", "sm_x and sm_y"};
+  Names names = {"phi_l", "phi_r", "phi_l and phi_r", "sm_theta", "sm_x and sm_y"};
   if (!log.streams.sensor_poses.empty()) {
     names = {"the left column of odometry.csv", "the right column of odometry.csv",
-             "the theta column of sensor_poses.csv", "the x and y columns of sensor_poses.csv"};
+             "the left and right columns of odometry.csv", "the theta column of sensor_poses.csv",
+             "the x and y columns of sensor_poses.csv"};
   }
-  if (!options.left_name.empty()) names.left = options.left_name;
-  if (!options.right_name.empty()) names.right = options.right_name;
+  if (!options.left_name.empty() && !options.right_name.empty()) {
+    names.left = options.left_name;
+    names.right = options.right_name;
+    names.wheels = names.left + " and " + names.right;
+  }
   return names;
 }
 
@@ -119,6 +123,13 @@ double RadiusOverWheelbase(const LaserCalibration& cal) {
 
 bool Plausible(const Fit& fit, const LaserInputCheckOptions& options) {
   return fit.ok && RadiusOverWheelbase(fit.calibration) <= options.largest_radius_over_wheelbase;
+}
+
+// Another reading must also give a wheelbase a robot has (the wheel readings' unit does not
+// change it; the radius it leaves to CheckSizes).
+bool PlausibleReading(const Fit& fit, const LaserInputCheckOptions& options) {
+  return Plausible(fit, options) &&
+         fit.calibration.odometry.wheelbase_m <= options.largest_wheelbase_m;
 }
 
 // Why the log as given is not what it means.
@@ -150,7 +161,7 @@ std::string WheelSignMessage(const LaserLog& log, const Names& names, Reading re
       Plausible(swapped, options) && Plausible(negated, options) &&
       std::max(swapped.misfit, negated.misfit) < 1.5 * std::min(swapped.misfit, negated.misfit);
   if (both || reading == kSwapped) {
-    text += ": with " + names.left + " and " + names.right + " swapped the log fits a robot (" +
+    text += ": with " + names.wheels + " swapped the log fits a robot (" +
             Sizes(swapped.calibration) + ", the sensor heading " +
             Deg(swapped.calibration.base_T_sensor(2)) + ")";
   }
@@ -208,7 +219,7 @@ Status CheckSizes(const LaserLog& log, const Names& names, const LaserCalibratio
   if (radius < options.smallest_radius_m) {
     return Status::InvalidInput(
         log.source + ": the wheel radius comes out at " + Format("%.4g", 1e3 * radius) +
-        " mm, which no wheel has: " + names.left + " and " + names.right +
+        " mm, which no wheel has: " + names.wheels +
         " look like encoder ticks (or degrees), not radians. Give --ticks_per_rev N, the ticks "
         "per wheel turn (360 for degrees): the radius is then " +
         Format("%.4g", 1e3 * radius) + " mm × N/2π (N = 1024 gives " +
@@ -218,11 +229,25 @@ Status CheckSizes(const LaserLog& log, const Names& names, const LaserCalibratio
     return Status::InvalidInput(
         log.source + Format(": the wheel radius comes out at %.4g m", radius) +
         ", which no wheel has, while the wheelbase (" + Mm(wheelbase) +
-        ") is plausible: " + names.left + " and " + names.right +
+        ") is plausible: " + names.wheels +
         " look like wheel turns, not radians. Give --ticks_per_rev 1 (or convert them to "
         "radians)");
   }
   return Status::Ok();
+}
+
+// No reading explains a log whose wheels turn the robot too little for the scans: the sizes
+// may say why; else wheel turns instead of radians (r/b 2π times too large) are the usual cause.
+Status CheckRotationScale(const LaserLog& log, const Names& names, const Fit& given,
+                          const LaserInputCheckOptions& options) {
+  CALIB_RETURN_IF_ERROR(CheckSizes(log, names, given.calibration, options));
+  return Status::InvalidInput(log.source + ": " + AsGiven(given) +
+                              Format(": the scan rotations are %.3g times those of a wheel as "
+                                     "large as the wheelbase. Are ",
+                                     RadiusOverWheelbase(given.calibration)) +
+                              names.wheels +
+                              " wheel turns, not radians? Then give --ticks_per_rev 1 (or convert "
+                              "them to radians)");
 }
 
 }  // namespace
@@ -244,9 +269,14 @@ Status CheckLaserInput(const LaserLog& log, const LaserInputCheckOptions& option
   fits[kThetaDegrees] = FitThetaInDegrees(log);
   int best = -1;
   for (int r = kSwapped; r < kNumReadings; ++r) {
-    if (Plausible(fits[r], options) && (best < 0 || fits[r].misfit < fits[best].misfit)) best = r;
+    if (PlausibleReading(fits[r], options) && (best < 0 || fits[r].misfit < fits[best].misfit)) {
+      best = r;
+    }
   }
-  if (best < 0) return Status::Ok();
+  if (best < 0) {
+    const bool scale = given.ok && options.check_sizes;
+    return scale ? CheckRotationScale(log, names, given, options) : Status::Ok();
+  }
   const Reading reading = static_cast<Reading>(best);
   return Status::InvalidInput(reading == kThetaDegrees
                                   ? ThetaDegreesMessage(log, names, fits)

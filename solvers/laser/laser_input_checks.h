@@ -12,9 +12,10 @@
 // the scan rotations far too large for the wheels' rotations), it is fitted to each other
 // reading of the log (left and right swapped, one or both wheels negated, θ in degrees), and the
 // reading that is a robot is what the log means (the closest fit, by the median xy misfit
-// |ℓ ⊕ s − o ⊕ ℓ| over the median |s_xy|, when several are). When the log as given is a robot,
-// its sizes are checked: a wheel no robot has says the wheel readings or the lengths are in
-// another unit (ticks, degrees, turns; millimetres).
+// |ℓ ⊕ s − o ⊕ ℓ| over the median |s_xy|, when several are; a reading must also give a wheelbase
+// a robot has). When the log as given is a robot, its sizes are checked: a wheel no robot has
+// says the wheel readings or the lengths are in another unit (ticks, degrees, turns;
+// millimetres); a wheel larger than the wheelbase that no reading explains, wheel turns.
 namespace calib {
 
 struct LaserInputCheckOptions {

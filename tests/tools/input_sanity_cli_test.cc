@@ -138,7 +138,7 @@ TEST_F(InputSanityCliTest, StreamTicksAreConvertedByTicksPerRev) {
             (*row)[2] *= kTicksPerRev / (2.0 * M_PI);
           });
   ExpectRefused(Calib(Calibrate(ticks, "--timing off")),
-                {"the left column of odometry.csv", "encoder ticks"});
+                {"the left and right columns of odometry.csv", "encoder ticks"});
   const nlohmann::json expected = Result(Calib(Calibrate(good, "--timing off")));
   const nlohmann::json converted = Result(
       Calib(Calibrate(ticks, "--timing off --ticks_per_rev " + std::to_string(kTicksPerRev))));

@@ -95,7 +95,7 @@ TEST(LaserInputChecksTest, TicksInStreamsAreConvertedInTheSamplesToo) {
   }
   StatusOr<LaserLog> log = LaserLogFromStreams(streams.odometry, streams.sensor_poses, "robot_dir");
   ASSERT_TRUE(log.ok()) << log.message();
-  ExpectRefused(*log, {"robot_dir", "the left column of odometry.csv", "encoder ticks"});
+  ExpectRefused(*log, {"robot_dir", "the left and right columns of odometry.csv", "encoder ticks"});
   ASSERT_TRUE(ConvertWheelTicks(kTicksPerRev, &*log).ok());
   EXPECT_TRUE(CheckLaserInput(*log).ok());
   EXPECT_NEAR(log->streams.odometry.back().left_rad,
@@ -153,6 +153,24 @@ TEST(LaserInputChecksTest, LengthsInMillimetresAreRefused) {
       LaserLogFromStreams(streams.odometry, streams.sensor_poses, "robot_dir");
   ASSERT_TRUE(stream_log.ok()) << stream_log.message();
   ExpectRefused(*stream_log, {"the x and y columns of sensor_poses.csv look like millimetres"});
+}
+
+// Turns instead of radians make the radius 2π times larger: said where no wheel is that large.
+TEST(LaserInputChecksTest, LargeWheelsInTurnsAreRefused) {
+  LaserSimOptions options = Simulation();
+  options.odometry = OdometryParams{0.6, 0.6, 1.5};
+  options.base_T_sensor = Pose2d(0.3, 0.0, 0.0);
+  LaserLog log = SimulateLaserLog(options);
+  log.source = "big.csv";
+  EXPECT_TRUE(CheckLaserInput(log).ok()) << CheckLaserInput(log).message();
+  for (LaserInterval& i : log.intervals) {
+    i.left_speed /= 2.0 * M_PI;
+    i.right_speed /= 2.0 * M_PI;
+  }
+  ExpectRefused(log, {"big.csv: the wheel radius comes out at 3.7", "look like wheel turns",
+                      "--ticks_per_rev 1"});
+  ASSERT_TRUE(ConvertWheelTicks(1.0, &log).ok());
+  EXPECT_TRUE(CheckLaserInput(log).ok());
 }
 
 // Cumulative angles reported wrapped into (−π, π] are unwrapped, with a warning; the log is then
