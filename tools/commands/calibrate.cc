@@ -9,6 +9,7 @@
 #include <calib/tools/commands/commands.h>
 #include <calib/tools/commands/robot_input.h>
 #include <calib/tools/report/bearing_report.h>
+#include <calib/tools/report/deployment.h>
 #include <calib/tools/report/laser_report.h>
 #include <calib/tools/report/latent_timing_report.h>
 #include <calib/tools/report/robot_log_report.h>
@@ -18,6 +19,34 @@
 
 namespace calib::cli {
 namespace {
+
+// --export: the deployment files beside the JSON, named in it and in the summary.
+Status ExportDeployment(const CalibrateOptions& flags, const StatusOr<Deployment>& deployment,
+                        nlohmann::ordered_json* json, std::string* summary) {
+  if (flags.export_formats.empty()) return Status::Ok();
+  CALIB_RETURN_IF_ERROR(deployment.status());
+  CALIB_ASSIGN_OR_RETURN(const std::vector<std::string> formats,
+                         ParseExportFormats(flags.export_formats));
+  CALIB_ASSIGN_OR_RETURN(const std::vector<std::string> paths,
+                         WriteDeployment(*deployment, formats, flags.output));
+  (*json)["exports"] = paths;
+  std::string line = "  deploy:";
+  for (const std::string& path : paths) line += " " + path;
+  *summary += line + "\n";
+  return Status::Ok();
+}
+
+// The report's last steps: the exports, then the JSON and the summary. The offset to deploy is
+// the one --time_offset applied plus what the calibration still found.
+int Finish(const CalibrateOptions& flags, StatusOr<Deployment> deployment,
+           nlohmann::ordered_json* json, std::string summary) {
+  if (deployment.ok() && flags.time_offset_s && deployment->offset_expressible) {
+    deployment->time_offset_s = *flags.time_offset_s + deployment->time_offset_s.value_or(0.0);
+  }
+  const Status exported = ExportDeployment(flags, deployment, json, &summary);
+  if (!exported.ok()) return Fail(exported.message());
+  return WriteReport(flags.output, *json, summary, flags.quiet);
+}
 
 LaserTimingOptions TimingOptions(const CalibrateOptions& flags,
                                  const LaserCalibrationOptions& options) {
@@ -70,7 +99,10 @@ int ReportLaserStreamResult(const CalibrateOptions& flags, const LaserLog& log,
       (recording ? RobotLogSummary(*recording, calibration, nominal) : "") +
       (bag && flags.scan_points ? ScanPointSummary(*bag) : "") + LatentTimingSummary(result) +
       verdict_line;
-  return WriteReport(flags.output, json, summary, flags.quiet);
+  const ScanPointCalibration* refined =
+      scan_points && scan_points->has_value() ? &**scan_points : nullptr;
+  return Finish(flags, LaserDeployment(calibration, flags.input, recording, &result, refined),
+                &json, summary);
 }
 
 // One raw-stream log: every sample's true time is estimated with the calibration.
@@ -112,7 +144,7 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   }
   std::vector<LaserLog> logs;
   for (const std::string& path : SplitCommas(flags.input)) {
-    StatusOr<LaserLog> log = ReadLaserLog(path, *format);
+    StatusOr<LaserLog> log = ReadLaserInput(path, *format, flags.time_offset_s);
     if (!log.ok()) return Fail(log.message());
     logs.push_back(std::move(log).value());
   }
@@ -151,9 +183,8 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   verdict.disagreements = result->consistency.warnings;
   verdict.streams = &timing;
   const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
-  return WriteReport(flags.output, json,
-                     LaserResultSummary(*result, flags.input, flags.loss, timing) + verdict_line,
-                     flags.quiet);
+  return Finish(flags, LaserDeployment(*result, flags.input), &json,
+                LaserResultSummary(*result, flags.input, flags.loss, timing) + verdict_line);
 }
 
 int CalibrateBearingLog(const CalibrateOptions& flags) {
@@ -174,16 +205,17 @@ int CalibrateBearingLog(const CalibrateOptions& flags) {
   verdict.streams = &timing;
   verdict.timing_treated = true;  // Offset and stamp jitter are modelled (calibrate_bearing).
   const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
-  return WriteReport(flags.output, json,
-                     BearingResultSummary(*result, flags.input, flags.loss, timing) + verdict_line,
-                     flags.quiet);
+  return Finish(flags, BearingDeployment(*result, input->log, flags.input), &json,
+                BearingResultSummary(*result, flags.input, flags.loss, timing) + verdict_line);
 }
 
 }  // namespace
 
 int RunCalibrate(const CalibrateOptions& options) {
-  const Status given = CheckInputAndOutput(options.input, options.output);
+  const Status given = CheckInput(options.input);
   if (!given.ok()) return Fail(given.message());
+  const StatusOr<std::vector<std::string>> exports = ParseExportFormats(options.export_formats);
+  if (!exports.ok()) return Fail(exports.message());
   return IsBearingInput(options.input, options.format) ? CalibrateBearingLog(options)
                                                        : CalibrateLaserLogs(options);
 }

@@ -2,6 +2,7 @@
 #define CALIB_TOOLS_COMMANDS_COMMANDS_H_
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 // The calib commands. Each takes its options struct (filled from the flags in flags.cc, the only
@@ -29,6 +30,10 @@ struct CalibrateOptions {
   double nominal_wheel_radius = 0.0, nominal_wheelbase = 0.0;
   std::string wheel_angle_unit = "rad";  // rad, deg, or ticks:N.
   bool scan_points = false;  // Refine against the scan points after the two-stage route.
+  // A known sensor latency: a sample stamped t was taken at t + this (raw streams, bags, bearing
+  // logs); empty: none given.
+  std::optional<double> time_offset_s;
+  std::string export_formats;  // --export: yaml, urdf, tf (comma-separated) or all; empty: none.
 };
 int RunCalibrate(const CalibrateOptions& options);
 

@@ -31,12 +31,19 @@ template <typename Diagnosis>
 int WriteDiagnosis(const DiagnoseOptions& flags, const Diagnosis& diagnosis, const Stopwatch& clock,
                    const DiagnosisWriters<Diagnosis>& writers,
                    const LaserTimingResult* timing = nullptr) {
-  const std::string plots_dir =
-      flags.plots_dir.empty() ? DefaultPlotsDir(flags.output) : flags.plots_dir;
-  const StatusOr<Plots> plots = writers.plots(diagnosis, plots_dir);
-  if (!plots.ok()) return Fail(plots.message());
-  nlohmann::ordered_json json = writers.json(diagnosis, flags.input, *plots);
-  std::string summary = writers.summary(diagnosis, flags.input, *plots);
+  // Plots go beside the JSON, or where --plots_dir says; none for a summary-only run.
+  const bool output_file = !flags.output.empty() && flags.output != "-";
+  const std::string plots_dir = !flags.plots_dir.empty() ? flags.plots_dir
+                                : output_file            ? DefaultPlotsDir(flags.output)
+                                                         : "";
+  Plots plots;
+  if (!plots_dir.empty()) {
+    StatusOr<Plots> written = writers.plots(diagnosis, plots_dir);
+    if (!written.ok()) return Fail(written.message());
+    plots = std::move(written).value();
+  }
+  nlohmann::ordered_json json = writers.json(diagnosis, flags.input, plots);
+  std::string summary = writers.summary(diagnosis, flags.input, plots);
   if (timing != nullptr) {
     // Timing is named first, as timing (and adopted when it changes the calibration).
     const nlohmann::ordered_json finding = LatentTimingFinding(*timing);
@@ -107,8 +114,8 @@ int DiagnoseLaserLog(const DiagnoseOptions& flags) {
   timing_options.sensor_clock = flags.timing;
   const bool robot = IsRobotInput(flags.input);
   std::optional<LaserTimingResult> timing;
-  StatusOr<LaserLog> log =
-      robot ? RobotLaserLog(flags, timing_options, &timing) : ReadLaserLog(flags.input, *format);
+  StatusOr<LaserLog> log = robot ? RobotLaserLog(flags, timing_options, &timing)
+                                 : ReadLaserInput(flags.input, *format, flags.time_offset_s);
   if (!log.ok()) return Fail(log.message());
   // Raw streams: their timing (sample times behind the stamps, a free-running sensor clock) is
   // estimated first, and the search runs on the intervals between the estimated times, so that
@@ -157,7 +164,7 @@ int DiagnoseBearingLog(const DiagnoseOptions& flags) {
 }  // namespace
 
 int RunDiagnose(const DiagnoseOptions& options) {
-  const Status given = CheckInputAndOutput(options.input, options.output);
+  const Status given = CheckInput(options.input);
   if (!given.ok()) return Fail(given.message());
   if (options.input.find(',') != std::string::npos) {
     return Fail("diagnose takes one log (--input names several)");

@@ -12,7 +12,9 @@ DEFINE_string(input, "",
               "(ROS 2 .mcap or bag directory, ROS 1 .bag), several laser logs "
               "separated by commas (calibrated jointly), or a bearing log directory "
               "(odometry.csv, bearings.csv, meta.json)");
-DEFINE_string(output, "", "Where to write the JSON result");
+DEFINE_string(output, "",
+              "Where to write the JSON result (optional: without it only the summary is "
+              "printed; - writes the JSON on stdout and the summary on stderr)");
 DEFINE_string(format, kDiagnose.format.c_str(), "Laser log format: auto, tuples, csv or stream");
 DEFINE_string(loss, kDiagnose.loss.c_str(), "Robust loss: cauchy, huber or none");
 DEFINE_double(loss_scale, kDiagnose.loss_scale,
@@ -46,6 +48,12 @@ DEFINE_string(base_frame, "",
 DEFINE_string(wheel_angle_unit, "rad",
               "calibrate (bags, scan directories): the unit of the wheel joints' positions: rad, "
               "deg, or ticks:N for raw encoder counts of N per wheel turn");
+DEFINE_string(export, "",
+              "calibrate: also write the calibration for deployment, beside the JSON (OUT.yaml, "
+              "OUT.urdf, OUT.tf) or as calib_calibration.* in the working directory: yaml "
+              "(diff_drive_controller parameters, the sensor mounting, the time offset), urdf "
+              "(the sensor's joint origin), tf (static_transform_publisher arguments), "
+              "comma-separated, or all");
 DEFINE_bool(scan_points, false,
             "calibrate (bags, scan directories): refine the calibration against the scan points "
             "themselves (point-to-line distances between neighbouring scans, each beam placed "
@@ -86,7 +94,9 @@ DEFINE_double(segment_mean, kSimulate.segment_mean,
 DEFINE_double(max_wheel_speed, kSimulate.max_wheel_speed,
               "simulate: largest commanded wheel speed (rad/s)");
 DEFINE_double(time_offset, kSimulate.time_offset,
-              "simulate: scans stamped t were taken at t + this (s)");
+              "A sensor sample stamped t was taken at t + this (s) on the odometry clock: "
+              "calibrate and diagnose apply it to the sensor's stamps (raw streams, bags, bearing "
+              "logs; not interval logs) as a known latency; simulate writes it into the log");
 DEFINE_double(lateral_slip, kSimulate.lateral_slip,
               "simulate: lateral velocity = this * v * omega (s)");
 DEFINE_double(longitudinal_slip, kSimulate.longitudinal_slip,
@@ -173,6 +183,10 @@ CalibrateOptions CalibrateOptionsFromFlags() {
   options.nominal_wheelbase = FLAGS_nominal_wheelbase;
   options.scan_points = FLAGS_scan_points;
   options.wheel_angle_unit = FLAGS_wheel_angle_unit;
+  options.export_formats = FLAGS_export;
+  if (!gflags::GetCommandLineFlagInfoOrDie("time_offset").is_default) {
+    options.time_offset_s = FLAGS_time_offset;
+  }
   return options;
 }
 
