@@ -77,6 +77,7 @@ TEST_F(DeployCliTest, DashWritesTheJsonOnStdoutAndTheSummaryOnStderr) {
   const nlohmann::json json = nlohmann::json::parse(run.out);
   EXPECT_EQ(json["problem"], "laser");
   EXPECT_TRUE(json["estimate"].contains("r_l"));
+  EXPECT_GT(json["odometry_drift"]["calibrated_1sigma"]["turn_deg_per_turn"].get<double>(), 0.0);
   EXPECT_NE(run.err.find("verdict:"), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(dir_ / "-"));
   const CliRun diagnose = Calib("diagnose --quiet --output - --input " +
