@@ -7,8 +7,11 @@
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
+#include <calib/tools/commands/plot_output.h>
 #include <calib/tools/commands/robot_input.h>
+#include <calib/tools/report/bearing_calibration_plots.h>
 #include <calib/tools/report/bearing_report.h>
+#include <calib/tools/report/laser_calibration_plots.h>
 #include <calib/tools/report/laser_report.h>
 #include <calib/tools/report/latent_timing_report.h>
 #include <calib/tools/report/robot_log_report.h>
@@ -65,11 +68,19 @@ int ReportLaserStreamResult(const CalibrateOptions& flags, const LaserLog& log,
     verdict.warnings.insert(verdict.warnings.end(), refinement.begin(), refinement.end());
   }
   const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
-  const std::string summary =
+  std::string summary =
       LaserResultSummary(calibration, flags.input, flags.loss, log.stream_timing) +
       (recording ? RobotLogSummary(*recording, calibration, nominal) : "") +
       (bag && flags.scan_points ? ScanPointSummary(*bag) : "") + LatentTimingSummary(result) +
       verdict_line;
+  const Status plotted = AddCalibrationPlots(
+      flags,
+      [&] {
+        return LaserCalibrationPlots({&log.intervals}, calibration,
+                                     {flags.nominal_wheel_radius, flags.nominal_wheelbase});
+      },
+      &json, &summary);
+  if (!plotted.ok()) return Fail(plotted.message());
   return WriteReport(flags.output, json, summary, flags.quiet);
 }
 
@@ -150,10 +161,12 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   verdict.warnings = result->observability.warnings;
   verdict.disagreements = result->consistency.warnings;
   verdict.streams = &timing;
-  const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
-  return WriteReport(flags.output, json,
-                     LaserResultSummary(*result, flags.input, flags.loss, timing) + verdict_line,
-                     flags.quiet);
+  std::string summary = LaserResultSummary(*result, flags.input, flags.loss, timing) +
+                        AddVerdict(JudgeResult(verdict), &json);
+  const Status plotted = AddCalibrationPlots(
+      flags, [&] { return LaserCalibrationPlots(intervals, *result); }, &json, &summary);
+  if (!plotted.ok()) return Fail(plotted.message());
+  return WriteReport(flags.output, json, summary, flags.quiet);
 }
 
 int CalibrateBearingLog(const CalibrateOptions& flags) {
@@ -173,10 +186,12 @@ int CalibrateBearingLog(const CalibrateOptions& flags) {
   verdict.warnings = result->warnings;
   verdict.streams = &timing;
   verdict.timing_treated = true;  // Offset and stamp jitter are modelled (calibrate_bearing).
-  const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
-  return WriteReport(flags.output, json,
-                     BearingResultSummary(*result, flags.input, flags.loss, timing) + verdict_line,
-                     flags.quiet);
+  std::string summary = BearingResultSummary(*result, flags.input, flags.loss, timing) +
+                        AddVerdict(JudgeResult(verdict), &json);
+  const Status plotted = AddCalibrationPlots(
+      flags, [&] { return BearingCalibrationPlots(input->log, *result); }, &json, &summary);
+  if (!plotted.ok()) return Fail(plotted.message());
+  return WriteReport(flags.output, json, summary, flags.quiet);
 }
 
 }  // namespace
@@ -184,6 +199,9 @@ int CalibrateBearingLog(const CalibrateOptions& flags) {
 int RunCalibrate(const CalibrateOptions& options) {
   const Status given = CheckInputAndOutput(options.input, options.output);
   if (!given.ok()) return Fail(given.message());
+  const Status plot_format =
+      options.plots_dir.empty() ? Status::Ok() : CheckPlotFormat(options.plot_format);
+  if (!plot_format.ok()) return Fail(plot_format.message());
   return IsBearingInput(options.input, options.format) ? CalibrateBearingLog(options)
                                                        : CalibrateLaserLogs(options);
 }

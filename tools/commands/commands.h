@@ -29,6 +29,9 @@ struct CalibrateOptions {
   double nominal_wheel_radius = 0.0, nominal_wheelbase = 0.0;
   std::string wheel_angle_unit = "rad";  // rad, deg, or ticks:N.
   bool scan_points = false;  // Refine against the scan points after the two-stage route.
+  // Plot folder: calibrate draws nothing when empty; diagnose then uses OUT_plots beside OUT.json.
+  std::string plots_dir;
+  std::string plot_format = "svg";  // svg, or png (each SVG also rasterized).
 };
 int RunCalibrate(const CalibrateOptions& options);
 
@@ -39,7 +42,6 @@ struct DiagnoseOptions : CalibrateOptions {
   int cv_blocks = 5;                     // Contiguous held-out blocks.
   std::string candidates;                // Comma-separated laser effects; empty: all.
   std::string boundary_speeds = "auto";  // auto, piecewise or smooth (laser).
-  std::string plots_dir;                 // Empty: OUT_plots beside the JSON output.
 };
 int RunDiagnose(const DiagnoseOptions& options);
 
