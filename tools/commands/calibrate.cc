@@ -76,8 +76,8 @@ int ReportLaserStreamResult(const CalibrateOptions& flags, const LaserLog& log,
   const Status plotted = AddCalibrationPlots(
       flags,
       [&] {
-        return LaserCalibrationPlots({&log.intervals}, calibration,
-                                     {flags.nominal_wheel_radius, flags.nominal_wheelbase});
+        return LaserTimingCalibrationPlots(log, result, calibration,
+                                           {flags.nominal_wheel_radius, flags.nominal_wheelbase});
       },
       &json, &summary);
   if (!plotted.ok()) return Fail(plotted.message());

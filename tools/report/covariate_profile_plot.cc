@@ -40,7 +40,10 @@ std::string ChannelTitle(const std::string& label) {
   return it != titles.end() ? it->second : label;
 }
 
-std::string ShortNumber(double v) { return Format("%.2g", v); }
+// Two significant digits; 0 for a value that is zero on the scale of the largest.
+std::string ShortNumber(double v, double largest) {
+  return std::abs(v) < 1e-4 * largest ? "0" : Format("%.2g", v);
+}
 
 }  // namespace
 
@@ -111,9 +114,11 @@ std::string CovariateProfileSvg(const CovariateProfile& profile, const std::stri
   if (!true_positions && bins > 0) {
     std::string means = "Bins are numbered (their means crowd together); mean " + covariate + " [" +
                         profile.unit + "] of each bin:";
+    double largest = 0.0;
+    for (double c : profile.center) largest = std::max(largest, std::abs(c));
     for (size_t b = 0; b < bins; ++b) {
-      means +=
-          Format(" %zu: ", b + 1) + ShortNumber(profile.center[b]) + (b + 1 < bins ? "," : ".");
+      means += Format(" %zu: ", b + 1) + ShortNumber(profile.center[b], largest) +
+               (b + 1 < bins ? "," : ".");
     }
     figure.caption.push_back(means);
   }

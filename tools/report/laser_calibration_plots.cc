@@ -1,3 +1,4 @@
+#include <calib/core/laser/laser_log_io.h>
 #include <calib/core/text_format.h>
 #include <calib/solvers/laser/laser_dead_reckoning.h>
 #include <calib/tools/report/laser_calibration_plots.h>
@@ -126,7 +127,7 @@ std::string PathsSvg(const std::vector<LaserInterval>& intervals,
 }
 
 std::string ResidualsSvg(const std::vector<Eigen::Vector3d>& errors, const std::vector<bool>& used,
-                         const Eigen::Vector3d& sigma) {
+                         const Eigen::Vector3d& sigma, const std::string& note) {
   const char* titles[3] = {"Forward (x) residual", "Sideways (y) residual", "Heading (θ) residual"};
   const char* labels[3] = {"x error [mm]", "y error [mm]", "θ error [mrad]"};
   const char* units[3] = {"mm", "mm", "mrad"};
@@ -138,6 +139,7 @@ std::string ResidualsSvg(const std::vector<Eigen::Vector3d>& errors, const std::
       "Blue: intervals used (inliers); red: intervals rejected as outliers (squared whitened "
       "residual above the χ² cut of 16.3). Dashed: the normal density of the noise σ fitted "
       "to the inliers, scaled to their count; bars that follow it mean the noise model fits."};
+  if (!note.empty()) figure.caption.push_back(note);
   for (int c = 0; c < 3; ++c) {
     std::vector<double> values;
     for (const Eigen::Vector3d& e : errors) values.push_back(e(c) * 1e3);
@@ -174,11 +176,9 @@ std::string CoverageSvg(const std::vector<LaserInterval>& intervals,
   return ChartSvg(figure);
 }
 
-}  // namespace
-
-PlotFiles LaserCalibrationPlots(const std::vector<const std::vector<LaserInterval>*>& logs,
-                                const LaserCalibrationResult& result,
-                                const LaserPlotBaseline& baseline) {
+PlotFiles Plots(const std::vector<const std::vector<LaserInterval>*>& logs,
+                const LaserCalibrationResult& result, const LaserPlotBaseline& baseline,
+                const std::string& residual_note) {
   const Baseline before = ChooseBaseline(result, baseline);
   PlotFiles files;
   for (size_t i = 0; i < logs.size(); ++i) {
@@ -190,10 +190,34 @@ PlotFiles LaserCalibrationPlots(const std::vector<const std::vector<LaserInterva
     const Eigen::Vector3d sigma =
         i < result.noise_sigma.size() ? result.noise_sigma[i] : Eigen::Vector3d::Zero();
     files.emplace_back(prefix + "laser_paths.svg", PathsSvg(intervals, result, before, used));
-    files.emplace_back(prefix + "laser_residuals.svg", ResidualsSvg(errors, used, sigma));
+    files.emplace_back(prefix + "laser_residuals.svg",
+                       ResidualsSvg(errors, used, sigma, residual_note));
     files.emplace_back(prefix + "laser_coverage.svg", CoverageSvg(intervals, result, used));
   }
   return files;
+}
+
+}  // namespace
+
+PlotFiles LaserCalibrationPlots(const std::vector<const std::vector<LaserInterval>*>& logs,
+                                const LaserCalibrationResult& result,
+                                const LaserPlotBaseline& baseline) {
+  return Plots(logs, result, baseline, "");
+}
+
+PlotFiles LaserTimingCalibrationPlots(const LaserLog& log, const LaserTimingResult& timing,
+                                      const LaserCalibrationResult& calibration,
+                                      const LaserPlotBaseline& baseline) {
+  const StatusOr<LaserLog> timed = LaserLogFromStreams(
+      timing.timed_streams.odometry, timing.timed_streams.sensor_poses, log.source);
+  const bool usable = timed.ok() && !calibration.is_inlier.empty() &&
+                      calibration.is_inlier[0].size() == timed->intervals.size();
+  return Plots({usable ? &timed->intervals : &log.intervals}, calibration, baseline,
+               std::string("Timing-aware calibration: the intervals run between the estimated "
+                           "sample times") +
+                   (usable ? "" : " (not rebuilt here: shown between the stamps)") +
+                   "; σ and the outlier flags are the fit's, whose sample times are latent, so "
+                   "a rejected interval may sit in the bulk here.");
 }
 
 }  // namespace calib

@@ -3,6 +3,7 @@
 
 #include <calib/core/laser/laser_log.h>
 #include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/tools/report/svg_plot.h>
 
 #include <optional>
@@ -27,6 +28,13 @@ struct LaserPlotBaseline {
 PlotFiles LaserCalibrationPlots(const std::vector<const std::vector<LaserInterval>*>& logs,
                                 const LaserCalibrationResult& result,
                                 const LaserPlotBaseline& baseline = {});
+
+// A timing-aware calibration (raw streams, a robot's bag): the same plots on the intervals
+// between the estimated sample times, where its residuals and noise σ live (the stamped
+// intervals of `log` when those cannot be rebuilt). `calibration`: the result reported.
+PlotFiles LaserTimingCalibrationPlots(const LaserLog& log, const LaserTimingResult& timing,
+                                      const LaserCalibrationResult& calibration,
+                                      const LaserPlotBaseline& baseline = {});
 
 }  // namespace calib
 
