@@ -119,7 +119,9 @@ std::string PathsSvg(const std::vector<LaserInterval>& intervals,
           "a slip) take the calibrated displacement in all three paths, so that they show as "
           "drift in none.",
       "Right: how far each dead-reckoned path is from the scan-matched one as the sensor "
-      "travels. Both drift with the noise; a calibration that fits stays closer."};
+      "travels. Part of the gap is the scan matcher's own random walk, common to both; wrong "
+      "wheels add a drift that grows with the distance. A closed-form seed is often close to the "
+      "calibration, and then so are their paths."};
   figure.panels = {paths, gaps};
   figure.panel_width = 460;
   figure.panel_height = 380;
