@@ -13,9 +13,7 @@ namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 
-std::string LengthUnit(const BearingPaths& paths) {
-  return paths.metric ? "m" : "nominal right-wheel m";
-}
+std::string LengthUnit(const BearingPaths& paths) { return paths.metric ? "m" : "nominal m"; }
 
 ChartSeries PathSeries(const std::string& label, const std::vector<Pose2d>& path, const char* color,
                        ChartStyle style) {
@@ -43,7 +41,10 @@ std::string PathsSvg(const BearingPaths& paths) {
   figure.caption = {
       "One panel per run, seen from above in the landmark's frame (the landmark is the white "
       "dot at the origin), lengths in " +
-      unit + (paths.metric ? "" : " (no initial distance: the bearings do not fix the scale)") +
+      unit +
+      (paths.metric ? ""
+                    : " (no initial distance, so the bearings do not fix the scale: a nominal "
+                      "metre is the right wheel's travel at meta.json's radius)") +
       ". Black: the path the bundle adjustment fits to the bearings and encoders together. "
       "Orange, dashed: dead reckoning from the same start with the nominal wheels "
       "(meta.json's radius and wheelbase). Green: the same with the calibrated wheels."};
@@ -68,7 +69,7 @@ std::string PathsSvg(const BearingPaths& paths) {
       travelled += (run.adjusted[k].head<2>() - run.adjusted[k - 1].head<2>()).norm();
     }
     panel.note = Format("End point off by %.3f (nominal), %.3f (calibrated) %s", old_gap, new_gap,
-                        paths.metric ? "m" : "units");
+                        paths.metric ? "m" : "nominal m");
     if (travelled < 0.05 * run.adjusted.front().head<2>().norm()) {
       panel.note += "; the robot turns in place";
     }

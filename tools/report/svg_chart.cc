@@ -108,7 +108,8 @@ std::vector<LegendSlot> LegendLayout(const ChartPanel& panel, double width) {
 }
 int LegendRows(const ChartPanel& panel, double width) {
   const std::vector<LegendSlot> slots = LegendLayout(panel, width);
-  return (slots.empty() ? 0 : slots.back().row + 1) + (panel.note.empty() ? 0 : 1);
+  return (slots.empty() ? 0 : slots.back().row + 1) +
+         static_cast<int>(Wrap(panel.note, width).size());
 }
 
 class PanelDrawer {
@@ -270,9 +271,9 @@ class PanelDrawer {
       svg << Format("<text x='%.1f' y='%.1f' font-size='12'>%s</text>\n", x + 32, y,
                     SvgEscape(s.label).c_str());
     }
-    if (!p_.note.empty()) {
+    for (const std::string& line : Wrap(p_.note, w_)) {
       svg << Format("<text x='%.1f' y='%.1f' font-size='12' fill='#444'>%s</text>\n", left_,
-                    y0 + kLegendRow * rows, SvgEscape(p_.note).c_str());
+                    y0 + kLegendRow * rows++, SvgEscape(line).c_str());
     }
   }
 
