@@ -387,6 +387,9 @@ StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
   result.noise = final_problem.noise();
   result.estimate = final_problem.params();
   result.poses = final_problem.poses();
+  for (const BearingRunNodes& nodes : final_problem.nodes()) {
+    result.node_times_s.push_back(nodes.t_s);
+  }
   result.residuals_rad = final_problem.BearingErrors();
   result.adjustment_seconds = Seconds(clock);
   clock = std::chrono::steady_clock::now();
@@ -398,6 +401,7 @@ StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
   result.covariance_seconds = Seconds(clock);
   CALIB_RETURN_IF_ERROR(CheckDetermined(options, &result).Prefixed(source + ": "));
   SummarizeRuns(log, final_problem, *inlier, &result);
+  result.is_inlier = *inlier;
   if (options.timing.sensor_clock) {
     CALIB_ASSIGN_OR_RETURN(
         result, bearing_calibration::TrySensorClock(log, options, progress, final_problem, *inlier,

@@ -141,6 +141,8 @@ struct BearingCalibrationResult {
   std::vector<BearingRunSummary> runs;
   std::vector<std::vector<double>> residuals_rad;  // Per run, per bearing: wrap(β − β̂).
   std::vector<std::vector<Pose2d>> poses;          // Per run, at its nodes (gauge units).
+  std::vector<std::vector<double>> node_times_s;   // Per run, the times of those nodes.
+  std::vector<std::vector<bool>> is_inlier;        // Per run, per bearing: within the cut.
   double covariance_scale = 1.0;                   // κ.
   int iterations = 0;
   bool converged = true;  // The final adjustment stopped by a convergence test.

@@ -8,10 +8,13 @@
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
+#include <calib/tools/commands/plot_output.h>
 #include <calib/tools/commands/robot_input.h>
+#include <calib/tools/report/bearing_calibration_plots.h>
 #include <calib/tools/report/bearing_report.h>
 #include <calib/tools/report/deployment.h>
 #include <calib/tools/report/drift_report.h>
+#include <calib/tools/report/laser_calibration_plots.h>
 #include <calib/tools/report/laser_report.h>
 #include <calib/tools/report/latent_timing_report.h>
 #include <calib/tools/report/robot_log_report.h>
@@ -126,11 +129,19 @@ int ReportLaserStreamResult(const CalibrateOptions& flags, const LaserCalibratio
   const DriftReport drift = LaserDrift(calibration, NominalOdometry(flags));
   json["odometry_drift"] = DriftJson(drift);
   const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
-  const std::string summary =
+  std::string summary =
       LaserResultSummary(calibration, flags.input, flags.loss, log.stream_timing) +
       (recording ? RobotLogSummary(*recording, calibration, nominal) : "") +
       (bag && flags.scan_points ? ScanPointSummary(*bag) : "") + LatentTimingSummary(result) +
       DriftSummary(drift) + verdict_line;
+  const Status plotted = AddCalibrationPlots(
+      flags,
+      [&] {
+        return LaserTimingCalibrationPlots(log, result, calibration,
+                                           {flags.nominal_wheel_radius, flags.nominal_wheelbase});
+      },
+      &json, &summary);
+  if (!plotted.ok()) return Fail(plotted.message());
   const ScanPointCalibration* refined =
       scan_points && scan_points->has_value() ? &**scan_points : nullptr;
   return Finish(flags, LaserDeployment(calibration, flags.input, recording, &result, refined),
@@ -217,10 +228,12 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   if (logs.size() == 1) ScreenModel(logs.front().intervals, options, false, &verdict, &json);
   const DriftReport drift = LaserDrift(*result, NominalOdometry(flags));
   json["odometry_drift"] = DriftJson(drift);
-  const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
-  return Finish(flags, LaserDeployment(*result, flags.input), &json,
-                LaserResultSummary(*result, flags.input, flags.loss, timing) + DriftSummary(drift) +
-                    verdict_line);
+  std::string summary = LaserResultSummary(*result, flags.input, flags.loss, timing) +
+                        DriftSummary(drift) + AddVerdict(JudgeResult(verdict), &json);
+  const Status plotted = AddCalibrationPlots(
+      flags, [&] { return LaserCalibrationPlots(intervals, *result); }, &json, &summary);
+  if (!plotted.ok()) return Fail(plotted.message());
+  return Finish(flags, LaserDeployment(*result, flags.input), &json, summary);
 }
 
 int CalibrateBearingLog(const CalibrateOptions& flags) {
@@ -242,10 +255,13 @@ int CalibrateBearingLog(const CalibrateOptions& flags) {
   verdict.timing_treated = true;  // Offset and stamp jitter are modelled (calibrate_bearing).
   const std::optional<DriftReport> drift = BearingDrift(*result, input->log);
   if (drift) json["odometry_drift"] = DriftJson(*drift);
-  const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
-  return Finish(flags, BearingDeployment(*result, input->log, flags.input), &json,
-                BearingResultSummary(*result, flags.input, flags.loss, timing) +
-                    (drift ? DriftSummary(*drift) : "") + verdict_line);
+  std::string summary = BearingResultSummary(*result, flags.input, flags.loss, timing) +
+                        (drift ? DriftSummary(*drift) : "") +
+                        AddVerdict(JudgeResult(verdict), &json);
+  const Status plotted = AddCalibrationPlots(
+      flags, [&] { return BearingCalibrationPlots(input->log, *result); }, &json, &summary);
+  if (!plotted.ok()) return Fail(plotted.message());
+  return Finish(flags, BearingDeployment(*result, input->log, flags.input), &json, summary);
 }
 
 }  // namespace
@@ -255,6 +271,9 @@ int RunCalibrate(const CalibrateOptions& options) {
   if (!given.ok()) return Fail(given.message());
   const StatusOr<std::vector<std::string>> exports = ParseExportFormats(options.export_formats);
   if (!exports.ok()) return Fail(exports.message());
+  const Status plot_format =
+      options.plots_dir.empty() ? Status::Ok() : CheckPlotFormat(options.plot_format);
+  if (!plot_format.ok()) return Fail(plot_format.message());
   return IsBearingInput(options.input, options.format) ? CalibrateBearingLog(options)
                                                        : CalibrateLaserLogs(options);
 }

@@ -34,6 +34,9 @@ struct CalibrateOptions {
   // logs); empty: none given.
   std::optional<double> time_offset_s;
   std::string export_formats;  // --export: yaml, urdf, tf (comma-separated) or all; empty: none.
+  // Plot folder: calibrate draws nothing when empty; diagnose then uses OUT_plots beside OUT.json.
+  std::string plots_dir;
+  std::string plot_format = "svg";  // svg, or png (each SVG also rasterized).
 };
 int RunCalibrate(const CalibrateOptions& options);
 
@@ -44,7 +47,6 @@ struct DiagnoseOptions : CalibrateOptions {
   int cv_blocks = 5;                     // Contiguous held-out blocks.
   std::string candidates;                // Comma-separated laser effects; empty: all.
   std::string boundary_speeds = "auto";  // auto, piecewise or smooth (laser).
-  std::string plots_dir;                 // Empty: OUT_plots beside the JSON output.
 };
 int RunDiagnose(const DiagnoseOptions& options);
 

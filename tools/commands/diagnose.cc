@@ -4,6 +4,7 @@
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
+#include <calib/tools/commands/plot_output.h>
 #include <calib/tools/commands/robot_input.h>
 #include <calib/tools/report/bearing_diagnose_report.h>
 #include <calib/tools/report/laser_diagnose_report.h>
@@ -41,6 +42,8 @@ int WriteDiagnosis(const DiagnoseOptions& flags, const Diagnosis& diagnosis, con
     StatusOr<Plots> written = writers.plots(diagnosis, plots_dir);
     if (!written.ok()) return Fail(written.message());
     plots = std::move(written).value();
+    const Status rasterized = AddRasterized(flags.plot_format, &plots);
+    if (!rasterized.ok()) return Fail(rasterized.message());
   }
   nlohmann::ordered_json json = writers.json(diagnosis, flags.input, plots);
   std::string summary = writers.summary(diagnosis, flags.input, plots);
@@ -175,6 +178,8 @@ int RunDiagnose(const DiagnoseOptions& options) {
   if (options.cv_blocks < 2) return Fail("--cv_blocks must be at least 2");
   const Status timing = CheckTimingFlag(options.timing);
   if (!timing.ok()) return Fail(timing.message());
+  const Status plot_format = CheckPlotFormat(options.plot_format);
+  if (!plot_format.ok()) return Fail(plot_format.message());
   return IsBearingInput(options.input, options.format) ? DiagnoseBearingLog(options)
                                                        : DiagnoseLaserLog(options);
 }

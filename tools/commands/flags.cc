@@ -73,8 +73,12 @@ DEFINE_string(boundary_speeds, kDiagnose.boundary_speeds.c_str(),
               "diagnose: wheel speeds at interval boundaries: auto, piecewise (constant within "
               "intervals) or smooth");
 DEFINE_string(plots_dir, "",
-              "diagnose: folder for the SVG plots (default: OUT_plots next to "
-              "the JSON output)");
+              "folder for the plots: calibrate draws its plots (dead reckoning, residuals, "
+              "coverage) only when given; diagnose draws its residual profiles there (default: "
+              "OUT_plots next to the JSON output)");
+DEFINE_string(plot_format, "svg",
+              "format of the plots: svg, or png (each SVG also converted to PNG by rsvg-convert, "
+              "Debian package librsvg2-bin)");
 
 // `calib simulate`: a laser log with known truth.
 DEFINE_string(truth, "", "simulate: where to write the truth as JSON (optional)");
@@ -187,6 +191,8 @@ CalibrateOptions CalibrateOptionsFromFlags() {
   if (!gflags::GetCommandLineFlagInfoOrDie("time_offset").is_default) {
     options.time_offset_s = FLAGS_time_offset;
   }
+  options.plots_dir = FLAGS_plots_dir;
+  options.plot_format = FLAGS_plot_format;
   return options;
 }
 
@@ -198,7 +204,6 @@ DiagnoseOptions DiagnoseOptionsFromFlags() {
   options.cv_blocks = FLAGS_cv_blocks;
   options.candidates = FLAGS_candidates;
   options.boundary_speeds = FLAGS_boundary_speeds;
-  options.plots_dir = FLAGS_plots_dir;
   return options;
 }
 
