@@ -66,8 +66,7 @@ BearingCalibrationOptions CalibrationOptions(const std::string& loss, double los
   return options;
 }
 
-py::dict CalibrateBearingPath(const std::string& path, const std::string& loss,
-                              double loss_scale) {
+py::dict CalibrateBearingPath(const std::string& path, const std::string& loss, double loss_scale) {
   const BearingCalibrationOptions options = CalibrationOptions(loss, loss_scale);
   const BearingLog log = Unwrap(ReadBearingLog(path));
   const StatusOr<BearingCalibrationResult> result = [&] {

@@ -193,7 +193,8 @@ py::dict LaserResultToPython(const LaserCalibrationResult& r, nlohmann::ordered_
   for (size_t k = 0; k < r.noise_sigma.size(); ++k) noise.row(k) = r.noise_sigma[k].transpose();
   d["noise_sigma"] = py::cast(noise);
   std::vector<bool> inlier;
-  for (const std::vector<bool>& log : r.is_inlier) inlier.insert(inlier.end(), log.begin(), log.end());
+  for (const std::vector<bool>& log : r.is_inlier)
+    inlier.insert(inlier.end(), log.begin(), log.end());
   d["is_inlier"] = py::array_t<bool>(py::cast(inlier));
   d["verdict"] = report["verdict"].get<std::string>();
   d["verdict_reason"] = report.value("verdict_reason", "");
@@ -271,8 +272,9 @@ py::dict CalibrateLaserPath(const std::string& path, const std::string& format,
   const LaserTimingOptions timing_options = TimingOptions(options, timing);
   if (IsRobotInput(path)) {
     if (timing == "off") {
-      throw py::value_error(path + ": a bag is calibrated with its timing; timing='off' applies "
-                                   "to logs of intervals and stream directories");
+      throw py::value_error(path +
+                            ": a bag is calibrated with its timing; timing='off' applies "
+                            "to logs of intervals and stream directories");
     }
     const RobotBagOptions bag_options = RobotOptions(bag);
     const RobotMessages messages = ReadRobotMessages(path);
@@ -323,8 +325,7 @@ LaserDiagnosisOptions DiagnosisOptions(const std::string& loss, double loss_scal
 // The contract's diagnosis report (`report`, as `calib diagnose` writes it but without plots)
 // with the base and final estimates as arrays.
 py::dict Diagnose(const std::string& source, const std::vector<LaserInterval>& intervals,
-                  const LaserDiagnosisOptions& options,
-                  const LaserTimingResult* timing = nullptr) {
+                  const LaserDiagnosisOptions& options, const LaserTimingResult* timing = nullptr) {
   const StatusOr<LaserDiagnosis> result = [&] {
     py::gil_scoped_release release;
     return DiagnoseLaser(intervals, options);
@@ -366,8 +367,8 @@ py::dict DiagnoseLaserPath(const std::string& path, const std::string& format,
   std::optional<LaserTimingResult> timed;
   LaserLog log;
   if (IsRobotInput(path)) {
-    RobotBagCalibration calibrated = Unwrap(
-        CalibrateRobotMessages(ReadRobotMessages(path), RobotOptions(bag), timing_options));
+    RobotBagCalibration calibrated =
+        Unwrap(CalibrateRobotMessages(ReadRobotMessages(path), RobotOptions(bag), timing_options));
     timed = std::move(calibrated.result);
     log = std::move(calibrated.log.scans.log);
   } else {
@@ -380,8 +381,8 @@ py::dict DiagnoseLaserPath(const std::string& path, const std::string& format,
     }
   }
   if (timed) {
-    StatusOr<LaserLog> at_times = LaserLogFromStreams(timed->timed_streams.odometry,
-                                                      timed->timed_streams.sensor_poses, path);
+    StatusOr<LaserLog> at_times =
+        LaserLogFromStreams(timed->timed_streams.odometry, timed->timed_streams.sensor_poses, path);
     if (!at_times.ok()) Raise(at_times.status().Prefixed(path + ": at the estimated times: "));
     log.intervals = std::move(at_times->intervals);
     options.sample_times_estimated = true;
@@ -418,8 +419,7 @@ void BindLaser(py::module_& m) {
         "`calib calibrate`).");
   m.def("calibrate_laser_arrays", &CalibrateLaserArrays, py::arg("T"), py::arg("phi_l"),
         py::arg("phi_r"), py::arg("sm"), py::kw_only(), py::arg("t") = py::none(),
-        py::arg("loss") = "cauchy", py::arg("loss_scale") = 3.0,
-        py::arg("interval_jitter") = true,
+        py::arg("loss") = "cauchy", py::arg("loss_scale") = 3.0, py::arg("interval_jitter") = true,
         "Calibrates intervals given as arrays: T (s), phi_l, phi_r (rad/s), sm (N×3: x, y, theta "
         "of the sensor displacement in the sensor frame at the start), optional t (interval "
         "starts; a jump marks a gap). Returns the dict of calibrate_laser.");
