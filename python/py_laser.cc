@@ -160,10 +160,21 @@ RobotBagOptions RobotOptions(const py::dict& kwargs) {
     } else if (name == "scan_points") {
       if (value.cast<bool>()) o.scan_points = ScanPointOptions();
     } else {
-      throw py::value_error("unknown option " + name);
+      throw py::type_error("unexpected keyword argument '" + name +
+                           "' (bag options: scan_topic, joint_state_topic, odom_topic, "
+                           "left_wheel_joint, right_wheel_joint, base_frame, nominal_wheel_radius, "
+                           "nominal_wheelbase, wheel_radians_per_unit, scan_points)");
     }
   }
   return o;
+}
+
+void CheckBagTiming(const std::string& path, const std::string& timing) {
+  if (timing == "off") {
+    throw py::value_error(path +
+                          ": a bag is calibrated with its timing; timing='off' applies to logs of "
+                          "intervals and stream directories");
+  }
 }
 
 RobotMessages ReadRobotMessages(const std::string& path) {
@@ -213,6 +224,9 @@ py::dict StreamResult(const std::string& path, const std::string& loss, const La
     calibration.estimate = bag->scan_points->estimate;
     calibration.covariance = bag->scan_points->covariance;
     calibration.stddev = bag->scan_points->stddev;
+    for (std::string& w : calibration.observability.warnings) {
+      w = "two-stage (before the refinement on the scan points): " + w;
+    }
   }
   nlohmann::ordered_json json = LaserResultJson(calibration, path, loss, log.stream_timing);
   json["timing"]["treatment"] = "latent_times";
@@ -271,11 +285,7 @@ py::dict CalibrateLaserPath(const std::string& path, const std::string& format,
   const LaserCalibrationOptions options = CalibrationOptions(loss, loss_scale);
   const LaserTimingOptions timing_options = TimingOptions(options, timing);
   if (IsRobotInput(path)) {
-    if (timing == "off") {
-      throw py::value_error(path +
-                            ": a bag is calibrated with its timing; timing='off' applies "
-                            "to logs of intervals and stream directories");
-    }
+    CheckBagTiming(path, timing);
     const RobotBagOptions bag_options = RobotOptions(bag);
     const RobotMessages messages = ReadRobotMessages(path);
     const RobotBagCalibration calibrated =
@@ -337,6 +347,7 @@ py::dict Diagnose(const std::string& source, const std::vector<LaserInterval>& i
     json["findings"].insert(json["findings"].begin(), finding);
     if (finding["significant"].get<bool>()) {
       json["final"]["effects"].insert(json["final"]["effects"].begin(), "sample_times");
+      json["adopted"].insert(json["adopted"].begin(), "sample_times");
     }
     json["timing"]["treatment"] = "latent_times";
     json["timing"]["latent_times"] = LatentTimingJson(*timing);
@@ -367,6 +378,7 @@ py::dict DiagnoseLaserPath(const std::string& path, const std::string& format,
   std::optional<LaserTimingResult> timed;
   LaserLog log;
   if (IsRobotInput(path)) {
+    CheckBagTiming(path, timing);
     RobotBagCalibration calibrated =
         Unwrap(CalibrateRobotMessages(ReadRobotMessages(path), RobotOptions(bag), timing_options));
     timed = std::move(calibrated.result);

@@ -75,6 +75,34 @@ class CalibrateLaserTest(unittest.TestCase):
             calib.calibrate_laser_arrays(T, phi_l, phi_r, sm)
 
 
+class RobotRecordingTest(unittest.TestCase):
+
+    def assert_within_three_sigma(self, result, truth_path):
+        with open(truth_path) as f:
+            truth = json.load(f)["estimate"]
+        for name, value, sigma in zip(result["params"], result["estimate"], result["stddev"]):
+            self.assertLess(abs(value - truth[name]), 3 * sigma, name)
+
+    def test_bag_read_and_calibrated_within_three_sigma(self):
+        bag = os.path.join(DATA, "bags", "sim_robot_zstd.mcap")
+        log = calib.read_laser_log(bag)  # Scans matched into sensor poses.
+        self.assertEqual(log["sensor_poses"].shape[1], 4)
+        self.assertEqual(log["sm"].shape, (len(log["T"]), 3))
+        result = calib.calibrate_laser(bag)
+        self.assertIn("recording", result["report"])
+        self.assert_within_three_sigma(result, os.path.join(DATA, "bags", "sim_robot_truth.json"))
+        with self.assertRaisesRegex(TypeError, "scan_topc"):
+            calib.read_laser_log(bag, scan_topc="/scan")
+
+    def test_raw_streams_read_and_calibrated_with_their_timing(self):
+        directory = os.path.join(DATA, "timing", "clean")
+        log = calib.read_laser_log(directory)
+        self.assertEqual(log["odometry"].shape[1], 3)
+        result = calib.calibrate_laser(directory)
+        self.assertEqual(result["report"]["timing"]["treatment"], "latent_times")
+        self.assert_within_three_sigma(result, os.path.join(directory, "truth.json"))
+
+
 class DiagnoseLaserTest(unittest.TestCase):
 
     def test_finds_the_lateral_slip(self):
