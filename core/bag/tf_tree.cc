@@ -59,6 +59,7 @@ StatusOr<PlanarMounting> MountingFromTf(const RobotMessages& bag, const std::str
       const Eigen::Matrix3d rotation = base_T_sensor.linear();
       PlanarMounting out;
       const Eigen::Vector3d x_axis = rotation.col(0), z_axis = rotation.col(2);
+      out.base_T_sensor_3d = base_T_sensor;
       out.upside_down = z_axis.z() < 0.0;
       out.tilt_rad = std::acos(std::clamp(z_axis.z(), -1.0, 1.0));
       out.base_T_sensor = Pose2d(base_T_sensor.translation().x(), base_T_sensor.translation().y(),

@@ -5,6 +5,7 @@
 #include <calib/core/se2.h>
 #include <calib/core/status.h>
 
+#include <Eigen/Geometry>
 #include <string>
 
 // A sensor's nominal mounting from a bag's tf: the transforms of /tf_static (and, for a frame
@@ -19,6 +20,7 @@ struct PlanarMounting {
   bool upside_down = false;
   double tilt_rad = 0.0;  // Between the sensor's z axis and the base's (0 or π when level).
   std::string chain;      // "base_link → laser_mount → laser".
+  Eigen::Isometry3d base_T_sensor_3d = Eigen::Isometry3d::Identity();  // As tf gives it.
 };
 
 // Frame names compare without a leading '/' (ROS 1 bags often have one).

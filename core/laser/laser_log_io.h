@@ -58,6 +58,10 @@ StatusOr<LaserStreams> ReadLaserStreamSamples(const std::string& directory,
 StatusOr<std::vector<EncoderSample>> ReadOdometryCsv(const std::string& path);
 // ReadLaserStreamSamples + LaserLogFromStreams; the log carries the streams and their timing.
 StatusOr<LaserLog> ReadLaserStream(const std::string& directory);
+// A raw-stream log whose sensor sample stamped t was taken at t + offset_s (a known latency):
+// the sensor poses moved and the intervals built again. An error for a log without raw streams
+// (tuples, CSV), whose intervals carry no sample stamps to move.
+StatusOr<LaserLog> ShiftSensorStamps(LaserLog log, double offset_s);
 
 // Writers emit the shortest decimal form that reads back bit-exact. They write the interval
 // values only: `steps`, `line` and `record` are not stored. WriteLaserTuples adds the key "t"

@@ -409,6 +409,23 @@ StatusOr<LaserLog> ReadLaserStream(const std::string& directory) {
   return log;
 }
 
+StatusOr<LaserLog> ShiftSensorStamps(LaserLog log, double offset_s) {
+  if (log.streams.sensor_poses.empty()) {
+    return Status::InvalidInput(log.source +
+                                ": a time offset applies to sample stamps, and this log holds "
+                                "intervals (tuples or CSV) without them; give the raw streams");
+  }
+  if (!std::isfinite(offset_s)) return Status::InvalidInput("the time offset is not finite");
+  for (StampedPose& pose : log.streams.sensor_poses) pose.t_s += offset_s;
+  CALIB_ASSIGN_OR_RETURN(
+      LaserLog shifted,
+      BuildFromStreams(log.streams.odometry, log.streams.sensor_poses, DirectoryNames(log.source)));
+  shifted.streams = std::move(log.streams);
+  shifted.stream_timing = std::move(log.stream_timing);
+  shifted.warnings = std::move(log.warnings);
+  return shifted;
+}
+
 Status WriteLaserStream(const std::vector<EncoderSample>& odometry,
                         const std::vector<StampedPose>& sensor_poses,
                         const std::string& directory) {

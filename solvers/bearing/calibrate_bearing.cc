@@ -211,24 +211,40 @@ Status ComputeCovariance(const BearingLog& log, const BearingCalibrationOptions&
   return Status::Ok();
 }
 
-// A parameter the log barely determines is reported as an error, not as a number.
-Status CheckDetermined(const BearingCalibrationResult& result,
-                       const BearingCalibrationOptions& options) {
-  const BearingParamVector value = ToVector(result.estimate);
-  std::string weak;
+// A parameter the log barely determines is a warning with its σ; one it does not determine at
+// all (σ beyond the undetermined limits, or not finite) is an error, not a number.
+Status CheckDetermined(const BearingCalibrationOptions& options, BearingCalibrationResult* result) {
+  const BearingParamVector value = ToVector(result->estimate);
+  std::string weak, undetermined;
   for (int i = 0; i < kNumBearingParams; ++i) {
     const bool angle = i == kBearingPhi || i == kBearingPsi;
-    const double limit =
-        angle ? options.max_angle_stddev_rad : options.max_relative_stddev * std::abs(value(i));
-    if (!(result.stddev(i) <= limit)) {
-      weak += (weak.empty() ? "" : ", ") + std::string(kBearingParamNames[i]) +
-              " (σ = " + Num(result.stddev(i), 3) + ")";
+    const double scale = angle ? 1.0 : std::abs(value(i));
+    const double warn =
+        scale * (angle ? options.max_angle_stddev_rad : options.max_relative_stddev);
+    const double refuse = scale * (angle ? options.undetermined_angle_stddev_rad
+                                         : options.undetermined_relative_stddev);
+    const double sigma = result->stddev(i);
+    const std::string entry = std::string(kBearingParamNames[i]) + " (σ = " + Num(sigma, 3) +
+                              (angle ? " rad" : ", " + Num(100.0 * sigma / scale, 2) + " %") + ")";
+    if (!(sigma <= refuse)) {
+      undetermined += (undetermined.empty() ? "" : ", ") + entry;
+    } else if (!(sigma <= warn)) {
+      weak += (weak.empty() ? "" : ", ") + entry;
     }
   }
-  if (weak.empty()) return Status::Ok();
-  return Status::NotObservable("the log does not determine " + weak +
-                               ": it needs circular runs at three or more distinct wheel-speed "
-                               "ratios, or runs whose curvature varies, with the landmark in view");
+  constexpr const char* kNeeds =
+      "it needs circular runs at three or more distinct wheel-speed ratios, or runs whose "
+      "curvature varies, with the landmark in view";
+  if (!undetermined.empty()) {
+    return Status::NotObservable("the log does not determine " + undetermined + ": " + kNeeds);
+  }
+  if (!weak.empty()) {
+    result->warnings.push_back("poorly determined: " + weak +
+                               "; the other parameters are sound, but do not deploy these "
+                               "without more data (" +
+                               kNeeds + ")");
+  }
+  return Status::Ok();
 }
 
 void SummarizeRuns(const BearingLog& log, const BearingProblem& problem, const BearingMask& inlier,
@@ -371,6 +387,9 @@ StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
   result.noise = final_problem.noise();
   result.estimate = final_problem.params();
   result.poses = final_problem.poses();
+  for (const BearingRunNodes& nodes : final_problem.nodes()) {
+    result.node_times_s.push_back(nodes.t_s);
+  }
   result.residuals_rad = final_problem.BearingErrors();
   result.adjustment_seconds = Seconds(clock);
   clock = std::chrono::steady_clock::now();
@@ -380,8 +399,9 @@ StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
   CALIB_RETURN_IF_ERROR(
       bearing_calibration::FinishTiming(&final_problem, &result).Prefixed(source + ": "));
   result.covariance_seconds = Seconds(clock);
-  CALIB_RETURN_IF_ERROR(CheckDetermined(result, options).Prefixed(source + ": "));
+  CALIB_RETURN_IF_ERROR(CheckDetermined(options, &result).Prefixed(source + ": "));
   SummarizeRuns(log, final_problem, *inlier, &result);
+  result.is_inlier = *inlier;
   if (options.timing.sensor_clock) {
     CALIB_ASSIGN_OR_RETURN(
         result, bearing_calibration::TrySensorClock(log, options, progress, final_problem, *inlier,

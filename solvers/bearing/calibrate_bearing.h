@@ -79,10 +79,14 @@ struct BearingCalibrationOptions {
   // A seed is rejected (and the next one tried) when the adjustment from it leaves residuals
   // whose robust scale exceeds this many times the neighbours' scatter: a wrong minimum.
   double max_fit_over_scatter = 2.0;
-  // Larger standard deviations mean the log does not determine the parameters: angles (rad),
-  // and η, δ, ξ relative to their value.
-  double max_angle_stddev_rad = 0.35;
-  double max_relative_stddev = 0.25;
+  // Larger standard deviations flag a poorly determined parameter (a warning with its σ; the
+  // estimate is still returned): angles (rad), and η, δ, ξ relative to their value.
+  double max_angle_stddev_rad = 0.1;
+  double max_relative_stddev = 0.1;
+  // Beyond these the log does not determine the parameter at all (not even its sign or
+  // quadrant): an error, not a number.
+  double undetermined_angle_stddev_rad = 1.0;
+  double undetermined_relative_stddev = 0.5;
   std::function<void(const std::string&)> progress;  // Optional progress lines.
 };
 
@@ -137,6 +141,8 @@ struct BearingCalibrationResult {
   std::vector<BearingRunSummary> runs;
   std::vector<std::vector<double>> residuals_rad;  // Per run, per bearing: wrap(β − β̂).
   std::vector<std::vector<Pose2d>> poses;          // Per run, at its nodes (gauge units).
+  std::vector<std::vector<double>> node_times_s;   // Per run, the times of those nodes.
+  std::vector<std::vector<bool>> is_inlier;        // Per run, per bearing: within the cut.
   double covariance_scale = 1.0;                   // κ.
   int iterations = 0;
   bool converged = true;  // The final adjustment stopped by a convergence test.

@@ -128,6 +128,7 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
   WheelAngleStream wheels;
   CALIB_RETURN_IF_ERROR(WheelAngles(bag, options, &out, &wheels));
   std::vector<LaserScan> scans = bag.scans.at(out.topics.scan_topic);
+  for (LaserScan& scan : scans) scan.stamp_s += options.sensor_time_offset_s;
   out.sensor_frame = scans.empty() ? "" : scans.front().frame_id;
   out.base_frame = BaseFrame(bag, options);
   const StatusOr<PlanarMounting> mounting = MountingFromTf(bag, out.base_frame, out.sensor_frame);

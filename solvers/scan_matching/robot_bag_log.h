@@ -29,6 +29,7 @@ struct RobotBagOptions {
   // N per wheel turn.
   double wheel_radians_per_unit = 1.0;
   std::string base_frame;  // Empty: base_link, else base_footprint, else Odometry's child frame.
+  double sensor_time_offset_s = 0.0;  // A known latency: a scan stamped t began at t + this.
   ScanOdometryOptions matching;
   // A calibration of this robot (a first pass): the matcher's guesses and the de-skewing of each
   // sweep then go through it instead of the nominal values.

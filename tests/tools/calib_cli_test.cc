@@ -1,6 +1,7 @@
 // The offline tool as a user runs it: exit status, messages, and the contract's JSON keys.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -9,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "tests/tools/cli_runner.h"
 
@@ -244,6 +246,35 @@ TEST_F(CalibCliTest, QuietSaysNothing) {
     EXPECT_EQ(run.exit_code, 0) << command << "\n" << run.err;
     EXPECT_EQ(run.out, "") << command;
     EXPECT_EQ(run.err, "") << command;
+  }
+}
+
+// The verdict points to `calib diagnose` when the model screen finds physics the base model
+// leaves out (data/diagnose: each log simulated with one effect), and not on the clean log.
+TEST_F(CalibCliTest, VerdictPointsToDiagnoseWhenTheModelLeavesPhysicsOut) {
+  const fs::path data = fs::path(CALIB_SOURCE_DIR) / "data" / "diagnose";
+  const std::vector<std::pair<std::string, std::string>> logs = {
+      {"clean.tuple", ""},
+      {"lateral_slip.tuple", "lateral_slip"},
+      {"longitudinal_slip.tuple", "longitudinal_slip"},
+      {"wheel_radius_change.tuple", "wheel_radius_change"},
+      {"time_offset.tuple", "time_offset"}};
+  for (const auto& [name, effect] : logs) {
+    const CliRun run = Calib(Calibrate(data / name));
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+    if (effect.empty()) {
+      EXPECT_EQ(json["verdict"], "trusted") << name << ": " << json["warnings"];
+      EXPECT_FALSE(json["model_screen"]["flagged"].get<bool>()) << name;
+      continue;
+    }
+    EXPECT_EQ(json["verdict"], "check") << name;
+    EXPECT_NE(json["verdict_reason"].get<std::string>().find("calib diagnose"), std::string::npos)
+        << name;
+    const auto& effects = json["model_screen"]["effects"];
+    EXPECT_NE(std::find(effects.begin(), effects.end(), effect), effects.end())
+        << name << ": " << effects;
+    EXPECT_NE(run.out.find("Run `calib diagnose`"), std::string::npos) << run.out;
   }
 }
 

@@ -3,13 +3,19 @@
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
 #include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/solvers/laser/laser_model_screen.h>
 #include <calib/solvers/scan_matching/robot_bag_log.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
 #include <calib/tools/commands/laser_input.h>
+#include <calib/tools/commands/plot_output.h>
 #include <calib/tools/commands/robot_input.h>
+#include <calib/tools/report/bearing_calibration_plots.h>
 #include <calib/tools/report/bearing_report.h>
+#include <calib/tools/report/deployment.h>
+#include <calib/tools/report/drift_report.h>
+#include <calib/tools/report/laser_calibration_plots.h>
 #include <calib/tools/report/laser_report.h>
 #include <calib/tools/report/latent_timing_report.h>
 #include <calib/tools/report/robot_log_report.h>
@@ -19,6 +25,59 @@
 
 namespace calib::cli {
 namespace {
+
+// The driver's wheels, when --nominal_wheel_radius and --nominal_wheelbase give them.
+std::optional<OdometryParams> NominalOdometry(const CalibrateOptions& flags) {
+  if (!(flags.nominal_wheel_radius > 0.0 && flags.nominal_wheelbase > 0.0)) return std::nullopt;
+  return OdometryParams{flags.nominal_wheel_radius, flags.nominal_wheel_radius,
+                        flags.nominal_wheelbase};
+}
+
+// The quick look for physics the model leaves out (laser_model_screen.h): its JSON, and its
+// sentence among the verdict's warnings when it finds something.
+void ScreenModel(const std::vector<LaserInterval>& intervals,
+                 const LaserCalibrationOptions& options, bool sample_times_estimated,
+                 VerdictInputs* verdict, nlohmann::ordered_json* json) {
+  const StatusOr<LaserModelScreen> screen =
+      ScreenLaserModel(intervals, options, sample_times_estimated);
+  nlohmann::ordered_json& out = (*json)["model_screen"];
+  if (!screen.ok()) {
+    out["error"] = screen.message();
+    return;
+  }
+  out["flagged"] = screen->flagged;
+  out["effects"] = screen->effects;
+  out["structure"] = screen->structure;
+  verdict->model_screen = screen->warning;
+}
+
+// --export: the deployment files beside the JSON, named in it and in the summary.
+Status ExportDeployment(const CalibrateOptions& flags, const StatusOr<Deployment>& deployment,
+                        nlohmann::ordered_json* json, std::string* summary) {
+  if (flags.export_formats.empty()) return Status::Ok();
+  CALIB_RETURN_IF_ERROR(deployment.status());
+  CALIB_ASSIGN_OR_RETURN(const std::vector<std::string> formats,
+                         ParseExportFormats(flags.export_formats));
+  CALIB_ASSIGN_OR_RETURN(const std::vector<std::string> paths,
+                         WriteDeployment(*deployment, formats, flags.output));
+  (*json)["exports"] = paths;
+  std::string line = "  deploy:";
+  for (const std::string& path : paths) line += " " + path;
+  *summary += line + "\n";
+  return Status::Ok();
+}
+
+// The report's last steps: the exports, then the JSON and the summary. The offset to deploy is
+// the one --time_offset applied plus what the calibration still found.
+int Finish(const CalibrateOptions& flags, StatusOr<Deployment> deployment,
+           nlohmann::ordered_json* json, std::string summary) {
+  if (deployment.ok() && flags.time_offset_s && deployment->offset_expressible) {
+    deployment->time_offset_s = *flags.time_offset_s + deployment->time_offset_s.value_or(0.0);
+  }
+  const Status exported = ExportDeployment(flags, deployment, json, &summary);
+  if (!exported.ok()) return Fail(exported.message());
+  return WriteReport(flags.output, *json, summary, flags.quiet);
+}
 
 LaserTimingOptions TimingOptions(const CalibrateOptions& flags,
                                  const LaserCalibrationOptions& options) {
@@ -30,9 +89,9 @@ LaserTimingOptions TimingOptions(const CalibrateOptions& flags,
 
 // The JSON and summary of a timing-aware calibration of `log`; `recording`: the bag it was made
 // from, if any.
-int ReportLaserStreamResult(const CalibrateOptions& flags, const LaserLog& log,
-                            const LaserTimingResult& result, const Stopwatch& clock,
-                            const RobotBagCalibration* bag = nullptr) {
+int ReportLaserStreamResult(const CalibrateOptions& flags, const LaserCalibrationOptions& options,
+                            const LaserLog& log, const LaserTimingResult& result,
+                            const Stopwatch& clock, const RobotBagCalibration* bag = nullptr) {
   const RobotBagLog* recording = bag ? &bag->log : nullptr;
   const std::optional<ScanPointCalibration>* scan_points = bag ? &bag->scan_points : nullptr;
   // Refined on the scan points: their estimate is the result; the two-stage one stays beside it.
@@ -61,19 +120,35 @@ int ReportLaserStreamResult(const CalibrateOptions& flags, const LaserLog& log,
   verdict.disagreements = calibration.consistency.warnings;
   verdict.streams = &log.stream_timing;
   verdict.timing_treated = true;
+  const StatusOr<LaserLog> timed = LaserLogFromStreams(
+      result.timed_streams.odometry, result.timed_streams.sensor_poses, flags.input);
+  if (timed.ok()) ScreenModel(timed->intervals, options, true, &verdict, &json);
   if (recording) {
     verdict.warnings.insert(verdict.warnings.end(), recording->warnings.begin(),
                             recording->warnings.end());
     const std::vector<std::string> refinement = ScanPointWarnings(*bag);
     verdict.warnings.insert(verdict.warnings.end(), refinement.begin(), refinement.end());
   }
+  const DriftReport drift = LaserDrift(calibration, NominalOdometry(flags));
+  json["odometry_drift"] = DriftJson(drift);
   const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
-  const std::string summary =
+  std::string summary =
       LaserResultSummary(calibration, flags.input, flags.loss, log.stream_timing) +
       (recording ? RobotLogSummary(*recording, calibration, nominal) : "") +
       (bag && flags.scan_points ? ScanPointSummary(*bag) : "") + LatentTimingSummary(result) +
-      WarningLines(log.warnings) + verdict_line;
-  return WriteReport(flags.output, json, summary, flags.quiet);
+      WarningLines(log.warnings) + DriftSummary(drift) + verdict_line;
+  const Status plotted = AddCalibrationPlots(
+      flags,
+      [&] {
+        return LaserTimingCalibrationPlots(log, result, calibration,
+                                           {flags.nominal_wheel_radius, flags.nominal_wheelbase});
+      },
+      &json, &summary);
+  if (!plotted.ok()) return Fail(plotted.message());
+  const ScanPointCalibration* refined =
+      scan_points && scan_points->has_value() ? &**scan_points : nullptr;
+  return Finish(flags, LaserDeployment(calibration, flags.input, recording, &result, refined),
+                &json, summary);
 }
 
 // One raw-stream log: every sample's true time is estimated with the calibration.
@@ -82,7 +157,7 @@ int CalibrateLaserStreamLog(const CalibrateOptions& flags, const LaserLog& log,
   const StatusOr<LaserTimingResult> result =
       CalibrateLaserStreams(log.streams, TimingOptions(flags, options));
   if (!result.ok()) return Fail(flags.input + ": " + result.message());
-  return ReportLaserStreamResult(flags, log, *result, clock);
+  return ReportLaserStreamResult(flags, options, log, *result, clock);
 }
 
 // A robot's bag (or a directory of scans.csv and odometry.csv): its scans are matched into
@@ -94,8 +169,8 @@ int CalibrateRobotBag(const CalibrateOptions& flags, const LaserCalibrationOptio
   const StatusOr<RobotBagCalibration> calibrated =
       CalibrateRobotMessages(input->bag, input->options, TimingOptions(flags, options));
   if (!calibrated.ok()) return Fail(calibrated.message());
-  return ReportLaserStreamResult(flags, calibrated->log.scans.log, calibrated->result, clock,
-                                 &*calibrated);
+  return ReportLaserStreamResult(flags, options, calibrated->log.scans.log, calibrated->result,
+                                 clock, &*calibrated);
 }
 
 int CalibrateLaserLogs(const CalibrateOptions& flags) {
@@ -151,11 +226,16 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
                           result->observability.warnings.end());
   verdict.disagreements = result->consistency.warnings;
   verdict.streams = &timing;
-  const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
-  return WriteReport(flags.output, json,
-                     LaserResultSummary(*result, flags.input, flags.loss, timing) +
-                         WarningLines(ReaderWarnings(logs)) + verdict_line,
-                     flags.quiet);
+  if (logs.size() == 1) ScreenModel(logs.front().intervals, options, false, &verdict, &json);
+  const DriftReport drift = LaserDrift(*result, NominalOdometry(flags));
+  json["odometry_drift"] = DriftJson(drift);
+  std::string summary = LaserResultSummary(*result, flags.input, flags.loss, timing) +
+                        WarningLines(ReaderWarnings(logs)) + DriftSummary(drift) +
+                        AddVerdict(JudgeResult(verdict), &json);
+  const Status plotted = AddCalibrationPlots(
+      flags, [&] { return LaserCalibrationPlots(intervals, *result); }, &json, &summary);
+  if (!plotted.ok()) return Fail(plotted.message());
+  return Finish(flags, LaserDeployment(*result, flags.input), &json, summary);
 }
 
 int CalibrateBearingLog(const CalibrateOptions& flags) {
@@ -175,17 +255,27 @@ int CalibrateBearingLog(const CalibrateOptions& flags) {
   verdict.warnings = result->warnings;
   verdict.streams = &timing;
   verdict.timing_treated = true;  // Offset and stamp jitter are modelled (calibrate_bearing).
-  const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
-  return WriteReport(flags.output, json,
-                     BearingResultSummary(*result, flags.input, flags.loss, timing) + verdict_line,
-                     flags.quiet);
+  const std::optional<DriftReport> drift = BearingDrift(*result, input->log);
+  if (drift) json["odometry_drift"] = DriftJson(*drift);
+  std::string summary = BearingResultSummary(*result, flags.input, flags.loss, timing) +
+                        (drift ? DriftSummary(*drift) : "") +
+                        AddVerdict(JudgeResult(verdict), &json);
+  const Status plotted = AddCalibrationPlots(
+      flags, [&] { return BearingCalibrationPlots(input->log, *result); }, &json, &summary);
+  if (!plotted.ok()) return Fail(plotted.message());
+  return Finish(flags, BearingDeployment(*result, input->log, flags.input), &json, summary);
 }
 
 }  // namespace
 
 int RunCalibrate(const CalibrateOptions& options) {
-  const Status given = CheckInputAndOutput(options.input, options.output);
+  const Status given = CheckInput(options.input);
   if (!given.ok()) return Fail(given.message());
+  const StatusOr<std::vector<std::string>> exports = ParseExportFormats(options.export_formats);
+  if (!exports.ok()) return Fail(exports.message());
+  const Status plot_format =
+      options.plots_dir.empty() ? Status::Ok() : CheckPlotFormat(options.plot_format);
+  if (!plot_format.ok()) return Fail(plot_format.message());
   return IsBearingInput(options.input, options.format) ? CalibrateBearingLog(options)
                                                        : CalibrateLaserLogs(options);
 }

@@ -26,9 +26,8 @@ std::function<void(const std::string&)> ProgressPrinter(const Stopwatch& clock, 
   };
 }
 
-Status CheckInputAndOutput(const std::string& input, const std::string& output) {
+Status CheckInput(const std::string& input) {
   if (input.empty()) return Status::InvalidInput("--input is required");
-  if (output.empty()) return Status::InvalidInput("--output is required");
   return Status::Ok();
 }
 
@@ -64,6 +63,13 @@ StatusOr<RobustLoss> ParseLossFlags(const std::string& loss, double loss_scale) 
   return parsed;
 }
 
+StatusOr<LaserLog> ReadLaserInput(const std::string& path, LaserFormat format,
+                                  const std::optional<double>& time_offset_s) {
+  CALIB_ASSIGN_OR_RETURN(LaserLog log, ReadLaserLog(path, format));
+  if (!time_offset_s) return log;
+  return ShiftSensorStamps(std::move(log), *time_offset_s);
+}
+
 std::vector<std::string> SplitCommas(const std::string& text) {
   std::vector<std::string> parts;
   std::stringstream stream(text);
@@ -88,13 +94,32 @@ StatusOr<BearingInput> ReadBearingInput(const CalibrateOptions& flags) {
   input.calibration.adjustment.loss_scale = flags.loss_scale;
   input.calibration.adjustment.num_threads = 2;
   CALIB_ASSIGN_OR_RETURN(input.log, ReadBearingLog(flags.input));
+  if (flags.time_offset_s) {
+    if (!std::isfinite(*flags.time_offset_s)) {
+      return Status::InvalidInput("--time_offset is not finite");
+    }
+    for (BearingRun& run : input.log.runs) {
+      for (BearingSample& bearing : run.bearings) bearing.t_s += *flags.time_offset_s;
+    }
+  }
   return input;
 }
 
 int WriteReport(const std::string& output, const nlohmann::ordered_json& json,
                 const std::string& summary, bool quiet) {
-  const Status written = WriteJsonFile(output, json);
-  if (!written.ok()) return Fail(written.message());
+  if (output == "-") {
+    // The JSON owns stdout; the summary goes to stderr so that a pipe reads pure JSON.
+    const std::string text = json.dump(2) + "\n";
+    if (std::fputs(text.c_str(), stdout) < 0 || std::fflush(stdout) != 0) {
+      return Fail("cannot write the JSON on stdout");
+    }
+    if (!quiet) std::fputs(summary.c_str(), stderr);
+    return 0;
+  }
+  if (!output.empty()) {
+    const Status written = WriteJsonFile(output, json);
+    if (!written.ok()) return Fail(written.message());
+  }
   if (!quiet) std::fputs(summary.c_str(), stdout);
   return 0;
 }

@@ -2,6 +2,7 @@
 #define CALIB_TOOLS_COMMANDS_COMMAND_UTIL_H_
 
 #include <calib/core/bearing/bearing_log.h>
+#include <calib/core/laser/laser_log_io.h>
 #include <calib/core/status.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
 #include <calib/solvers/common/robust_loss.h>
@@ -11,6 +12,7 @@
 #include <cstdio>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -38,8 +40,8 @@ std::function<void(const std::string&)> ProgressPrinter(const Stopwatch& clock, 
                                                         std::FILE* out = stderr,
                                                         double after_s = 1.0);
 
-// The checks every command on a log starts with: --input and --output given.
-Status CheckInputAndOutput(const std::string& input, const std::string& output);
+// The check every command on a log starts with: --input given (--output is optional).
+Status CheckInput(const std::string& input);
 
 // True when --format is auto and --input is a bearing log directory.
 bool IsBearingInput(const std::string& input, const std::string& format);
@@ -71,6 +73,10 @@ struct BearingInput {
   BearingCalibrationOptions calibration;
 };
 StatusOr<BearingInput> ReadBearingInput(const CalibrateOptions& flags);
+
+// ReadLaserLog, with --time_offset applied to the sensor's stamps when given.
+StatusOr<LaserLog> ReadLaserInput(const std::string& path, LaserFormat format,
+                                  const std::optional<double>& time_offset_s);
 
 // "a.json,b.json" → {"a.json", "b.json"} (empty parts dropped).
 std::vector<std::string> SplitCommas(const std::string& text);

@@ -2,6 +2,7 @@
 #define CALIB_TOOLS_COMMANDS_COMMANDS_H_
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 // The calib commands. Each takes its options struct (filled from the flags in flags.cc, the only
@@ -30,6 +31,13 @@ struct CalibrateOptions {
   std::string wheel_angle_unit = "rad";  // rad, deg, or ticks:N.
   double ticks_per_rev = 0.0;  // > 0: wheel readings are encoder ticks, this many per turn.
   bool scan_points = false;    // Refine against the scan points after the two-stage route.
+  // A known sensor latency: a sample stamped t was taken at t + this (raw streams, bags, bearing
+  // logs); empty: none given.
+  std::optional<double> time_offset_s;
+  std::string export_formats;  // --export: yaml, urdf, tf (comma-separated) or all; empty: none.
+  // Plot folder: calibrate draws nothing when empty; diagnose then uses OUT_plots beside OUT.json.
+  std::string plots_dir;
+  std::string plot_format = "svg";  // svg, or png (each SVG also rasterized).
 };
 int RunCalibrate(const CalibrateOptions& options);
 
@@ -40,7 +48,6 @@ struct DiagnoseOptions : CalibrateOptions {
   int cv_blocks = 5;                     // Contiguous held-out blocks.
   std::string candidates;                // Comma-separated laser effects; empty: all.
   std::string boundary_speeds = "auto";  // auto, piecewise or smooth (laser).
-  std::string plots_dir;                 // Empty: OUT_plots beside the JSON output.
 };
 int RunDiagnose(const DiagnoseOptions& options);
 

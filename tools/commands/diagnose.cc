@@ -5,6 +5,7 @@
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/commands.h>
 #include <calib/tools/commands/laser_input.h>
+#include <calib/tools/commands/plot_output.h>
 #include <calib/tools/commands/robot_input.h>
 #include <calib/tools/report/bearing_diagnose_report.h>
 #include <calib/tools/report/laser_diagnose_report.h>
@@ -33,12 +34,21 @@ template <typename Diagnosis>
 int WriteDiagnosis(const DiagnoseOptions& flags, const Diagnosis& diagnosis, const Stopwatch& clock,
                    const DiagnosisWriters<Diagnosis>& writers,
                    const LaserTimingResult* timing = nullptr) {
-  const std::string plots_dir =
-      flags.plots_dir.empty() ? DefaultPlotsDir(flags.output) : flags.plots_dir;
-  const StatusOr<Plots> plots = writers.plots(diagnosis, plots_dir);
-  if (!plots.ok()) return Fail(plots.message());
-  nlohmann::ordered_json json = writers.json(diagnosis, flags.input, *plots);
-  std::string summary = writers.summary(diagnosis, flags.input, *plots);
+  // Plots go beside the JSON, or where --plots_dir says; none for a summary-only run.
+  const bool output_file = !flags.output.empty() && flags.output != "-";
+  const std::string plots_dir = !flags.plots_dir.empty() ? flags.plots_dir
+                                : output_file            ? DefaultPlotsDir(flags.output)
+                                                         : "";
+  Plots plots;
+  if (!plots_dir.empty()) {
+    StatusOr<Plots> written = writers.plots(diagnosis, plots_dir);
+    if (!written.ok()) return Fail(written.message());
+    plots = std::move(written).value();
+    const Status rasterized = AddRasterized(flags.plot_format, &plots);
+    if (!rasterized.ok()) return Fail(rasterized.message());
+  }
+  nlohmann::ordered_json json = writers.json(diagnosis, flags.input, plots);
+  std::string summary = writers.summary(diagnosis, flags.input, plots);
   if (timing != nullptr) {
     // Timing is named first, as timing (and adopted when it changes the calibration).
     const nlohmann::ordered_json finding = LatentTimingFinding(*timing);
@@ -168,7 +178,7 @@ int DiagnoseBearingLog(const DiagnoseOptions& flags) {
 }  // namespace
 
 int RunDiagnose(const DiagnoseOptions& options) {
-  const Status given = CheckInputAndOutput(options.input, options.output);
+  const Status given = CheckInput(options.input);
   if (!given.ok()) return Fail(given.message());
   if (options.input.find(',') != std::string::npos) {
     return Fail("diagnose takes one log (--input names several)");
@@ -179,6 +189,8 @@ int RunDiagnose(const DiagnoseOptions& options) {
   if (options.cv_blocks < 2) return Fail("--cv_blocks must be at least 2");
   const Status timing = CheckTimingFlag(options.timing);
   if (!timing.ok()) return Fail(timing.message());
+  const Status plot_format = CheckPlotFormat(options.plot_format);
+  if (!plot_format.ok()) return Fail(plot_format.message());
   return IsBearingInput(options.input, options.format) ? DiagnoseBearingLog(options)
                                                        : DiagnoseLaserLog(options);
 }

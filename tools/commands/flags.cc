@@ -12,7 +12,9 @@ DEFINE_string(input, "",
               "(ROS 2 .mcap or bag directory, ROS 1 .bag), several laser logs "
               "separated by commas (calibrated jointly), or a bearing log directory "
               "(odometry.csv, bearings.csv, meta.json)");
-DEFINE_string(output, "", "Where to write the JSON result");
+DEFINE_string(output, "",
+              "Where to write the JSON result (optional: without it only the summary is "
+              "printed; - writes the JSON on stdout and the summary on stderr)");
 DEFINE_string(format, kDiagnose.format.c_str(), "Laser log format: auto, tuples, csv or stream");
 DEFINE_string(loss, kDiagnose.loss.c_str(), "Robust loss: cauchy, huber or none");
 DEFINE_double(loss_scale, kDiagnose.loss_scale,
@@ -50,6 +52,12 @@ DEFINE_double(ticks_per_rev, 0.0,
               "calibrate, diagnose (laser logs, streams, bags): the wheel readings are encoder "
               "ticks, this many per wheel turn; they are converted to radians (for bags the same "
               "as --wheel_angle_unit ticks:N)");
+DEFINE_string(export, "",
+              "calibrate: also write the calibration for deployment, beside the JSON (OUT.yaml, "
+              "OUT.urdf, OUT.tf) or as calib_calibration.* in the working directory: yaml "
+              "(diff_drive_controller parameters, the sensor mounting, the time offset), urdf "
+              "(the sensor's joint origin), tf (static_transform_publisher arguments), "
+              "comma-separated, or all");
 DEFINE_bool(scan_points, false,
             "calibrate (bags, scan directories): refine the calibration against the scan points "
             "themselves (point-to-line distances between neighbouring scans, each beam placed "
@@ -69,8 +77,12 @@ DEFINE_string(boundary_speeds, kDiagnose.boundary_speeds.c_str(),
               "diagnose: wheel speeds at interval boundaries: auto, piecewise (constant within "
               "intervals) or smooth");
 DEFINE_string(plots_dir, "",
-              "diagnose: folder for the SVG plots (default: OUT_plots next to "
-              "the JSON output)");
+              "folder for the plots: calibrate draws its plots (dead reckoning, residuals, "
+              "coverage) only when given; diagnose draws its residual profiles there (default: "
+              "OUT_plots next to the JSON output)");
+DEFINE_string(plot_format, "svg",
+              "format of the plots: svg, or png (each SVG also converted to PNG by rsvg-convert, "
+              "Debian package librsvg2-bin)");
 
 // `calib simulate`: a laser log with known truth.
 DEFINE_string(truth, "", "simulate: where to write the truth as JSON (optional)");
@@ -90,7 +102,9 @@ DEFINE_double(segment_mean, kSimulate.segment_mean,
 DEFINE_double(max_wheel_speed, kSimulate.max_wheel_speed,
               "simulate: largest commanded wheel speed (rad/s)");
 DEFINE_double(time_offset, kSimulate.time_offset,
-              "simulate: scans stamped t were taken at t + this (s)");
+              "A sensor sample stamped t was taken at t + this (s) on the odometry clock: "
+              "calibrate and diagnose apply it to the sensor's stamps (raw streams, bags, bearing "
+              "logs; not interval logs) as a known latency; simulate writes it into the log");
 DEFINE_double(lateral_slip, kSimulate.lateral_slip,
               "simulate: lateral velocity = this * v * omega (s)");
 DEFINE_double(longitudinal_slip, kSimulate.longitudinal_slip,
@@ -178,6 +192,12 @@ CalibrateOptions CalibrateOptionsFromFlags() {
   options.scan_points = FLAGS_scan_points;
   options.wheel_angle_unit = FLAGS_wheel_angle_unit;
   options.ticks_per_rev = FLAGS_ticks_per_rev;
+  options.export_formats = FLAGS_export;
+  if (!gflags::GetCommandLineFlagInfoOrDie("time_offset").is_default) {
+    options.time_offset_s = FLAGS_time_offset;
+  }
+  options.plots_dir = FLAGS_plots_dir;
+  options.plot_format = FLAGS_plot_format;
   return options;
 }
 
@@ -189,7 +209,6 @@ DiagnoseOptions DiagnoseOptionsFromFlags() {
   options.cv_blocks = FLAGS_cv_blocks;
   options.candidates = FLAGS_candidates;
   options.boundary_speeds = FLAGS_boundary_speeds;
-  options.plots_dir = FLAGS_plots_dir;
   return options;
 }
 

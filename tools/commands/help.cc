@@ -44,7 +44,7 @@ bool FlagBelongsTo(const gflags::CommandLineFlagInfo& flag, const std::string& c
       return command == other;
     }
   }
-  if (command == "simulate") return flag.name == "output";
+  if (command == "simulate") return flag.name == "output" || flag.name == "time_offset";
   return true;
 }
 

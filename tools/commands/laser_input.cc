@@ -16,7 +16,7 @@ StatusOr<std::vector<LaserLog>> ReadCheckedLaserLogs(const CalibrateOptions& fla
   }
   std::vector<LaserLog> logs;
   for (const std::string& path : SplitCommas(flags.input)) {
-    CALIB_ASSIGN_OR_RETURN(LaserLog log, ReadLaserLog(path, format));
+    CALIB_ASSIGN_OR_RETURN(LaserLog log, ReadLaserInput(path, format, flags.time_offset_s));
     if (flags.ticks_per_rev > 0.0) {
       CALIB_RETURN_IF_ERROR(ConvertWheelTicks(flags.ticks_per_rev, &log));
     }

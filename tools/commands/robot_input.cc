@@ -27,6 +27,7 @@ StatusOr<RobotInput> ReadRobotInput(const CalibrateOptions& flags) {
   o.nominal_wheel_radius_m = flags.nominal_wheel_radius;
   o.nominal_wheelbase_m = flags.nominal_wheelbase;
   if (flags.scan_points) o.scan_points = ScanPointOptions();
+  o.sensor_time_offset_s = flags.time_offset_s.value_or(0.0);
   CALIB_ASSIGN_OR_RETURN(o.wheel_radians_per_unit, WheelRadiansPerUnit(flags));
   CALIB_ASSIGN_OR_RETURN(out.bag, IsScanDirectory(flags.input) ? ReadScanDirectory(flags.input)
                                                                : ReadRobotBag(flags.input));

@@ -5,27 +5,32 @@
 #include <calib/tools/report/laser_diagnose_report.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 
 namespace calib {
 
 PlotFiles DiagnosisPlots(const DiagnosisReport& report, const std::string& residuals) {
+  std::string what = residuals;
+  if (!what.empty()) what[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(what[0])));
   PlotFiles files;
   for (const ReportedFinding& reported : report.findings) {
     const Finding& f = reported.finding;
     if (!f.significant) continue;
-    files.emplace_back(FindingPlotName(f),
-                       CovariateProfileSvg(f.profile, f.name + ": " + residuals + " against " +
-                                                          f.location.covariate));
+    files.emplace_back(
+        FindingPlotName(f),
+        CovariateProfileSvg(f.profile, EffectInWords(f.name) + ": " + residuals + " against " +
+                                           CovariateInWords(f.location.covariate)));
   }
   for (const CovariateProfile& profile : report.covariates) {
     if (profile.name != "time" && profile.name != report.structure_before.covariate &&
         profile.name != report.structure_after.covariate) {
       continue;
     }
-    files.emplace_back("residuals_vs_" + profile.name + ".svg",
-                       CovariateProfileSvg(profile, residuals + " against " + profile.name));
+    files.emplace_back(
+        "residuals_vs_" + profile.name + ".svg",
+        CovariateProfileSvg(profile, what + " against " + CovariateInWords(profile.name)));
   }
   return files;
 }

@@ -16,8 +16,15 @@ namespace calib {
 std::string SvgEscape(const std::string& text);
 
 // Binned means ± 2 standard errors of a covariate profile, before (base model) and after (with
-// the adopted effects), one panel per channel, two panels a row.
+// the adopted effects), one panel per channel, two panels a row (covariate_profile_plot.cc): at
+// the bins' true positions when they are spread evenly enough, else as numbered bins with their
+// means listed; the "along the effect" panel explained in the caption.
 std::string CovariateProfileSvg(const CovariateProfile& profile, const std::string& title);
+
+// Words for the titles: "lateral_slip" → "Lateral slip", "v_times_omega" → "v·ω (centripetal
+// acceleration)"; unknown names with their underscores as spaces.
+std::string EffectInWords(const std::string& name);
+std::string CovariateInWords(const std::string& name);
 
 struct PlotSeries {
   std::string label;

@@ -43,12 +43,26 @@ Verdict JudgeResult(const VerdictInputs& inputs) {
     verdict.reason =
         "the calibrated wheel model disagrees with the sensor's totals, a check that needs no "
         "timing: the estimate is likely biased";
+  } else if (!inputs.model_screen.empty()) {
+    verdict.verdict = "check";
+    verdict.reason =
+        "the residuals show physics the model leaves out: run `calib diagnose` before using "
+        "the numbers";
   } else if (!verdict.warnings.empty()) {
     verdict.verdict = "check";
     verdict.reason = "read the warnings before using the numbers";
   } else {
     verdict.verdict = "trusted";
     verdict.reason = "no check found a problem";
+  }
+  if (!inputs.model_screen.empty()) {
+    AddUnique(inputs.model_screen, &verdict.warnings);
+    verdict.model_screen = inputs.model_screen;
+    if (verdict.reason.find("calib diagnose") == std::string::npos) {
+      verdict.reason +=
+          "; the residuals also show physics the model leaves out: run `calib "
+          "diagnose`";
+    }
   }
   return verdict;
 }
@@ -57,7 +71,9 @@ std::string AddVerdict(const Verdict& verdict, nlohmann::ordered_json* json) {
   (*json)["verdict"] = verdict.verdict;
   (*json)["verdict_reason"] = verdict.reason;
   (*json)["warnings"] = verdict.warnings;
-  return "  verdict: " + verdict.verdict + " (" + verdict.reason + ")\n";
+  const std::string screen =
+      verdict.model_screen.empty() ? "" : "  warning: " + verdict.model_screen + "\n";
+  return screen + "  verdict: " + verdict.verdict + " (" + verdict.reason + ")\n";
 }
 
 }  // namespace calib

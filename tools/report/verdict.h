@@ -10,8 +10,9 @@
 // The contract's "verdict" and "warnings" of `calib calibrate`, one rule for both problems:
 //   unreliable — the fit did not converge, or a stream's stamps are not sample times and the
 //                problem has no validated treatment for it;
-//   check      — any other warning (the timing-free consistency check disagrees, weak
-//                observability, modelled timing, outliers, ...);
+//   check      — any other warning (the timing-free consistency check disagrees, the model
+//                screen finds physics the model leaves out, weak observability, modelled
+//                timing, outliers, ...);
 //   trusted    — nothing to say.
 namespace calib {
 
@@ -24,12 +25,16 @@ struct VerdictInputs {
   // (the bearing problem's offset and jitter); false for the laser problem, whose latent-time
   // calibration of raw streams is not validated yet.
   bool timing_treated = false;
+  // The model screen's sentence (solvers/laser/laser_model_screen.h) when it found physics the
+  // model leaves out: the verdict is at best "check", and it says to run `calib diagnose`.
+  std::string model_screen;
 };
 
 struct Verdict {
   std::string verdict;  // "trusted", "check" or "unreliable".
   std::vector<std::string> warnings;
-  std::string reason;  // One sentence: why this verdict.
+  std::string reason;        // One sentence: why this verdict.
+  std::string model_screen;  // Printed under the verdict line when not empty.
 };
 
 Verdict JudgeResult(const VerdictInputs& inputs);
