@@ -7,6 +7,7 @@
 #include <calib/tools/commands/plot_output.h>
 #include <calib/tools/commands/robot_input.h>
 #include <calib/tools/report/bearing_diagnose_report.h>
+#include <calib/tools/report/deploy_advice.h>
 #include <calib/tools/report/laser_diagnose_report.h>
 #include <calib/tools/report/latent_timing_report.h>
 
@@ -61,6 +62,9 @@ int WriteDiagnosis(const DiagnoseOptions& flags, const Diagnosis& diagnosis, con
                "  timing: modelled first, as timing: the effects above were searched on the "
                "intervals between the estimated sample times\n";
   }
+  const DeployAdvice advice = AdviseDeployment(json);
+  json["deploy"] = advice.json;
+  summary += advice.summary;
   json["seconds"] = clock.Seconds();
   return WriteReport(flags.output, json, summary, flags.quiet);
 }
