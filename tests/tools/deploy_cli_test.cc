@@ -208,4 +208,22 @@ TEST_F(DeployCliTest, TimeOffsetMovesTheSensorStamps) {
       << intervals.err;
 }
 
+// An output in a folder that does not exist is refused before any work, in every command, with
+// the path named; nothing is created.
+TEST_F(DeployCliTest, OutputInAMissingFolderIsRefused) {
+  const std::string missing = (dir_ / "no" / "such").string();
+  const std::string sample = (kData / "sample_laser.tuple").string();
+  for (const std::string& command :
+       {"calibrate --input " + sample + " --output " + missing + "/x.json",
+        "diagnose --input " + sample + " --output " + missing + "/x.json",
+        "simulate --output " + missing + "/x.tuple",
+        "simulate --output " + (dir_ / "x.tuple").string() + " --truth " + missing + "/t.json",
+        "calibrate --input " + sample + " --output " + dir_.string()}) {
+    const CliRun run = Calib(command);
+    EXPECT_EQ(run.exit_code, 1) << command;
+    EXPECT_EQ(run.err.find("calib: error: --"), 0u) << run.err;
+    EXPECT_FALSE(fs::exists(dir_ / "no")) << command;
+  }
+}
+
 }  // namespace

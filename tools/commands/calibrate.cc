@@ -197,6 +197,8 @@ int CalibrateBearingLog(const CalibrateOptions& flags) {
 int RunCalibrate(const CalibrateOptions& options) {
   const Status given = CheckInput(options.input);
   if (!given.ok()) return Fail(given.message());
+  const Status output = CheckOutputPath("output", options.output);
+  if (!output.ok()) return Fail(output.message());
   const StatusOr<std::vector<std::string>> exports = ParseExportFormats(options.export_formats);
   if (!exports.ok()) return Fail(exports.message());
   const Status plot_format =

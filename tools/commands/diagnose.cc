@@ -173,6 +173,8 @@ int DiagnoseBearingLog(const DiagnoseOptions& flags) {
 int RunDiagnose(const DiagnoseOptions& options) {
   const Status given = CheckInput(options.input);
   if (!given.ok()) return Fail(given.message());
+  const Status output = CheckOutputPath("output", options.output);
+  if (!output.ok()) return Fail(output.message());
   if (options.input.find(',') != std::string::npos) {
     return Fail("diagnose takes one log (--input names several)");
   }
