@@ -6,6 +6,7 @@
 #include <calib/solvers/common/robust_loss.h>
 #include <calib/tools/report/bearing_diagnose_report.h>
 #include <calib/tools/report/calibration_report.h>
+#include <calib/tools/report/deploy_advice.h>
 
 #include <string>
 #include <vector>
@@ -114,7 +115,8 @@ py::dict DiagnoseBearingPath(const std::string& path, const std::string& loss, d
     return DiagnoseBearing(log, options);
   }();
   if (!result.ok()) Raise(result.status());
-  const nlohmann::ordered_json json = BearingDiagnosisJson(*result, path, {});
+  nlohmann::ordered_json json = BearingDiagnosisJson(*result, path, {});
+  json["deploy"] = AdviseDeployment(json).json;
   py::dict d;
   d["problem"] = "bearing";
   d["params"] = Names(kBearingParamNames);

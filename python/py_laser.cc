@@ -10,6 +10,7 @@
 #include <calib/solvers/scan_matching/robot_bag_log.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/tools/report/calibration_report.h>
+#include <calib/tools/report/deploy_advice.h>
 #include <calib/tools/report/laser_diagnose_report.h>
 #include <calib/tools/report/latent_timing_report.h>
 
@@ -338,15 +339,9 @@ py::dict Diagnose(const std::string& source, const std::vector<LaserInterval>& i
   if (!result.ok()) Raise(result.status().Prefixed(source + ": "));
   nlohmann::ordered_json json = LaserDiagnosisJson(*result, source, {});
   if (timing != nullptr) {
-    const nlohmann::ordered_json finding = LatentTimingFinding(*timing);
-    json["findings"].insert(json["findings"].begin(), finding);
-    if (finding["significant"].get<bool>()) {
-      json["final"]["effects"].insert(json["final"]["effects"].begin(), "sample_times");
-      json["adopted"].insert(json["adopted"].begin(), "sample_times");
-    }
-    json["timing"]["treatment"] = "latent_times";
-    json["timing"]["latent_times"] = LatentTimingJson(*timing);
+    AddLatentTimingToDiagnosis(*timing, &json);
   }
+  json["deploy"] = AdviseDeployment(json).json;
   py::dict d;
   d["problem"] = "laser";
   d["params"] = LaserParamNames();

@@ -28,17 +28,7 @@ class DeployCliTest : public ::testing::Test {
 
   // Run from inside the scratch folder, so that files written "in the working directory" land
   // there.
-  CliRun Calib(const std::string& args) {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string command = "cd " + dir_.string() + " && " + CALIB_BINARY_DIR + "/bin/calib " +
-                                args + " >" + out.string() + " 2>" + err.string() + " </dev/null";
-    const int status = std::system(command.c_str());
-    CliRun run;
-    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    run.out = ReadFile(out);
-    run.err = ReadFile(err);
-    return run;
-  }
+  CliRun Calib(const std::string& args) { return ::calib::testing::RunCalib(args, dir_, dir_); }
 
   // The value after "key: " in a YAML text.
   static double Yaml(const std::string& yaml, const std::string& key) {

@@ -50,14 +50,7 @@ int WriteDiagnosis(const DiagnoseOptions& flags, const Diagnosis& diagnosis, con
   std::string summary = writers.summary(diagnosis, flags.input, plots);
   if (timing != nullptr) {
     // Timing is named first, as timing (and adopted when it changes the calibration).
-    const nlohmann::ordered_json finding = LatentTimingFinding(*timing);
-    json["findings"].insert(json["findings"].begin(), finding);
-    if (finding["significant"].get<bool>()) {
-      json["final"]["effects"].insert(json["final"]["effects"].begin(), "sample_times");
-      json["adopted"].insert(json["adopted"].begin(), "sample_times");
-    }
-    json["timing"]["treatment"] = "latent_times";
-    json["timing"]["latent_times"] = LatentTimingJson(*timing);
+    AddLatentTimingToDiagnosis(*timing, &json);
     summary += LatentTimingSummary(*timing) +
                "  timing: modelled first, as timing: the effects above were searched on the "
                "intervals between the estimated sample times\n";
