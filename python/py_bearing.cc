@@ -5,8 +5,8 @@
 #include <calib/solvers/bearing/calibrate_bearing.h>
 #include <calib/solvers/common/robust_loss.h>
 #include <calib/tools/report/bearing_diagnose_report.h>
-#include <calib/tools/report/bearing_report.h>
-#include <calib/tools/report/verdict.h>
+#include <calib/tools/report/calibration_report.h>
+#include <calib/tools/report/deploy_advice.h>
 
 #include <string>
 #include <vector>
@@ -75,13 +75,8 @@ py::dict CalibrateBearingPath(const std::string& path, const std::string& loss, 
   }();
   if (!result.ok()) Raise(result.status());
   const BearingCalibrationResult& r = *result;
-  nlohmann::ordered_json report = BearingResultJson(r, path, loss, log.stream_timing);
-  VerdictInputs verdict;  // As calibrate.cc: offset and stamp jitter are modelled.
-  verdict.converged = r.converged;
-  verdict.warnings = r.warnings;
-  verdict.streams = &log.stream_timing;
-  verdict.timing_treated = true;
-  AddVerdict(JudgeResult(verdict), &report);
+  const CalibrationReport calibration = BearingCalibrationReport(r, log, path, loss);
+  const nlohmann::ordered_json& report = calibration.json;
 
   py::dict d;
   d["problem"] = "bearing";
@@ -101,6 +96,7 @@ py::dict CalibrateBearingPath(const std::string& path, const std::string& loss, 
   d["verdict"] = report["verdict"].get<std::string>();
   d["verdict_reason"] = report.value("verdict_reason", "");
   d["warnings"] = report["warnings"].get<std::vector<std::string>>();
+  d["summary"] = calibration.summary;
   d["report"] = JsonToPython(report);
   return d;
 }
@@ -119,7 +115,8 @@ py::dict DiagnoseBearingPath(const std::string& path, const std::string& loss, d
     return DiagnoseBearing(log, options);
   }();
   if (!result.ok()) Raise(result.status());
-  const nlohmann::ordered_json json = BearingDiagnosisJson(*result, path, {});
+  nlohmann::ordered_json json = BearingDiagnosisJson(*result, path, {});
+  json["deploy"] = AdviseDeployment(json).json;
   py::dict d;
   d["problem"] = "bearing";
   d["params"] = Names(kBearingParamNames);

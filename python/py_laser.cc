@@ -9,11 +9,10 @@
 #include <calib/solvers/laser/laser_diagnosis.h>
 #include <calib/solvers/scan_matching/robot_bag_log.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
+#include <calib/tools/report/calibration_report.h>
+#include <calib/tools/report/deploy_advice.h>
 #include <calib/tools/report/laser_diagnose_report.h>
-#include <calib/tools/report/laser_report.h>
 #include <calib/tools/report/latent_timing_report.h>
-#include <calib/tools/report/robot_log_report.h>
-#include <calib/tools/report/verdict.h>
 
 #include <optional>
 #include <string>
@@ -182,14 +181,9 @@ RobotMessages ReadRobotMessages(const std::string& path) {
 }
 
 // The common part of every laser result: arrays, the verdict, and the report `calib calibrate`
-// writes (`report`).
-py::dict LaserResultToPython(const LaserCalibrationResult& r, nlohmann::ordered_json report,
-                             VerdictInputs verdict) {
-  verdict.converged = r.converged;
-  verdict.warnings.insert(verdict.warnings.begin(), r.observability.warnings.begin(),
-                          r.observability.warnings.end());
-  verdict.disagreements = r.consistency.warnings;
-  AddVerdict(JudgeResult(verdict), &report);
+// writes (`report`), assembled as the command line does (tools/report/calibration_report.h).
+py::dict LaserResultToPython(const CalibrationReport& report) {
+  const LaserCalibrationResult& r = report.laser;
   py::dict d;
   d["problem"] = "laser";
   d["params"] = LaserParamNames();
@@ -207,43 +201,42 @@ py::dict LaserResultToPython(const LaserCalibrationResult& r, nlohmann::ordered_
   for (const std::vector<bool>& log : r.is_inlier)
     inlier.insert(inlier.end(), log.begin(), log.end());
   d["is_inlier"] = py::array_t<bool>(py::cast(inlier));
-  d["verdict"] = report["verdict"].get<std::string>();
-  d["verdict_reason"] = report.value("verdict_reason", "");
-  d["warnings"] = report["warnings"].get<std::vector<std::string>>();
-  d["report"] = JsonToPython(report);
+  d["verdict"] = report.json["verdict"].get<std::string>();
+  d["verdict_reason"] = report.json.value("verdict_reason", "");
+  d["warnings"] = report.json["warnings"].get<std::vector<std::string>>();
+  d["summary"] = report.summary;
+  d["report"] = JsonToPython(report.json);
   return d;
 }
 
-// A raw-stream log or a bag calibrated with its timing, reported as calibrate.cc does.
-py::dict StreamResult(const std::string& path, const std::string& loss, const LaserLog& log,
-                      const LaserTimingResult& timing, const RobotBagCalibration* bag = nullptr,
-                      const RobotBagOptions* bag_options = nullptr) {
-  LaserCalibrationResult calibration = timing.calibration;
-  const bool scan_points = bag && bag->scan_points.has_value();
-  if (scan_points) {
-    calibration.estimate = bag->scan_points->estimate;
-    calibration.covariance = bag->scan_points->covariance;
-    calibration.stddev = bag->scan_points->stddev;
-    for (std::string& w : calibration.observability.warnings) {
-      w = "two-stage (before the refinement on the scan points): " + w;
+LaserReportOptions ReportOptions(const std::string& source, const std::string& loss,
+                                 const LaserCalibrationOptions& options,
+                                 const RobotBagOptions* bag_options = nullptr) {
+  LaserReportOptions report;
+  report.input = source;
+  report.loss = loss;
+  report.screen = options;
+  if (bag_options) {
+    report.scan_points = bag_options->scan_points.has_value();
+    if (bag_options->nominal_wheel_radius_m > 0.0 && bag_options->nominal_wheelbase_m > 0.0) {
+      report.nominal =
+          OdometryParams{bag_options->nominal_wheel_radius_m, bag_options->nominal_wheel_radius_m,
+                         bag_options->nominal_wheelbase_m};
     }
   }
-  nlohmann::ordered_json json = LaserResultJson(calibration, path, loss, log.stream_timing);
-  json["timing"]["treatment"] = "latent_times";
-  json["timing"]["latent_times"] = LatentTimingJson(timing);
-  VerdictInputs verdict;
-  verdict.streams = &log.stream_timing;
-  verdict.timing_treated = true;
-  if (bag) {
-    const NominalWheels nominal{bag_options->nominal_wheel_radius_m,
-                                bag_options->nominal_wheelbase_m};
-    json["recording"] = RobotLogJson(bag->log, calibration, nominal);
-    if (bag_options->scan_points) json["scan_points"] = ScanPointJson(*bag);
-    verdict.warnings = bag->log.warnings;
-    const std::vector<std::string> refinement = ScanPointWarnings(*bag);
-    verdict.warnings.insert(verdict.warnings.end(), refinement.begin(), refinement.end());
-  }
-  py::dict d = LaserResultToPython(calibration, std::move(json), std::move(verdict));
+  return report;
+}
+
+// A raw-stream log or a bag calibrated with its timing.
+py::dict StreamResult(const std::string& path, const std::string& loss,
+                      const LaserCalibrationOptions& options, const LaserLog& log,
+                      const LaserTimingResult& timing, const RobotBagCalibration* bag = nullptr,
+                      const RobotBagOptions* bag_options = nullptr) {
+  const CalibrationReport report = [&] {
+    py::gil_scoped_release release;
+    return LaserTimingReport(timing, log, bag, ReportOptions(path, loss, options, bag_options));
+  }();
+  py::dict d = LaserResultToPython(report);
   d["time_offset"] = timing.time_offset_s;
   d["time_offset_stddev"] = timing.time_offset_stddev_s;
   d["sensor_clock"] = timing.sensor_clock;
@@ -255,14 +248,17 @@ py::dict IntervalResult(const std::string& source, const std::string& loss,
                         LaserCalibrationOptions options, bool interval_jitter,
                         const std::vector<StreamTiming>& timing = {}) {
   options.interval_jitter = interval_jitter;
-  const StatusOr<LaserCalibrationResult> result = [&] {
+  LaserLog log;
+  log.source = source;
+  log.intervals = intervals;
+  log.stream_timing = timing;
+  const StatusOr<CalibrationReport> report = [&]() -> StatusOr<CalibrationReport> {
     py::gil_scoped_release release;
-    return CalibrateLaser(intervals, options);
+    CALIB_ASSIGN_OR_RETURN(const LaserCalibrationResult result, CalibrateLaser(intervals, options));
+    return LaserIntervalReport(result, {&log}, ReportOptions(source, loss, options));
   }();
-  if (!result.ok()) Raise(result.status().Prefixed(source + ": "));
-  VerdictInputs verdict;
-  verdict.streams = &timing;
-  return LaserResultToPython(*result, LaserResultJson(*result, source, loss, timing), verdict);
+  if (!report.ok()) Raise(report.status().Prefixed(source + ": "));
+  return LaserResultToPython(*report);
 }
 
 py::dict ReadLaser(const std::string& path, const std::string& format, const py::kwargs& bag) {
@@ -290,8 +286,8 @@ py::dict CalibrateLaserPath(const std::string& path, const std::string& format,
     const RobotMessages messages = ReadRobotMessages(path);
     const RobotBagCalibration calibrated =
         Unwrap(CalibrateRobotMessages(messages, bag_options, timing_options));
-    return StreamResult(path, loss, calibrated.log.scans.log, calibrated.result, &calibrated,
-                        &bag_options);
+    return StreamResult(path, loss, options, calibrated.log.scans.log, calibrated.result,
+                        &calibrated, &bag_options);
   }
   if (!bag.empty()) throw py::value_error(path + ": bag options apply to bags only");
   const LaserLog log = Unwrap(ReadLaserLog(path, Unwrap(ParseLaserFormat(format))));
@@ -299,7 +295,7 @@ py::dict CalibrateLaserPath(const std::string& path, const std::string& format,
   if (streams && timing != "off") {
     StatusOr<LaserTimingResult> result = CalibrateLaserStreams(log.streams, timing_options);
     if (!result.ok()) Raise(result.status().Prefixed(path + ": "));
-    return StreamResult(path, loss, log, *result);
+    return StreamResult(path, loss, options, log, *result);
   }
   return IntervalResult(path, loss, log.intervals, options, !streams, log.stream_timing);
 }
@@ -343,15 +339,9 @@ py::dict Diagnose(const std::string& source, const std::vector<LaserInterval>& i
   if (!result.ok()) Raise(result.status().Prefixed(source + ": "));
   nlohmann::ordered_json json = LaserDiagnosisJson(*result, source, {});
   if (timing != nullptr) {
-    const nlohmann::ordered_json finding = LatentTimingFinding(*timing);
-    json["findings"].insert(json["findings"].begin(), finding);
-    if (finding["significant"].get<bool>()) {
-      json["final"]["effects"].insert(json["final"]["effects"].begin(), "sample_times");
-      json["adopted"].insert(json["adopted"].begin(), "sample_times");
-    }
-    json["timing"]["treatment"] = "latent_times";
-    json["timing"]["latent_times"] = LatentTimingJson(*timing);
+    AddLatentTimingToDiagnosis(*timing, &json);
   }
+  json["deploy"] = AdviseDeployment(json).json;
   py::dict d;
   d["problem"] = "laser";
   d["params"] = LaserParamNames();

@@ -75,6 +75,14 @@ class CalibrateLaserTest(unittest.TestCase):
             calib.calibrate_laser_arrays(T, phi_l, phi_r, sm)
 
 
+    def test_verdict_points_to_diagnose_as_the_command_line_does(self):
+        result = calib.calibrate_laser(os.path.join(DATA, "diagnose", "lateral_slip.tuple"))
+        self.assertEqual(result["verdict"], "check")
+        self.assertIn("calib diagnose", result["verdict_reason"])
+        self.assertIn("lateral_slip", result["report"]["model_screen"]["effects"])
+        self.assertIn("odometry drift", result["summary"])
+
+
 class RobotRecordingTest(unittest.TestCase):
 
     def assert_within_three_sigma(self, result, truth_path):

@@ -39,10 +39,13 @@ inline std::filesystem::path MakeScratchDir(const std::string& prefix) {
   return dir;
 }
 
-// `scratch` receives the captured stdout.txt and stderr.txt.
-inline CliRun RunCalib(const std::string& args, const std::filesystem::path& scratch) {
+// `scratch` receives the captured stdout.txt and stderr.txt; `working_dir`: where it runs (empty:
+// here).
+inline CliRun RunCalib(const std::string& args, const std::filesystem::path& scratch,
+                       const std::filesystem::path& working_dir = {}) {
   const std::filesystem::path out = scratch / "stdout.txt", err = scratch / "stderr.txt";
-  const std::string command = std::string(CALIB_BINARY_DIR) + "/bin/calib " + args + " >" +
+  const std::string cd = working_dir.empty() ? "" : "cd " + working_dir.string() + " && ";
+  const std::string command = cd + std::string(CALIB_BINARY_DIR) + "/bin/calib " + args + " >" +
                               out.string() + " 2>" + err.string() + " </dev/null";
   const int status = std::system(command.c_str());
   CliRun run;

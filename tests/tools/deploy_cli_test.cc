@@ -28,17 +28,7 @@ class DeployCliTest : public ::testing::Test {
 
   // Run from inside the scratch folder, so that files written "in the working directory" land
   // there.
-  CliRun Calib(const std::string& args) {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string command = "cd " + dir_.string() + " && " + CALIB_BINARY_DIR + "/bin/calib " +
-                                args + " >" + out.string() + " 2>" + err.string() + " </dev/null";
-    const int status = std::system(command.c_str());
-    CliRun run;
-    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    run.out = ReadFile(out);
-    run.err = ReadFile(err);
-    return run;
-  }
+  CliRun Calib(const std::string& args) { return ::calib::testing::RunCalib(args, dir_, dir_); }
 
   // The value after "key: " in a YAML text.
   static double Yaml(const std::string& yaml, const std::string& key) {
@@ -206,6 +196,24 @@ TEST_F(DeployCliTest, TimeOffsetMovesTheSensorStamps) {
   EXPECT_NE(intervals.err.find("sample_laser.tuple: a time offset applies to sample stamps"),
             std::string::npos)
       << intervals.err;
+}
+
+// An output in a folder that does not exist is refused before any work, in every command, with
+// the path named; nothing is created.
+TEST_F(DeployCliTest, OutputInAMissingFolderIsRefused) {
+  const std::string missing = (dir_ / "no" / "such").string();
+  const std::string sample = (kData / "sample_laser.tuple").string();
+  for (const std::string& command :
+       {"calibrate --input " + sample + " --output " + missing + "/x.json",
+        "diagnose --input " + sample + " --output " + missing + "/x.json",
+        "simulate --output " + missing + "/x.tuple",
+        "simulate --output " + (dir_ / "x.tuple").string() + " --truth " + missing + "/t.json",
+        "calibrate --input " + sample + " --output " + dir_.string()}) {
+    const CliRun run = Calib(command);
+    EXPECT_EQ(run.exit_code, 1) << command;
+    EXPECT_EQ(run.err.find("calib: error: --"), 0u) << run.err;
+    EXPECT_FALSE(fs::exists(dir_ / "no")) << command;
+  }
 }
 
 }  // namespace

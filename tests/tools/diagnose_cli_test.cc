@@ -114,4 +114,28 @@ TEST_F(DiagnoseCliTest, BearingDirectoryGivesTheContractJsonAndPlots) {
   EXPECT_NE(bad.err.find("bearings.csv"), std::string::npos) << bad.err;
 }
 
+// Which single estimate to deploy: the final fit; after a radius change, the radii after it; a
+// time offset the driver applies; slip named as what a standard controller cannot express.
+TEST_F(DiagnoseCliTest, SaysWhatToDeploy) {
+  nlohmann::json json = Diagnose(kDataDir / "wheel_radius_change.tuple");
+  ASSERT_TRUE(json.contains("deploy"));
+  const nlohmann::json* change = nullptr;
+  for (const auto& f : json["findings"]) {
+    if (f["effect"] == "wheel_radius_change") change = &f;
+  }
+  ASSERT_NE(change, nullptr);
+  EXPECT_EQ(json["deploy"]["estimate"]["r_l"], (*change)["r_l_after"]);
+  EXPECT_EQ(json["deploy"]["estimate"]["r_r"], (*change)["r_r_after"]);
+  EXPECT_EQ(json["deploy"]["estimate"]["b"], json["final"]["estimate"]["b"]);
+
+  json = Diagnose(kDataDir / "time_offset.tuple");
+  EXPECT_NEAR(json["deploy"]["sensor_time_offset_s"].get<double>(),
+              json["final"]["effect_values"]["time_offset"]["value"].get<double>(), 1e-12);
+  EXPECT_TRUE(json["deploy"]["not_expressible"].empty());
+
+  json = Diagnose(kDataDir / "lateral_slip.tuple");
+  EXPECT_EQ(json["deploy"]["not_expressible"], nlohmann::json::array({"lateral_slip"}));
+  EXPECT_EQ(json["deploy"]["estimate"], json["final"]["estimate"]);
+}
+
 }  // namespace

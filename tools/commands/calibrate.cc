@@ -3,7 +3,6 @@
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
 #include <calib/solvers/laser/calibrate_laser.h>
-#include <calib/solvers/laser/laser_model_screen.h>
 #include <calib/solvers/scan_matching/robot_bag_log.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/tools/commands/command_util.h>
@@ -12,14 +11,9 @@
 #include <calib/tools/commands/plot_output.h>
 #include <calib/tools/commands/robot_input.h>
 #include <calib/tools/report/bearing_calibration_plots.h>
-#include <calib/tools/report/bearing_report.h>
+#include <calib/tools/report/calibration_report.h>
 #include <calib/tools/report/deployment.h>
-#include <calib/tools/report/drift_report.h>
 #include <calib/tools/report/laser_calibration_plots.h>
-#include <calib/tools/report/laser_report.h>
-#include <calib/tools/report/latent_timing_report.h>
-#include <calib/tools/report/robot_log_report.h>
-#include <calib/tools/report/verdict.h>
 
 #include <vector>
 
@@ -31,24 +25,6 @@ std::optional<OdometryParams> NominalOdometry(const CalibrateOptions& flags) {
   if (!(flags.nominal_wheel_radius > 0.0 && flags.nominal_wheelbase > 0.0)) return std::nullopt;
   return OdometryParams{flags.nominal_wheel_radius, flags.nominal_wheel_radius,
                         flags.nominal_wheelbase};
-}
-
-// The quick look for physics the model leaves out (laser_model_screen.h): its JSON, and its
-// sentence among the verdict's warnings when it finds something.
-void ScreenModel(const std::vector<LaserInterval>& intervals,
-                 const LaserCalibrationOptions& options, bool sample_times_estimated,
-                 VerdictInputs* verdict, nlohmann::ordered_json* json) {
-  const StatusOr<LaserModelScreen> screen =
-      ScreenLaserModel(intervals, options, sample_times_estimated);
-  nlohmann::ordered_json& out = (*json)["model_screen"];
-  if (!screen.ok()) {
-    out["error"] = screen.message();
-    return;
-  }
-  out["flagged"] = screen->flagged;
-  out["effects"] = screen->effects;
-  out["structure"] = screen->structure;
-  verdict->model_screen = screen->warning;
 }
 
 // --export: the deployment files beside the JSON, named in it and in the summary.
@@ -87,68 +63,38 @@ LaserTimingOptions TimingOptions(const CalibrateOptions& flags,
   return timing;
 }
 
-// The JSON and summary of a timing-aware calibration of `log`; `recording`: the bag it was made
+LaserReportOptions ReportOptions(const CalibrateOptions& flags,
+                                 const LaserCalibrationOptions& options) {
+  LaserReportOptions report;
+  report.input = flags.input;
+  report.loss = flags.loss;
+  report.nominal = NominalOdometry(flags);
+  report.screen = options;
+  report.scan_points = flags.scan_points;
+  return report;
+}
+
+// The JSON and summary of a timing-aware calibration of `log`; `bag`: the recording it was made
 // from, if any.
 int ReportLaserStreamResult(const CalibrateOptions& flags, const LaserCalibrationOptions& options,
                             const LaserLog& log, const LaserTimingResult& result,
                             const Stopwatch& clock, const RobotBagCalibration* bag = nullptr) {
-  const RobotBagLog* recording = bag ? &bag->log : nullptr;
-  const std::optional<ScanPointCalibration>* scan_points = bag ? &bag->scan_points : nullptr;
-  // Refined on the scan points: their estimate is the result; the two-stage one stays beside it.
-  LaserCalibrationResult calibration = result.calibration;
-  if (scan_points && scan_points->has_value()) {
-    calibration.estimate = (*scan_points)->estimate;
-    calibration.covariance = (*scan_points)->covariance;
-    calibration.stddev = (*scan_points)->stddev;
-    for (std::string& w : calibration.observability.warnings) {
-      w = "two-stage (before the refinement on the scan points): " + w;
-    }
-  }
-  nlohmann::ordered_json json =
-      LaserResultJson(calibration, flags.input, flags.loss, log.stream_timing);
-  json["timing"]["treatment"] = "latent_times";
-  json["timing"]["latent_times"] = LatentTimingJson(result);
-  const NominalWheels nominal{flags.nominal_wheel_radius, flags.nominal_wheelbase};
-  if (recording) json["recording"] = RobotLogJson(*recording, calibration, nominal);
-  if (bag && flags.scan_points) json["scan_points"] = ScanPointJson(*bag);
-  json["seconds"]["total"] = clock.Seconds();
-  VerdictInputs verdict;
-  verdict.converged = calibration.converged;
-  verdict.warnings = log.warnings;
-  verdict.warnings.insert(verdict.warnings.end(), calibration.observability.warnings.begin(),
-                          calibration.observability.warnings.end());
-  verdict.disagreements = calibration.consistency.warnings;
-  verdict.streams = &log.stream_timing;
-  verdict.timing_treated = true;
-  const StatusOr<LaserLog> timed = LaserLogFromStreams(
-      result.timed_streams.odometry, result.timed_streams.sensor_poses, flags.input);
-  if (timed.ok()) ScreenModel(timed->intervals, options, true, &verdict, &json);
-  if (recording) {
-    verdict.warnings.insert(verdict.warnings.end(), recording->warnings.begin(),
-                            recording->warnings.end());
-    const std::vector<std::string> refinement = ScanPointWarnings(*bag);
-    verdict.warnings.insert(verdict.warnings.end(), refinement.begin(), refinement.end());
-  }
-  const DriftReport drift = LaserDrift(calibration, NominalOdometry(flags));
-  json["odometry_drift"] = DriftJson(drift);
-  const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
-  std::string summary =
-      LaserResultSummary(calibration, flags.input, flags.loss, log.stream_timing) +
-      (recording ? RobotLogSummary(*recording, calibration, nominal) : "") +
-      (bag && flags.scan_points ? ScanPointSummary(*bag) : "") + LatentTimingSummary(result) +
-      WarningLines(log.warnings) + DriftSummary(drift) + verdict_line;
+  CalibrationReport report = LaserTimingReport(result, log, bag, ReportOptions(flags, options));
+  report.json["seconds"]["total"] = clock.Seconds();
+  const LaserCalibrationResult& calibration = report.laser;
   const Status plotted = AddCalibrationPlots(
       flags,
       [&] {
         return LaserTimingCalibrationPlots(log, result, calibration,
                                            {flags.nominal_wheel_radius, flags.nominal_wheelbase});
       },
-      &json, &summary);
+      &report.json, &report.summary);
   if (!plotted.ok()) return Fail(plotted.message());
   const ScanPointCalibration* refined =
-      scan_points && scan_points->has_value() ? &**scan_points : nullptr;
-  return Finish(flags, LaserDeployment(calibration, flags.input, recording, &result, refined),
-                &json, summary);
+      bag && bag->scan_points.has_value() ? &*bag->scan_points : nullptr;
+  return Finish(
+      flags, LaserDeployment(calibration, flags.input, bag ? &bag->log : nullptr, &result, refined),
+      &report.json, report.summary);
 }
 
 // One raw-stream log: every sample's true time is estimated with the calibration.
@@ -213,29 +159,15 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   const StatusOr<LaserCalibrationResult> result = CalibrateLaserJoint(intervals, options);
   if (!result.ok()) return Fail(flags.input + ": " + result.message());
 
-  std::vector<StreamTiming> timing;  // Of raw stream logs only.
-  for (const LaserLog& log : logs) {
-    timing.insert(timing.end(), log.stream_timing.begin(), log.stream_timing.end());
-  }
-  nlohmann::ordered_json json = LaserResultJson(*result, flags.input, flags.loss, timing);
-  json["seconds"]["total"] = clock.Seconds();
-  VerdictInputs verdict;
-  verdict.converged = result->converged;
-  verdict.warnings = ReaderWarnings(logs);
-  verdict.warnings.insert(verdict.warnings.end(), result->observability.warnings.begin(),
-                          result->observability.warnings.end());
-  verdict.disagreements = result->consistency.warnings;
-  verdict.streams = &timing;
-  if (logs.size() == 1) ScreenModel(logs.front().intervals, options, false, &verdict, &json);
-  const DriftReport drift = LaserDrift(*result, NominalOdometry(flags));
-  json["odometry_drift"] = DriftJson(drift);
-  std::string summary = LaserResultSummary(*result, flags.input, flags.loss, timing) +
-                        WarningLines(ReaderWarnings(logs)) + DriftSummary(drift) +
-                        AddVerdict(JudgeResult(verdict), &json);
+  std::vector<const LaserLog*> read;
+  for (const LaserLog& log : logs) read.push_back(&log);
+  CalibrationReport report = LaserIntervalReport(*result, read, ReportOptions(flags, options));
+  report.json["seconds"]["total"] = clock.Seconds();
   const Status plotted = AddCalibrationPlots(
-      flags, [&] { return LaserCalibrationPlots(intervals, *result); }, &json, &summary);
+      flags, [&] { return LaserCalibrationPlots(intervals, *result); }, &report.json,
+      &report.summary);
   if (!plotted.ok()) return Fail(plotted.message());
-  return Finish(flags, LaserDeployment(*result, flags.input), &json, summary);
+  return Finish(flags, LaserDeployment(*result, flags.input), &report.json, report.summary);
 }
 
 int CalibrateBearingLog(const CalibrateOptions& flags) {
@@ -247,23 +179,14 @@ int CalibrateBearingLog(const CalibrateOptions& flags) {
       CalibrateBearing(input->log, input->calibration);
   if (!result.ok()) return Fail(result.message());
 
-  const std::vector<StreamTiming>& timing = input->log.stream_timing;
-  nlohmann::ordered_json json = BearingResultJson(*result, flags.input, flags.loss, timing);
-  json["seconds"]["total"] = clock.Seconds();
-  VerdictInputs verdict;
-  verdict.converged = result->converged;
-  verdict.warnings = result->warnings;
-  verdict.streams = &timing;
-  verdict.timing_treated = true;  // Offset and stamp jitter are modelled (calibrate_bearing).
-  const std::optional<DriftReport> drift = BearingDrift(*result, input->log);
-  if (drift) json["odometry_drift"] = DriftJson(*drift);
-  std::string summary = BearingResultSummary(*result, flags.input, flags.loss, timing) +
-                        (drift ? DriftSummary(*drift) : "") +
-                        AddVerdict(JudgeResult(verdict), &json);
+  CalibrationReport report = BearingCalibrationReport(*result, input->log, flags.input, flags.loss);
+  report.json["seconds"]["total"] = clock.Seconds();
   const Status plotted = AddCalibrationPlots(
-      flags, [&] { return BearingCalibrationPlots(input->log, *result); }, &json, &summary);
+      flags, [&] { return BearingCalibrationPlots(input->log, *result); }, &report.json,
+      &report.summary);
   if (!plotted.ok()) return Fail(plotted.message());
-  return Finish(flags, BearingDeployment(*result, input->log, flags.input), &json, summary);
+  return Finish(flags, BearingDeployment(*result, input->log, flags.input), &report.json,
+                report.summary);
 }
 
 }  // namespace
@@ -271,6 +194,8 @@ int CalibrateBearingLog(const CalibrateOptions& flags) {
 int RunCalibrate(const CalibrateOptions& options) {
   const Status given = CheckInput(options.input);
   if (!given.ok()) return Fail(given.message());
+  const Status output = CheckOutputPath("output", options.output);
+  if (!output.ok()) return Fail(output.message());
   const StatusOr<std::vector<std::string>> exports = ParseExportFormats(options.export_formats);
   if (!exports.ok()) return Fail(exports.message());
   const Status plot_format =

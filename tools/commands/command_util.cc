@@ -31,6 +31,22 @@ Status CheckInput(const std::string& input) {
   return Status::Ok();
 }
 
+Status CheckOutputPath(const std::string& flag, const std::string& path, bool directory_output) {
+  if (path.empty() || path == "-") return Status::Ok();
+  const std::filesystem::path file(path);
+  const std::filesystem::path folder =
+      file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
+  std::error_code error;
+  if (!std::filesystem::is_directory(folder, error)) {
+    return Status::Io("--" + flag + " " + path + ": cannot write there, the folder " +
+                      folder.string() + " does not exist");
+  }
+  if (!directory_output && std::filesystem::is_directory(file, error)) {
+    return Status::Io("--" + flag + " " + path + ": is a folder, not a file");
+  }
+  return Status::Ok();
+}
+
 bool IsBearingInput(const std::string& input, const std::string& format) {
   return format == "auto" && IsBearingLogDirectory(input);
 }

@@ -43,6 +43,11 @@ std::function<void(const std::string&)> ProgressPrinter(const Stopwatch& clock, 
 // The check every command on a log starts with: --input given (--output is optional).
 Status CheckInput(const std::string& input);
 
+// An output path (not empty, not "-") must be in a folder that exists, and not be a folder
+// itself unless `directory_output`: checked before any work, the path named.
+Status CheckOutputPath(const std::string& flag, const std::string& path,
+                       bool directory_output = false);
+
 // True when --format is auto and --input is a bearing log directory.
 bool IsBearingInput(const std::string& input, const std::string& format);
 

@@ -8,6 +8,7 @@
 #include <calib/tools/commands/plot_output.h>
 #include <calib/tools/commands/robot_input.h>
 #include <calib/tools/report/bearing_diagnose_report.h>
+#include <calib/tools/report/deploy_advice.h>
 #include <calib/tools/report/laser_diagnose_report.h>
 #include <calib/tools/report/latent_timing_report.h>
 
@@ -51,18 +52,14 @@ int WriteDiagnosis(const DiagnoseOptions& flags, const Diagnosis& diagnosis, con
   std::string summary = writers.summary(diagnosis, flags.input, plots);
   if (timing != nullptr) {
     // Timing is named first, as timing (and adopted when it changes the calibration).
-    const nlohmann::ordered_json finding = LatentTimingFinding(*timing);
-    json["findings"].insert(json["findings"].begin(), finding);
-    if (finding["significant"].get<bool>()) {
-      json["final"]["effects"].insert(json["final"]["effects"].begin(), "sample_times");
-      json["adopted"].insert(json["adopted"].begin(), "sample_times");
-    }
-    json["timing"]["treatment"] = "latent_times";
-    json["timing"]["latent_times"] = LatentTimingJson(*timing);
+    AddLatentTimingToDiagnosis(*timing, &json);
     summary += LatentTimingSummary(*timing) +
                "  timing: modelled first, as timing: the effects above were searched on the "
                "intervals between the estimated sample times\n";
   }
+  const DeployAdvice advice = AdviseDeployment(json);
+  json["deploy"] = advice.json;
+  summary += advice.summary;
   json["seconds"] = clock.Seconds();
   return WriteReport(flags.output, json, summary, flags.quiet);
 }
@@ -180,6 +177,8 @@ int DiagnoseBearingLog(const DiagnoseOptions& flags) {
 int RunDiagnose(const DiagnoseOptions& options) {
   const Status given = CheckInput(options.input);
   if (!given.ok()) return Fail(given.message());
+  const Status output = CheckOutputPath("output", options.output);
+  if (!output.ok()) return Fail(output.message());
   if (options.input.find(',') != std::string::npos) {
     return Fail("diagnose takes one log (--input names several)");
   }

@@ -27,20 +27,6 @@ StatusOr<std::vector<LaserLog>> ReadCheckedLaserLogs(const CalibrateOptions& fla
   return logs;
 }
 
-std::vector<std::string> ReaderWarnings(const std::vector<LaserLog>& logs) {
-  std::vector<std::string> warnings;
-  for (const LaserLog& log : logs) {
-    warnings.insert(warnings.end(), log.warnings.begin(), log.warnings.end());
-  }
-  return warnings;
-}
-
-std::string WarningLines(const std::vector<std::string>& warnings) {
-  std::string text;
-  for (const std::string& warning : warnings) text += "  warning: " + warning + "\n";
-  return text;
-}
-
 StatusOr<double> WheelRadiansPerUnit(const CalibrateOptions& flags) {
   CALIB_ASSIGN_OR_RETURN(const double per_unit, ParseWheelAngleUnit(flags.wheel_angle_unit));
   if (flags.ticks_per_rev == 0.0) return per_unit;

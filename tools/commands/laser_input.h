@@ -17,12 +17,6 @@ namespace calib::cli {
 StatusOr<std::vector<LaserLog>> ReadCheckedLaserLogs(const CalibrateOptions& flags,
                                                      LaserFormat format);
 
-// What the readers corrected (duplicates dropped, wrapped angles unwrapped), over all logs.
-std::vector<std::string> ReaderWarnings(const std::vector<LaserLog>& logs);
-
-// "  warning: SENTENCE\n" for each.
-std::string WarningLines(const std::vector<std::string>& warnings);
-
 // --ticks_per_rev for a bag: the JointState positions' radians per unit, as --wheel_angle_unit
 // ticks:N; an error when both flags give a unit.
 StatusOr<double> WheelRadiansPerUnit(const CalibrateOptions& flags);

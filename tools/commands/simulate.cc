@@ -13,6 +13,7 @@
 #include <cmath>
 #include <filesystem>
 #include <string>
+#include <tuple>
 
 namespace calib::cli {
 namespace {
@@ -152,6 +153,12 @@ int WriteTruth(const SimulateOptions& flags, const nlohmann::ordered_json& json)
 
 int RunSimulate(const SimulateOptions& flags) {
   if (flags.output.empty()) return Fail("--output is required");
+  for (const auto& [flag, path, folder] :
+       {std::tuple<std::string, std::string, bool>{"output", flags.output, true},
+        {"truth", flags.truth, false}}) {
+    const Status checked = CheckOutputPath(flag, path, folder);
+    if (!checked.ok()) return Fail(checked.message());
+  }
   const StatusOr<LaserSimOptions> options = SimulatorOptions(flags);
   if (!options.ok()) return Fail(options.message());
   const StatusOr<LoggingModel> model = LoggingModelFromFlags(flags);

@@ -15,18 +15,6 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 
 std::string LengthUnit(const BearingPaths& paths) { return paths.metric ? "m" : "nominal m"; }
 
-ChartSeries PathSeries(const std::string& label, const std::vector<Pose2d>& path, const char* color,
-                       ChartStyle style) {
-  ChartSeries s{label, {}, {}};
-  for (const Pose2d& p : path) {
-    s.x.push_back(p(0));
-    s.y.push_back(p(1));
-  }
-  s.color = color;
-  s.style = style;
-  return s;
-}
-
 // Whether bearing j of run i is an inlier (true when the result does not say).
 bool Used(const BearingCalibrationResult& result, size_t i, int j) {
   if (j < 0 || i >= result.is_inlier.size()) return true;

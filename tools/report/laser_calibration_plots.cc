@@ -47,18 +47,6 @@ std::vector<bool> InlierFlags(const LaserCalibrationResult& result, size_t log,
   return std::vector<bool>(errors.size(), true);
 }
 
-ChartSeries PathSeries(const std::string& label, const std::vector<Pose2d>& path, const char* color,
-                       ChartStyle style) {
-  ChartSeries s{label, {}, {}};
-  for (const Pose2d& p : path) {
-    s.x.push_back(p(0));
-    s.y.push_back(p(1));
-  }
-  s.color = color;
-  s.style = style;
-  return s;
-}
-
 // The gap between a dead-reckoned path and the scan-matched one against the distance the sensor
 // travelled.
 ChartSeries GapSeries(const std::string& label, const std::vector<Pose2d>& path,

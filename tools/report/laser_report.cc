@@ -124,7 +124,14 @@ std::string LaserResultSummary(const LaserCalibrationResult& result, const std::
                   estimate(i) * k, result.stddev(i) * k, closed(i) * k);
     text += line;
   }
-  std::snprintf(line, sizeof(line), "  inliers %d of %d\n", result.inliers, result.samples);
+  if (loss == "none") {
+    // Without a robust loss every interval weighs fully: the cut only names the large ones.
+    std::snprintf(line, sizeof(line),
+                  "  all %d intervals weigh fully (no robust loss); %d lie beyond the inlier cut\n",
+                  result.samples, result.samples - result.inliers);
+  } else {
+    std::snprintf(line, sizeof(line), "  inliers %d of %d\n", result.inliers, result.samples);
+  }
   text += line;
   for (const Eigen::Vector3d& sigma : result.noise_sigma) {
     std::snprintf(line, sizeof(line),

@@ -123,4 +123,15 @@ std::string LatentTimingSummary(const LaserTimingResult& r) {
   return text;
 }
 
+void AddLatentTimingToDiagnosis(const LaserTimingResult& result, nlohmann::ordered_json* json) {
+  const nlohmann::ordered_json finding = LatentTimingFinding(result);
+  (*json)["findings"].insert((*json)["findings"].begin(), finding);
+  if (finding["significant"].get<bool>()) {
+    (*json)["final"]["effects"].insert((*json)["final"]["effects"].begin(), "sample_times");
+    (*json)["adopted"].insert((*json)["adopted"].begin(), "sample_times");
+  }
+  (*json)["timing"]["treatment"] = "latent_times";
+  (*json)["timing"]["latent_times"] = LatentTimingJson(result);
+}
+
 }  // namespace calib

@@ -19,6 +19,9 @@ nlohmann::ordered_json LatentTimingJson(const LaserTimingResult& result);
 // estimated sample times from their stamps, s; "sensor_clock" stamps or free_running),
 // significant when taking the stamps as sample times would move a parameter by more than 3 σ.
 nlohmann::ordered_json LatentTimingFinding(const LaserTimingResult& result);
+// A diagnosis JSON searched on the estimated sample times: the timing finding first (and adopted,
+// as "sample_times", when significant) and the timing block.
+void AddLatentTimingToDiagnosis(const LaserTimingResult& result, nlohmann::ordered_json* json);
 
 // Two or three lines: the model, τ, the jitters or the clock, and how far the stamp-as-truth
 // estimate was from this one.

@@ -332,4 +332,16 @@ std::string ChartSvg(const ChartFigure& figure) {
   return svg.str();
 }
 
+ChartSeries PathSeries(const std::string& label, const std::vector<Pose2d>& path, const char* color,
+                       ChartStyle style) {
+  ChartSeries s{label, {}, {}};
+  for (const Pose2d& p : path) {
+    s.x.push_back(p(0));
+    s.y.push_back(p(1));
+  }
+  s.color = color;
+  s.style = style;
+  return s;
+}
+
 }  // namespace calib

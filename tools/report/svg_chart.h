@@ -1,6 +1,8 @@
 #ifndef CALIB_TOOLS_REPORT_SVG_CHART_H_
 #define CALIB_TOOLS_REPORT_SVG_CHART_H_
 
+#include <calib/core/se2.h>
+
 #include <string>
 #include <utility>
 #include <vector>
@@ -35,6 +37,10 @@ struct ChartSeries {
   double bar_width = 0.0;  // kBars.
   double offset_px = 0.0;  // Drawn shifted right by this (two error-bar series side by side).
 };
+
+// A path of poses as a series of their (x, y).
+ChartSeries PathSeries(const std::string& label, const std::vector<Pose2d>& path, const char* color,
+                       ChartStyle style);
 
 struct ChartPanel {
   std::string title;             // In words.

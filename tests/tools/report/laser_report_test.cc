@@ -38,5 +38,19 @@ TEST(LaserReportTest, ConvergenceAndWarningsReachTheJson) {
   EXPECT_NE(text.find("warning: the refinement stopped"), std::string::npos) << text;
 }
 
+// Without a robust loss there are no inliers to count: every interval weighs fully.
+TEST(LaserReportTest, NoLossSaysEveryIntervalWeighsFully) {
+  LaserCalibrationResult result;
+  result.samples = 100;
+  result.inliers = 97;
+  EXPECT_NE(LaserResultSummary(result, "sim", "cauchy").find("inliers 97 of 100"),
+            std::string::npos);
+  const std::string text = LaserResultSummary(result, "sim", "none");
+  EXPECT_EQ(text.find("inliers 97"), std::string::npos) << text;
+  EXPECT_NE(text.find("all 100 intervals weigh fully (no robust loss); 3 lie beyond"),
+            std::string::npos)
+      << text;
+}
+
 }  // namespace
 }  // namespace calib

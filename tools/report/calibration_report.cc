@@ -1,0 +1,149 @@
+#include <calib/solvers/laser/laser_model_screen.h>
+#include <calib/tools/report/bearing_report.h>
+#include <calib/tools/report/calibration_report.h>
+#include <calib/tools/report/drift_report.h>
+#include <calib/tools/report/laser_report.h>
+#include <calib/tools/report/latent_timing_report.h>
+#include <calib/tools/report/robot_log_report.h>
+#include <calib/tools/report/verdict.h>
+
+#include <utility>
+
+namespace calib {
+namespace {
+
+// The quick look for physics the model leaves out (laser_model_screen.h): its JSON, and its
+// sentence for the verdict when it finds something.
+void ScreenModel(const std::vector<LaserInterval>& intervals, const LaserReportOptions& options,
+                 bool sample_times_estimated, VerdictInputs* verdict,
+                 nlohmann::ordered_json* json) {
+  if (!options.screen_model) return;
+  const StatusOr<LaserModelScreen> screen =
+      ScreenLaserModel(intervals, options.screen, sample_times_estimated);
+  nlohmann::ordered_json& out = (*json)["model_screen"];
+  if (!screen.ok()) {
+    out["error"] = screen.message();
+    return;
+  }
+  out["flagged"] = screen->flagged;
+  out["effects"] = screen->effects;
+  out["structure"] = screen->structure;
+  verdict->model_screen = screen->warning;
+}
+
+VerdictInputs LaserVerdict(const LaserCalibrationResult& result,
+                           const std::vector<StreamTiming>* streams) {
+  VerdictInputs verdict;
+  verdict.converged = result.converged;
+  verdict.warnings = result.observability.warnings;
+  verdict.disagreements = result.consistency.warnings;
+  verdict.streams = streams;
+  return verdict;
+}
+
+// What the readers corrected (exact duplicates dropped, wrapped wheel angles unwrapped): first
+// among the verdict's warnings; returns their summary lines.
+std::string AddReaderWarnings(const std::vector<const LaserLog*>& logs, VerdictInputs* verdict) {
+  std::vector<std::string> read;
+  std::string lines;
+  for (const LaserLog* log : logs) {
+    for (const std::string& warning : log->warnings) {
+      read.push_back(warning);
+      lines += "  warning: " + warning + "\n";
+    }
+  }
+  verdict->warnings.insert(verdict->warnings.begin(), read.begin(), read.end());
+  return lines;
+}
+
+}  // namespace
+
+CalibrationReport LaserIntervalReport(const LaserCalibrationResult& result,
+                                      const std::vector<const LaserLog*>& logs,
+                                      const LaserReportOptions& options) {
+  CalibrationReport report;
+  report.laser = result;
+  std::vector<StreamTiming> timing;  // Of raw stream logs only.
+  for (const LaserLog* log : logs) {
+    timing.insert(timing.end(), log->stream_timing.begin(), log->stream_timing.end());
+  }
+  report.json = LaserResultJson(result, options.input, options.loss, timing);
+  VerdictInputs verdict = LaserVerdict(result, &timing);
+  const std::string read = AddReaderWarnings(logs, &verdict);
+  if (logs.size() == 1) {
+    ScreenModel(logs.front()->intervals, options, false, &verdict, &report.json);
+  }
+  const DriftReport drift = LaserDrift(result, options.nominal);
+  report.json["odometry_drift"] = DriftJson(drift);
+  report.summary = LaserResultSummary(result, options.input, options.loss, timing) + read +
+                   DriftSummary(drift) + AddVerdict(JudgeResult(verdict), &report.json);
+  return report;
+}
+
+CalibrationReport LaserTimingReport(const LaserTimingResult& result, const LaserLog& log,
+                                    const RobotBagCalibration* bag,
+                                    const LaserReportOptions& options) {
+  CalibrationReport report;
+  const RobotBagLog* recording = bag ? &bag->log : nullptr;
+  const bool refined = bag && bag->scan_points.has_value();
+  // Refined on the scan points: their estimate is the result; the two-stage one stays beside it.
+  LaserCalibrationResult& calibration = report.laser;
+  calibration = result.calibration;
+  if (refined) {
+    calibration.estimate = bag->scan_points->estimate;
+    calibration.covariance = bag->scan_points->covariance;
+    calibration.stddev = bag->scan_points->stddev;
+    for (std::string& w : calibration.observability.warnings) {
+      w = "two-stage (before the refinement on the scan points): " + w;
+    }
+  }
+  nlohmann::ordered_json& json = report.json;
+  json = LaserResultJson(calibration, options.input, options.loss, log.stream_timing);
+  json["timing"]["treatment"] = "latent_times";
+  json["timing"]["latent_times"] = LatentTimingJson(result);
+  const NominalWheels nominal{options.nominal ? options.nominal->left_radius_m : 0.0,
+                              options.nominal ? options.nominal->wheelbase_m : 0.0};
+  if (recording) json["recording"] = RobotLogJson(*recording, calibration, nominal);
+  if (bag && options.scan_points) json["scan_points"] = ScanPointJson(*bag);
+  VerdictInputs verdict = LaserVerdict(calibration, &log.stream_timing);
+  const std::string read = AddReaderWarnings({&log}, &verdict);
+  verdict.timing_treated = true;
+  const StatusOr<LaserLog> timed = LaserLogFromStreams(
+      result.timed_streams.odometry, result.timed_streams.sensor_poses, options.input);
+  if (timed.ok()) ScreenModel(timed->intervals, options, true, &verdict, &json);
+  if (recording) {
+    verdict.warnings.insert(verdict.warnings.end(), recording->warnings.begin(),
+                            recording->warnings.end());
+    const std::vector<std::string> refinement = ScanPointWarnings(*bag);
+    verdict.warnings.insert(verdict.warnings.end(), refinement.begin(), refinement.end());
+  }
+  const DriftReport drift = LaserDrift(calibration, options.nominal);
+  json["odometry_drift"] = DriftJson(drift);
+  const std::string verdict_line = AddVerdict(JudgeResult(verdict), &json);
+  report.summary = LaserResultSummary(calibration, options.input, options.loss, log.stream_timing) +
+                   (recording ? RobotLogSummary(*recording, calibration, nominal) : "") +
+                   (bag && options.scan_points ? ScanPointSummary(*bag) : "") +
+                   LatentTimingSummary(result) + read + DriftSummary(drift) + verdict_line;
+  return report;
+}
+
+CalibrationReport BearingCalibrationReport(const BearingCalibrationResult& result,
+                                           const BearingLog& log, const std::string& input,
+                                           const std::string& loss) {
+  CalibrationReport report;
+  const std::vector<StreamTiming>& timing = log.stream_timing;
+  report.json = BearingResultJson(result, input, loss, timing);
+  VerdictInputs verdict;
+  verdict.converged = result.converged;
+  verdict.warnings = result.warnings;
+  verdict.streams = &timing;
+  verdict.timing_treated = true;  // Offset and stamp jitter are modelled (calibrate_bearing).
+  const std::optional<DriftReport> drift = BearingDrift(result, log);
+  if (drift) report.json["odometry_drift"] = DriftJson(*drift);
+  report.summary = BearingResultSummary(result, input, loss, timing) +
+                   (drift ? DriftSummary(*drift) : "") +
+                   AddVerdict(JudgeResult(verdict), &report.json);
+  return report;
+}
+
+}  // namespace calib

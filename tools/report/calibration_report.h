@@ -1,0 +1,55 @@
+#ifndef CALIB_TOOLS_REPORT_CALIBRATION_REPORT_H_
+#define CALIB_TOOLS_REPORT_CALIBRATION_REPORT_H_
+
+#include <calib/core/bearing/bearing_log.h>
+#include <calib/core/diff_drive.h>
+#include <calib/core/laser/laser_log.h>
+#include <calib/core/timing/stamp_timing.h>
+#include <calib/solvers/bearing/calibrate_bearing.h>
+#include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/solvers/scan_matching/robot_bag_log.h>
+#include <calib/solvers/timing/laser_timing_calibration.h>
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+// The report of `calib calibrate` (its JSON, summary and verdict), assembled in one place for
+// the command line and the Python module: the result's JSON, the timing, the recording, the
+// model screen, the odometry drift, the verdict.
+namespace calib {
+
+struct CalibrationReport {
+  nlohmann::ordered_json json;
+  std::string summary;
+  // The laser calibration reported (the scan-point refinement's when it ran).
+  LaserCalibrationResult laser;
+};
+
+struct LaserReportOptions {
+  std::string input, loss = "cauchy";
+  std::optional<OdometryParams> nominal;  // The driver's wheels, when known.
+  LaserCalibrationOptions screen;         // The calibration options the model screen reuses.
+  bool screen_model = true;
+  bool scan_points = false;  // The refinement on the scan points was asked for (bags).
+};
+
+// A calibration of intervals (tuples, CSV, streams with --timing off); `logs`: the logs it was
+// calibrated from (the screen runs on a single log only).
+CalibrationReport LaserIntervalReport(const LaserCalibrationResult& result,
+                                      const std::vector<const LaserLog*>& logs,
+                                      const LaserReportOptions& options);
+
+// A timing-aware calibration of raw streams, or of a bag (`bag`, may be null).
+CalibrationReport LaserTimingReport(const LaserTimingResult& result, const LaserLog& log,
+                                    const RobotBagCalibration* bag,
+                                    const LaserReportOptions& options);
+
+CalibrationReport BearingCalibrationReport(const BearingCalibrationResult& result,
+                                           const BearingLog& log, const std::string& input,
+                                           const std::string& loss);
+
+}  // namespace calib
+
+#endif  // CALIB_TOOLS_REPORT_CALIBRATION_REPORT_H_
