@@ -134,9 +134,9 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   if (IsRobotInput(flags.input)) {
     return CalibrateRobotBag(flags, options, clock);
   }
-  StatusOr<std::vector<LaserLog>> read = ReadCheckedLaserLogs(flags, *format);
-  if (!read.ok()) return Fail(read.message());
-  const std::vector<LaserLog>& logs = *read;
+  StatusOr<std::vector<LaserLog>> checked = ReadCheckedLaserLogs(flags, *format);
+  if (!checked.ok()) return Fail(checked.message());
+  const std::vector<LaserLog>& logs = *checked;
   std::vector<const std::vector<LaserInterval>*> intervals;
   bool streams = false;
   for (const LaserLog& log : logs) {
