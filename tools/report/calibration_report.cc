@@ -14,21 +14,32 @@ namespace {
 
 // The quick look for physics the model leaves out (laser_model_screen.h): its JSON, and its
 // sentence for the verdict when it finds something.
-void ScreenModel(const std::vector<LaserInterval>& intervals, const LaserReportOptions& options,
-                 bool sample_times_estimated, VerdictInputs* verdict,
-                 nlohmann::ordered_json* json) {
-  if (!options.screen_model) return;
+// Returns a summary line when the screen did not run on a long log.
+std::string ScreenModel(const std::vector<LaserInterval>& intervals,
+                        const LaserReportOptions& options, bool sample_times_estimated,
+                        VerdictInputs* verdict, nlohmann::ordered_json* json) {
+  if (!options.screen_model) return "";
+  if (static_cast<int>(intervals.size()) > options.screen_max_intervals) {
+    // The screen costs about one more calibration: on long logs, diagnose is the way.
+    const std::string note = "not run on " + std::to_string(intervals.size()) +
+                             " intervals (more than " +
+                             std::to_string(options.screen_max_intervals) +
+                             "): run `calib diagnose` to look for physics the model leaves out";
+    (*json)["model_screen"]["skipped"] = note;
+    return "  model screen: " + note + "\n";
+  }
   const StatusOr<LaserModelScreen> screen =
       ScreenLaserModel(intervals, options.screen, sample_times_estimated);
   nlohmann::ordered_json& out = (*json)["model_screen"];
   if (!screen.ok()) {
     out["error"] = screen.message();
-    return;
+    return "";
   }
   out["flagged"] = screen->flagged;
   out["effects"] = screen->effects;
   out["structure"] = screen->structure;
   verdict->model_screen = screen->warning;
+  return "";
 }
 
 VerdictInputs LaserVerdict(const LaserCalibrationResult& result,
@@ -70,13 +81,13 @@ CalibrationReport LaserIntervalReport(const LaserCalibrationResult& result,
   report.json = LaserResultJson(result, options.input, options.loss, timing);
   VerdictInputs verdict = LaserVerdict(result, &timing);
   const std::string read = AddReaderWarnings(logs, &verdict);
-  if (logs.size() == 1) {
-    ScreenModel(logs.front()->intervals, options, false, &verdict, &report.json);
-  }
+  const std::string screened = logs.size() == 1 ? ScreenModel(logs.front()->intervals, options,
+                                                              false, &verdict, &report.json)
+                                                : "";
   const DriftReport drift = LaserDrift(result, options.nominal);
   report.json["odometry_drift"] = DriftJson(drift);
   report.summary = LaserResultSummary(result, options.input, options.loss, timing) + read +
-                   DriftSummary(drift) + AddVerdict(JudgeResult(verdict), &report.json);
+                   DriftSummary(drift) + screened + AddVerdict(JudgeResult(verdict), &report.json);
   return report;
 }
 
@@ -110,7 +121,8 @@ CalibrationReport LaserTimingReport(const LaserTimingResult& result, const Laser
   verdict.timing_treated = true;
   const StatusOr<LaserLog> timed = LaserLogFromStreams(
       result.timed_streams.odometry, result.timed_streams.sensor_poses, options.input);
-  if (timed.ok()) ScreenModel(timed->intervals, options, true, &verdict, &json);
+  const std::string screened =
+      timed.ok() ? ScreenModel(timed->intervals, options, true, &verdict, &json) : "";
   if (recording) {
     verdict.warnings.insert(verdict.warnings.end(), recording->warnings.begin(),
                             recording->warnings.end());
@@ -123,7 +135,8 @@ CalibrationReport LaserTimingReport(const LaserTimingResult& result, const Laser
   report.summary = LaserResultSummary(calibration, options.input, options.loss, log.stream_timing) +
                    (recording ? RobotLogSummary(*recording, calibration, nominal) : "") +
                    (bag && options.scan_points ? ScanPointSummary(*bag) : "") +
-                   LatentTimingSummary(result) + read + DriftSummary(drift) + verdict_line;
+                   LatentTimingSummary(result) + read + DriftSummary(drift) + screened +
+                   verdict_line;
   return report;
 }
 

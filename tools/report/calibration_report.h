@@ -32,7 +32,8 @@ struct LaserReportOptions {
   std::optional<OdometryParams> nominal;  // The driver's wheels, when known.
   LaserCalibrationOptions screen;         // The calibration options the model screen reuses.
   bool screen_model = true;
-  bool scan_points = false;  // The refinement on the scan points was asked for (bags).
+  int screen_max_intervals = 50000;  // Longer logs are not screened (say so; diagnose them).
+  bool scan_points = false;          // The refinement on the scan points was asked for (bags).
 };
 
 // A calibration of intervals (tuples, CSV, streams with --timing off); `logs`: the logs it was

@@ -37,7 +37,7 @@ DeployAdvice AdviseDeployment(const nlohmann::ordered_json& diagnosis) {
   nlohmann::ordered_json& out = advice.json;
   const nlohmann::ordered_json& final_fit = diagnosis["final"];
   out["estimate"] = final_fit["estimate"];
-  std::string statement = "deploy the final estimate";
+  std::string statement = "the final estimate";
   std::vector<std::string> physical, cannot;
   for (const auto& e : final_fit["effects"]) {
     if (!IsTiming(e.get<std::string>())) physical.push_back(e.get<std::string>());
