@@ -15,6 +15,7 @@
 #include <calib/tools/report/deployment.h>
 #include <calib/tools/report/laser_calibration_plots.h>
 
+#include <cmath>
 #include <vector>
 
 namespace calib::cli {
@@ -196,6 +197,9 @@ int RunCalibrate(const CalibrateOptions& options) {
   if (!given.ok()) return Fail(given.message());
   const Status output = CheckOutputPath("output", options.output);
   if (!output.ok()) return Fail(output.message());
+  if (options.time_offset_s && !std::isfinite(*options.time_offset_s)) {
+    return Fail("--time_offset must be a finite number of seconds");
+  }
   const StatusOr<std::vector<std::string>> exports = ParseExportFormats(options.export_formats);
   if (!exports.ok()) return Fail(exports.message());
   const Status plot_format =

@@ -12,6 +12,7 @@
 #include <calib/tools/report/laser_diagnose_report.h>
 #include <calib/tools/report/latent_timing_report.h>
 
+#include <cmath>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -179,6 +180,9 @@ int RunDiagnose(const DiagnoseOptions& options) {
   if (!given.ok()) return Fail(given.message());
   const Status output = CheckOutputPath("output", options.output);
   if (!output.ok()) return Fail(output.message());
+  if (options.time_offset_s && !std::isfinite(*options.time_offset_s)) {
+    return Fail("--time_offset must be a finite number of seconds");
+  }
   if (options.input.find(',') != std::string::npos) {
     return Fail("diagnose takes one log (--input names several)");
   }
