@@ -190,6 +190,9 @@ TEST_F(DeployCliTest, TimeOffsetMovesTheSensorStamps) {
   ASSERT_EQ(shifted.exit_code, 0) << shifted.err;
   EXPECT_GT(Z(nlohmann::json::parse(plain.out), truth)[0], 2.5);
   for (double z : Z(nlohmann::json::parse(shifted.out), truth)) EXPECT_LT(std::abs(z), 2.0);
+  const CliRun not_finite = Calib(base + " --time_offset nan");
+  EXPECT_EQ(not_finite.exit_code, 1);
+  EXPECT_NE(not_finite.err.find("--time_offset must be a finite number"), std::string::npos);
   const CliRun intervals =
       Calib("calibrate --time_offset 0.1 --input " + (kData / "sample_laser.tuple").string());
   EXPECT_EQ(intervals.exit_code, 1);
