@@ -27,27 +27,32 @@ DEFINE_string(timing, kDiagnose.timing.c_str(),
               "diagnose then searches on the intervals between the estimated times");
 
 // `calib calibrate` on a robot's bag.
-DEFINE_string(scan_topic, "",
-              "calibrate (bags): the sensor_msgs/LaserScan topic (default: the only one)");
-DEFINE_string(joint_state_topic, "",
-              "calibrate (bags): the sensor_msgs/JointState topic of the wheels (default: the one "
-              "whose joints name a left and a right wheel)");
-DEFINE_string(left_wheel_joint, "", "calibrate (bags): the left wheel's joint name");
-DEFINE_string(right_wheel_joint, "", "calibrate (bags): the right wheel's joint name");
-DEFINE_string(odom_topic, "",
-              "calibrate (bags): the nav_msgs/Odometry topic whose poses give the wheel angles "
-              "when no JointState names the wheels (needs the nominal wheels)");
+DEFINE_string(
+    scan_topic, "",
+    "calibrate, diagnose (bags): the sensor_msgs/LaserScan topic (default: the only one)");
+DEFINE_string(
+    joint_state_topic, "",
+    "calibrate, diagnose (bags): the sensor_msgs/JointState topic of the wheels (default: the one "
+    "whose joints name a left and a right wheel)");
+DEFINE_string(left_wheel_joint, "", "calibrate, diagnose (bags): the left wheel's joint name");
+DEFINE_string(right_wheel_joint, "", "calibrate, diagnose (bags): the right wheel's joint name");
+DEFINE_string(
+    odom_topic, "",
+    "calibrate, diagnose (bags): the nav_msgs/Odometry topic whose poses give the wheel angles "
+    "when no JointState names the wheels (needs the nominal wheels)");
 DEFINE_double(nominal_wheel_radius, 0.0,
-              "calibrate (bags): the wheel radius (m) the robot's driver uses; with "
+              "calibrate, diagnose (bags): the wheel radius (m) the robot's driver uses; with "
               "--nominal_wheelbase it seeds the scan matching and, for wheel angles from "
               "odometry, the result gives corrections to it");
-DEFINE_double(nominal_wheelbase, 0.0, "calibrate (bags): the wheelbase (m) the driver uses");
+DEFINE_double(nominal_wheelbase, 0.0,
+              "calibrate, diagnose (bags): the wheelbase (m) the driver uses");
 DEFINE_string(base_frame, "",
-              "calibrate (bags): the robot's base frame in tf (default base_link, else "
+              "calibrate, diagnose (bags): the robot's base frame in tf (default base_link, else "
               "base_footprint)");
-DEFINE_string(wheel_angle_unit, "rad",
-              "calibrate (bags, scan directories): the unit of the wheel joints' positions: rad, "
-              "deg, or ticks:N for raw encoder counts of N per wheel turn");
+DEFINE_string(
+    wheel_angle_unit, "rad",
+    "calibrate, diagnose (bags, scan directories): the unit of the wheel joints' positions: rad, "
+    "deg, or ticks:N for raw encoder counts of N per wheel turn");
 DEFINE_double(ticks_per_rev, 0.0,
               "calibrate, diagnose (laser logs, streams, bags): the wheel readings are encoder "
               "ticks, this many per wheel turn; they are converted to radians (for bags the same "
