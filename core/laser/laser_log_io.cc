@@ -4,9 +4,13 @@
 #include <calib/core/text_number.h>
 
 #include <cctype>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <string_view>
 #include <system_error>
+#include <utility>
+#include <vector>
 
 namespace calib {
 namespace fs = std::filesystem;
@@ -21,6 +25,59 @@ StatusOr<LaserFormat> ParseLaserFormat(const std::string& name) {
   return Status::InvalidInput("unknown laser log format '" + name +
                               "'; accepted: auto, tuples, json, csv, stream");
 }
+
+namespace {
+
+// A value no unit explains (a glitch: 5e307 where a few radians belong; a mistaken unit gives at
+// most millions): beyond this in any field of an interval.
+constexpr double kAbsurdValue = 1e9;
+
+std::string AbsurdField(const LaserInterval& i) {
+  const std::pair<const char*, double> fields[] = {
+      {"T", i.duration_s},          {"phi_l", i.left_speed},      {"phi_r", i.right_speed},
+      {"sm_x", i.sensor_motion(0)}, {"sm_y", i.sensor_motion(1)}, {"sm_theta", i.sensor_motion(2)}};
+  for (const auto& [name, value] : fields) {
+    if (std::abs(value) > kAbsurdValue) {
+      char text[96];
+      std::snprintf(text, sizeof(text), "%s = %.3g", name, value);
+      return text;
+    }
+  }
+  return "";
+}
+
+// One glitch costs its interval, not the log: intervals holding an absurd value are dropped
+// (the next kept one marked as after a gap) and counted in a warning.
+void DropAbsurdIntervals(LaserLog* log) {
+  std::vector<LaserInterval> kept;
+  kept.reserve(log->intervals.size());
+  int dropped = 0;
+  std::string first;
+  bool gap = false;
+  for (LaserInterval& interval : log->intervals) {
+    const std::string field = AbsurdField(interval);
+    if (!field.empty()) {
+      if (dropped++ == 0) {
+        first = "record " + std::to_string(interval.record) +
+                (interval.line > 0 ? " (line " + std::to_string(interval.line) + ")" : "") + ": " +
+                field;
+      }
+      gap = true;
+      continue;
+    }
+    interval.gap_before = interval.gap_before || (gap && !kept.empty());
+    gap = false;
+    kept.push_back(std::move(interval));
+  }
+  log->intervals = std::move(kept);
+  if (dropped > 0) {
+    log->warnings.push_back(log->source + ": " + std::to_string(dropped) +
+                            " record(s) dropped for a value no unit explains (first: " + first +
+                            ")");
+  }
+}
+
+}  // namespace
 
 StatusOr<LaserLog> ReadLaserLog(const std::string& path, LaserFormat format) {
   std::error_code ec;
@@ -43,7 +100,10 @@ StatusOr<LaserLog> ReadLaserLog(const std::string& path, LaserFormat format) {
     while (i < body.size() && laser_io_internal::IsJsonSpace(body[i])) ++i;
     format = i < body.size() && body[i] == '{' ? LaserFormat::kTuples : LaserFormat::kCsv;
   }
-  return format == LaserFormat::kTuples ? ParseLaserTuples(text, path) : ParseLaserCsv(text, path);
+  CALIB_ASSIGN_OR_RETURN(LaserLog log, format == LaserFormat::kTuples ? ParseLaserTuples(text, path)
+                                                                      : ParseLaserCsv(text, path));
+  DropAbsurdIntervals(&log);
+  return log;
 }
 
 }  // namespace calib

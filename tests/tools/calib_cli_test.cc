@@ -278,4 +278,51 @@ TEST_F(CalibCliTest, VerdictPointsToDiagnoseWhenTheModelLeavesPhysicsOut) {
   }
 }
 
+// One glitch costs its interval, not the log: a value no unit explains (sm_theta = 5e307) is
+// dropped with a warning naming its record, and the rest calibrates within 3σ of the truth.
+TEST_F(CalibCliTest, AnAbsurdValueCostsOneInterval) {
+  const fs::path clean = dir_ / "clean.csv", truth = dir_ / "truth.json";
+  ASSERT_EQ(Calib("simulate --quiet --intervals 300 --output " + clean.string() + " --truth " +
+                  truth.string())
+                .exit_code,
+            0);
+  std::istringstream lines(ReadFile(clean));
+  std::string text, line;
+  for (int k = 0; std::getline(lines, line); ++k) {
+    if (k == 31) line = line.substr(0, line.rfind(',')) + ",5e307";  // sm_theta is last.
+    text += line + "\n";
+  }
+  ASSERT_NE(ReadFile(clean).substr(0, 40).find("sm_theta"), std::string::npos);
+  const fs::path glitch = Write("glitch.csv", text);
+  const CliRun run = Calib(Calibrate(glitch));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+  EXPECT_EQ(json["samples"], 299);
+  const std::string warnings = json["warnings"].dump();
+  EXPECT_NE(warnings.find("1 record(s) dropped for a value no unit explains (first: record 31 "
+                          "(line 32): sm_theta = 5e+307)"),
+            std::string::npos)
+      << warnings;
+  const nlohmann::json expected = nlohmann::json::parse(ReadFile(truth))["estimate"];
+  for (const auto& [name, value] : expected.items()) {
+    EXPECT_LE(std::abs(json["estimate"][name].get<double>() - value.get<double>()),
+              3.0 * json["stddev"][name].get<double>())
+        << name;
+  }
+}
+
+// On a short clean log the model screen's binned means are not used (they false-alarm there).
+TEST_F(CalibCliTest, TheModelScreenDoesNotFalseAlarmOnAShortCleanLog) {
+  const fs::path log = dir_ / "short.csv";
+  for (const char* seed : {"1", "2", "3"}) {
+    ASSERT_EQ(Calib(std::string("simulate --quiet --intervals 60 --seed ") + seed + " --output " +
+                    log.string())
+                  .exit_code,
+              0);
+    ASSERT_EQ(Calib(Calibrate(log)).exit_code, 0);
+    const nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+    EXPECT_FALSE(json["model_screen"]["flagged"].get<bool>()) << seed << json["model_screen"];
+  }
+}
+
 }  // namespace
