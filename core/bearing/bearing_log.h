@@ -42,6 +42,8 @@ struct BearingLog {
   std::string source;  // Directory (or other origin), for messages.
   BearingLogMeta meta;
   std::vector<BearingRun> runs;  // Sorted by id.
+  // What the reader dropped on the way (glitches), one sentence each.
+  std::vector<std::string> warnings;
   // Timing diagnostics filled by ReadBearingLog: "odometry" then "bearings", each pooled over
   // the runs (every run analysed on its own clock; see PoolStreamTiming). Empty when built in
   // memory.

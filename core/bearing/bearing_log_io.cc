@@ -1,5 +1,6 @@
 #include <calib/core/bearing/bearing_log_io.h>
 #include <calib/core/csv.h>
+#include <calib/core/encoder_spikes.h>
 #include <calib/core/text_file.h>
 #include <calib/core/text_number.h>
 #include <calib/core/timing/stamp_timing.h>
@@ -44,9 +45,10 @@ int LineOf(const std::string& text, const std::string& needle) {
 
 const char* JsonTypeName(const nlohmann::json& value) { return value.type_name(); }
 
+// A positive length at most `largest_m` (no robot's wheel is 10 m, no landmark seen 100 km away).
 Status JsonPositiveNumber(const nlohmann::json& object, const std::string& key,
-                          const std::string& path, const std::string& what, const std::string& text,
-                          const std::string& source, double* value) {
+                          const std::string& path, const std::string& what, double largest_m,
+                          const std::string& text, const std::string& source, double* value) {
   const int line = LineOf(text, "\"" + key + "\"");
   if (!object.contains(key)) {
     return Status::InvalidInput(source + ": missing field \"" + path + "\" (" + what + ")");
@@ -61,6 +63,11 @@ Status JsonPositiveNumber(const nlohmann::json& object, const std::string& key,
     return Status::InvalidInput(At(source, line) + "field \"" + path +
                                 "\" must be positive and finite (" + what + "), got " +
                                 Num(*value));
+  }
+  if (*value > largest_m) {
+    return Status::InvalidInput(At(source, line) + "field \"" + path + "\" is " + Num(*value) +
+                                " m, more than the " + Num(largest_m) + " m it can be (" + what +
+                                ")");
   }
   return Status::Ok();
 }
@@ -127,6 +134,44 @@ Status CheckBearing(const BearingRun& run, size_t i, const std::string& source) 
   return Status::Ok();
 }
 
+// A bearing no sensor gives (outside (−π, π]) or taken outside its run's odometry.
+bool IsGlitch(const BearingRun& run, const BearingSample& b) {
+  return !(b.bearing_rad > -M_PI - kBearingSlack && b.bearing_rad <= M_PI + kBearingSlack) ||
+         !(b.t_s >= run.odometry.front().t_s && b.t_s <= run.odometry.back().t_s);
+}
+
+// A handful of such bearings (one in 50 at most) are glitches: dropped, one warning naming the
+// first. More are the file's unit or clock, not glitches: kept, for CheckBearing to refuse.
+void DropIsolatedGlitches(const std::string& source, std::vector<BearingRun>* runs,
+                          std::vector<std::string>* warnings) {
+  size_t total = 0, glitches = 0;
+  std::string first;
+  for (const BearingRun& run : *runs) {
+    total += run.bearings.size();
+    for (const BearingSample& b : run.bearings) {
+      if (!IsGlitch(run, b)) continue;
+      if (glitches++ == 0) {
+        first = At(source, b.line) + "run " + std::to_string(run.id) + ": t = " + Num(b.t_s) +
+                ", bearing " + Num(b.bearing_rad);
+      }
+    }
+  }
+  if (glitches == 0 || glitches > total / 50) return;
+  for (BearingRun& run : *runs) {
+    std::vector<BearingSample> kept;
+    for (const BearingSample& b : run.bearings) {
+      if (!IsGlitch(run, b)) kept.push_back(b);
+    }
+    run.bearings = std::move(kept);
+  }
+  if (warnings != nullptr) {
+    warnings->push_back(source + ": " + std::to_string(glitches) +
+                        " bearing(s) dropped: outside (−π, π] or outside their run's odometry "
+                        "(first: " +
+                        first + ")");
+  }
+}
+
 Status CheckMeta(const BearingLogMeta& meta, const std::vector<BearingRun>& runs,
                  const std::string& source) {
   if (!(meta.wheel_radius_m > 0.0) || !std::isfinite(meta.wheel_radius_m)) {
@@ -157,7 +202,8 @@ Status CheckMeta(const BearingLogMeta& meta, const std::vector<BearingRun>& runs
 
 StatusOr<std::vector<BearingRun>> ParseBearingOdometryCsv(const std::string& text,
                                                           const std::string& source,
-                                                          StreamTiming* timing) {
+                                                          StreamTiming* timing,
+                                                          std::vector<std::string>* warnings) {
   CALIB_ASSIGN_OR_RETURN(CsvReader csv,
                          CsvReader::Open(text, source, {{"run"}, {"t"}, {"left"}, {"right"}}));
   std::map<int, StreamRecords> records;  // Per run, in file order.
@@ -192,6 +238,14 @@ StatusOr<std::vector<BearingRun>> ParseBearingOdometryCsv(const std::string& tex
       run.odometry.push_back(EncoderSample{kept.stamps_s[k], kept.values[2 * k],
                                            kept.values[2 * k + 1], kept.lines[k]});
     }
+    int first_line = 0;
+    if (const int spikes = DropEncoderSpikes(&run.odometry, &first_line);
+        spikes > 0 && warnings != nullptr) {
+      warnings->push_back(At(source, first_line) + "run " + std::to_string(id) + ": " +
+                          std::to_string(spikes) +
+                          " encoder sample(s) dropped: the wheel angle jumps away and back (a "
+                          "logging glitch)");
+    }
     CALIB_RETURN_IF_ERROR(CheckRunOdometry(run, source));
     out.push_back(std::move(run));
   }
@@ -200,7 +254,8 @@ StatusOr<std::vector<BearingRun>> ParseBearingOdometryCsv(const std::string& tex
 }
 
 Status ParseBearingsCsv(const std::string& text, const std::string& source,
-                        std::vector<BearingRun>* runs, StreamTiming* timing) {
+                        std::vector<BearingRun>* runs, StreamTiming* timing,
+                        std::vector<std::string>* warnings) {
   CALIB_ASSIGN_OR_RETURN(CsvReader csv,
                          CsvReader::Open(text, source, {{"run"}, {"t"}, {"bearing"}}));
   std::map<int, StreamRecords> records;  // Per run, in file order.
@@ -227,11 +282,7 @@ Status ParseBearingsCsv(const std::string& text, const std::string& source,
   std::vector<StreamTiming> timings;
   for (BearingRun& run : *runs) {
     const auto found = records.find(run.id);
-    if (found == records.end()) {
-      return Status::InvalidInput(source + ": run " + std::to_string(run.id) + " has no bearings" +
-                                  OdometryLines(run) +
-                                  "; every run needs bearings of the landmark");
-    }
+    if (found == records.end()) continue;  // Refused below, in the runs' order.
     StreamRecords& kept = found->second;
     if (timing != nullptr) {
       timings.push_back(AnalyzeStreamTiming(kept.stamps_s, kept.values, "bearings",
@@ -241,6 +292,16 @@ Status ParseBearingsCsv(const std::string& text, const std::string& source,
     CALIB_RETURN_IF_ERROR(DropExactDuplicates(source, &kept));
     for (size_t k = 0; k < kept.stamps_s.size(); ++k) {
       run.bearings.push_back(BearingSample{kept.stamps_s[k], kept.values[k], kept.lines[k]});
+    }
+  }
+  DropIsolatedGlitches(source, runs, warnings);
+  for (const BearingRun& run : *runs) {
+    if (records.count(run.id) == 0) {
+      return Status::InvalidInput(source + ": run " + std::to_string(run.id) + " has no bearings" +
+                                  OdometryLines(run) +
+                                  "; every run needs bearings of the landmark");
+    }
+    for (size_t k = 0; k < run.bearings.size(); ++k) {
       CALIB_RETURN_IF_ERROR(CheckBearing(run, k, source));
     }
   }
@@ -262,11 +323,11 @@ StatusOr<BearingLogMeta> ParseBearingMeta(const std::string& text, const std::st
   }
   BearingLogMeta meta;
   CALIB_RETURN_IF_ERROR(JsonPositiveNumber(json, "wheel_radius", "wheel_radius",
-                                           "nominal wheel radius in metres", text, source,
+                                           "nominal wheel radius in metres", 10.0, text, source,
                                            &meta.wheel_radius_m));
   CALIB_RETURN_IF_ERROR(JsonPositiveNumber(json, "wheelbase", "wheelbase",
-                                           "nominal distance between the wheels in metres", text,
-                                           source, &meta.wheelbase_m));
+                                           "nominal distance between the wheels in metres", 100.0,
+                                           text, source, &meta.wheelbase_m));
   if (json.contains("initial_distance")) {
     const nlohmann::json& d = json.at("initial_distance");
     const int line = LineOf(text, "\"initial_distance\"");
@@ -295,7 +356,7 @@ StatusOr<BearingLogMeta> ParseBearingMeta(const std::string& text, const std::st
     initial.run = static_cast<int>(run.get<double>());
     CALIB_RETURN_IF_ERROR(JsonPositiveNumber(d, "meters", "initial_distance.meters",
                                              "robot–landmark distance at the run's start in metres",
-                                             text, source, &initial.meters));
+                                             1e5, text, source, &initial.meters));
     meta.initial_distance = initial;
   }
   return meta;
@@ -335,10 +396,11 @@ StatusOr<BearingLog> ReadBearingLog(const std::string& directory) {
   std::string text;
   CALIB_RETURN_IF_ERROR(ReadWholeFile(odometry_path, &text));
   std::vector<StreamTiming> timing(2);
+  std::vector<std::string> warnings;
   CALIB_ASSIGN_OR_RETURN(std::vector<BearingRun> runs,
-                         ParseBearingOdometryCsv(text, odometry_path, &timing[0]));
+                         ParseBearingOdometryCsv(text, odometry_path, &timing[0], &warnings));
   CALIB_RETURN_IF_ERROR(ReadWholeFile(bearings_path, &text));
-  CALIB_RETURN_IF_ERROR(ParseBearingsCsv(text, bearings_path, &runs, &timing[1]));
+  CALIB_RETURN_IF_ERROR(ParseBearingsCsv(text, bearings_path, &runs, &timing[1], &warnings));
   CALIB_RETURN_IF_ERROR(ReadWholeFile(meta_path, &text));
   CALIB_ASSIGN_OR_RETURN(const BearingLogMeta meta, ParseBearingMeta(text, meta_path));
   CALIB_RETURN_IF_ERROR(CheckMeta(meta, runs, meta_path));
@@ -347,6 +409,7 @@ StatusOr<BearingLog> ReadBearingLog(const std::string& directory) {
   log.meta = meta;
   log.runs = std::move(runs);
   log.stream_timing = std::move(timing);
+  log.warnings = std::move(warnings);
   return log;
 }
 

@@ -22,13 +22,18 @@ StatusOr<BearingLog> ReadBearingLog(const std::string& directory);
 // run, exact duplicate records (same t, same values) are dropped; a repeated t with different
 // values is an error naming both lines. `timing` (may be null) receives the stream's timing
 // diagnostics, each run analysed on its own and pooled (PoolStreamTiming).
-StatusOr<std::vector<BearingRun>> ParseBearingOdometryCsv(const std::string& text,
-                                                          const std::string& source,
-                                                          StreamTiming* timing = nullptr);
+// Isolated spikes of a run's wheel angles (encoder_spikes.h) are dropped, with a sentence in
+// `warnings` (may be null).
+StatusOr<std::vector<BearingRun>> ParseBearingOdometryCsv(
+    const std::string& text, const std::string& source, StreamTiming* timing = nullptr,
+    std::vector<std::string>* warnings = nullptr);
 // Adds the bearings to `runs` (from ParseBearingOdometryCsv), checking each against its run;
-// duplicates and `timing` as above.
+// duplicates and `timing` as above. A handful of bearings outside (−π, π] or outside their run's
+// odometry (at most n/50) are glitches: dropped, with a sentence in `warnings` (may be
+// null); more are an error naming the first.
 Status ParseBearingsCsv(const std::string& text, const std::string& source,
-                        std::vector<BearingRun>* runs, StreamTiming* timing = nullptr);
+                        std::vector<BearingRun>* runs, StreamTiming* timing = nullptr,
+                        std::vector<std::string>* warnings = nullptr);
 StatusOr<BearingLogMeta> ParseBearingMeta(const std::string& text, const std::string& source);
 
 // The invariants every consumer may rely on, for logs built in memory: positive finite nominal

@@ -5,6 +5,7 @@
 #include <calib/core/status.h>
 #include <calib/core/text_number.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <utility>
@@ -73,6 +74,15 @@ class LogBuilder {
       }
       // Clocks and rounding of printed values make starts and ends differ slightly.
       const double tolerance = 1e-6 + 1e-3 * previous.duration_s;
+      if (t < previous_end - tolerance && IsDurationGlitch(previous, t)) {
+        // The stamps say where the previous interval ends: its T is a glitch, not an overlap.
+        if (duration_glitches_.empty()) duration_glitch_ = DurationGlitch(previous, t);
+        duration_glitches_.push_back(previous.record);
+        log_.intervals.pop_back();
+        interval.gap_before = true;
+        log_.intervals.push_back(std::move(interval));
+        return Status::Ok();
+      }
       if (t < previous_end - tolerance) {
         return Status::InvalidInput(where() + "interval starting at t=" + Num(t) +
                                     " overlaps the previous interval, which ends at " +
@@ -90,6 +100,20 @@ class LogBuilder {
     }
     log_.has_timestamps = has_t_;
     if (!duplicates_.empty()) log_.warnings.push_back(DuplicatesWarning());
+    if (!duration_glitches_.empty()) {
+      const size_t total = log_.intervals.size() + duration_glitches_.size();
+      // Many such records are no glitch: T is not the interval's length in seconds.
+      if (duration_glitches_.size() > std::max<size_t>(2, total / 50)) {
+        return Status::InvalidInput(
+            log_.source + ": " + std::to_string(duration_glitches_.size()) + " of " +
+            std::to_string(total) + " records have a T longer than the time to the next " +
+            "record's t (first: " + duration_glitch_ +
+            "): T must be each interval's length in seconds, on the clock of t");
+      }
+      log_.warnings.push_back(log_.source + ": " + std::to_string(duration_glitches_.size()) +
+                              " record(s) dropped for a T longer than the time to the next " +
+                              "record's t (first: " + duration_glitch_ + ")");
+    }
     return std::move(log_);
   }
 
@@ -102,6 +126,15 @@ class LogBuilder {
     return (has_t ? a.start_s == b.start_s : moves) && a.duration_s == b.duration_s &&
            a.left_speed == b.left_speed && a.right_speed == b.right_speed &&
            a.sensor_motion == b.sensor_motion;
+  }
+
+  // A T at least twice the time to the next record's start (the next starting after this one).
+  static bool IsDurationGlitch(const LaserInterval& previous, double t) {
+    return t > previous.start_s && previous.duration_s > 2.0 * (t - previous.start_s);
+  }
+  std::string DurationGlitch(const LaserInterval& previous, double t) const {
+    return Where(log_.source, previous.line, previous.record) + "T = " + Num(previous.duration_s) +
+           " s, but the next record starts " + Num(t - previous.start_s) + " s after it";
   }
 
   std::string DuplicatesWarning() const {
@@ -117,7 +150,9 @@ class LogBuilder {
 
   LaserLog log_;
   bool has_t_ = false;
-  std::vector<int> duplicates_;  // Records dropped as exact duplicates.
+  std::vector<int> duplicates_;         // Records dropped as exact duplicates.
+  std::vector<int> duration_glitches_;  // Records dropped for a T the stamps contradict.
+  std::string duration_glitch_;         // The first of them, in words.
 };
 
 inline bool Finite(const LaserInterval& interval) {

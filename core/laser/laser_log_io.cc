@@ -1,5 +1,6 @@
 #include <calib/core/laser/laser_log_builder.h>
 #include <calib/core/laser/laser_log_io.h>
+#include <calib/core/laser/laser_plausibility.h>
 #include <calib/core/text_file.h>
 #include <calib/core/text_number.h>
 
@@ -26,59 +27,6 @@ StatusOr<LaserFormat> ParseLaserFormat(const std::string& name) {
                               "'; accepted: auto, tuples, json, csv, stream");
 }
 
-namespace {
-
-// A value no unit explains (a glitch: 5e307 where a few radians belong; a mistaken unit gives at
-// most millions): beyond this in any field of an interval.
-constexpr double kAbsurdValue = 1e9;
-
-std::string AbsurdField(const LaserInterval& i) {
-  const std::pair<const char*, double> fields[] = {
-      {"T", i.duration_s},          {"phi_l", i.left_speed},      {"phi_r", i.right_speed},
-      {"sm_x", i.sensor_motion(0)}, {"sm_y", i.sensor_motion(1)}, {"sm_theta", i.sensor_motion(2)}};
-  for (const auto& [name, value] : fields) {
-    if (std::abs(value) > kAbsurdValue) {
-      char text[96];
-      std::snprintf(text, sizeof(text), "%s = %.3g", name, value);
-      return text;
-    }
-  }
-  return "";
-}
-
-// One glitch costs its interval, not the log: intervals holding an absurd value are dropped
-// (the next kept one marked as after a gap) and counted in a warning.
-void DropAbsurdIntervals(LaserLog* log) {
-  std::vector<LaserInterval> kept;
-  kept.reserve(log->intervals.size());
-  int dropped = 0;
-  std::string first;
-  bool gap = false;
-  for (LaserInterval& interval : log->intervals) {
-    const std::string field = AbsurdField(interval);
-    if (!field.empty()) {
-      if (dropped++ == 0) {
-        first = "record " + std::to_string(interval.record) +
-                (interval.line > 0 ? " (line " + std::to_string(interval.line) + ")" : "") + ": " +
-                field;
-      }
-      gap = true;
-      continue;
-    }
-    interval.gap_before = interval.gap_before || (gap && !kept.empty());
-    gap = false;
-    kept.push_back(std::move(interval));
-  }
-  log->intervals = std::move(kept);
-  if (dropped > 0) {
-    log->warnings.push_back(log->source + ": " + std::to_string(dropped) +
-                            " record(s) dropped for a value no unit explains (first: " + first +
-                            ")");
-  }
-}
-
-}  // namespace
-
 StatusOr<LaserLog> ReadLaserLog(const std::string& path, LaserFormat format) {
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
@@ -102,7 +50,7 @@ StatusOr<LaserLog> ReadLaserLog(const std::string& path, LaserFormat format) {
   }
   CALIB_ASSIGN_OR_RETURN(LaserLog log, format == LaserFormat::kTuples ? ParseLaserTuples(text, path)
                                                                       : ParseLaserCsv(text, path));
-  DropAbsurdIntervals(&log);
+  DropImplausibleIntervals(&log);
   return log;
 }
 

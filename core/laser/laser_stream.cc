@@ -1,6 +1,8 @@
 #include <calib/core/csv.h>
+#include <calib/core/encoder_spikes.h>
 #include <calib/core/laser/laser_log_builder.h>
 #include <calib/core/laser/laser_log_io.h>
+#include <calib/core/laser/laser_plausibility.h>
 #include <calib/core/laser/wheel_readings.h>
 #include <calib/core/text_file.h>
 #include <calib/core/text_number.h>
@@ -252,6 +254,14 @@ StatusOr<LaserStreams> PrepareStreams(StreamRecords odometry, StreamRecords pose
     streams.sensor_poses.push_back(
         StampedPose{poses.stamps_s[k], Pose2d(v[0], v[1], v[2]), line, segment});
   }
+  int first_line = 0;
+  if (const int spikes = DropEncoderSpikes(&streams.odometry, &first_line);
+      spikes > 0 && warnings != nullptr) {
+    warnings->push_back(names.odometry + ": " + std::to_string(spikes) +
+                        " encoder sample(s) dropped: the wheel angle jumps away and back, a "
+                        "logging glitch (first" +
+                        (first_line > 0 ? " at line " + std::to_string(first_line) : "") + ")");
+  }
   CALIB_RETURN_IF_ERROR(ValidateOdometry(streams.odometry, names));
   CALIB_RETURN_IF_ERROR(ValidatePoses(streams.sensor_poses, names));
   return streams;
@@ -351,6 +361,7 @@ StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometr
   log.streams = std::move(streams);
   log.stream_timing = std::move(timing);
   log.warnings = std::move(warnings);
+  DropImplausibleIntervals(&log);
   return log;
 }
 
@@ -406,6 +417,7 @@ StatusOr<LaserLog> ReadLaserStream(const std::string& directory) {
   log.streams = std::move(streams);
   log.stream_timing = std::move(timing);
   log.warnings = std::move(warnings);
+  DropImplausibleIntervals(&log);
   return log;
 }
 

@@ -1,5 +1,8 @@
+#include <calib/core/text_format.h>
+#include <calib/solvers/common/outlier_share.h>
 #include <calib/solvers/common/solver_options.h>
 #include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/solvers/laser/censi_consensus.h>
 #include <calib/solvers/laser/laser_jitter_refit.h>
 
 #include <algorithm>
@@ -101,6 +104,74 @@ void SeedFromTrimmedClosedForm(const std::vector<LaserInterval>& intervals,
   result->closed_form_trimmed = result->closed_form;
   result->warnings.push_back("the trimmed closed form failed (" + trimmed.message() +
                              "): the refinement started from the closed form on all intervals");
+}
+
+// The closed form without the intervals that disagree grossly with the consensus, named in a
+// warning; on all intervals when the screen leaves too little motion (then its error, if any).
+Status ClosedFormWithoutGross(const std::vector<LaserInterval>& intervals,
+                              LaserCalibrationResult* result) {
+  ConsensusScreen screen;
+  const StatusOr<CensiClosedFormResult> screened = CensiClosedFormScreened(intervals, &screen);
+  if (!screened.ok() || screen.outliers() == 0) {
+    CALIB_ASSIGN_OR_RETURN(result->closed_form, CensiClosedForm(intervals));
+    return Status::Ok();
+  }
+  result->closed_form = *screened;
+  result->gross_intervals = screen.outliers();
+  // Not a warning: scan-matcher failures are common, and the robust fit counts its inliers.
+  result->gross_note = std::to_string(screen.outliers()) + " of " +
+                       std::to_string(intervals.size()) +
+                       " intervals disagree grossly with the rest of the log (first: " +
+                       IntervalName(intervals[static_cast<size_t>(screen.first_outlier)],
+                                    static_cast<size_t>(screen.first_outlier)) +
+                       "): the closed form leaves them out, and the robust fit down-weights them";
+  return Status::Ok();
+}
+
+// Fewer moving intervals than this per unknown give neither an estimate nor error bars worth
+// reporting (3 intervals fit 6 unknowns with 3 residual degrees of freedom: σ is then noise).
+constexpr int kMinIntervalsPerUnknown = 4;
+
+Status CheckEnoughIntervals(const LaserMotionCensus& census) {
+  const int moving = census.total - census.still;
+  const int needed = kMinIntervalsPerUnknown * kNumLaserParams;
+  if (moving >= needed) return Status::Ok();
+  return Status::NotObservable(
+      "only " + std::to_string(moving) + " moving interval(s) (of " + std::to_string(census.total) +
+      ") for the six unknowns r_l, r_r, b and the sensor's x, y, " + "θ: at least " +
+      std::to_string(needed) + ", " + std::to_string(kMinIntervalsPerUnknown) +
+      " per unknown, are needed for an estimate and its error bars; record a longer log with " +
+      "turns and arcs");
+}
+
+// Whether the fit can be relied on: most intervals gross (the robust loss then follows them), or
+// inliers that lack the motion the parameters need, make the result unreliable.
+void JudgeInliers(const LaserProblem& problem, const std::vector<LaserInterval>& joined,
+                  LaserCalibrationResult* result) {
+  Eigen::MatrixXd whitened(result->samples, 3);
+  std::vector<bool> inlier;
+  Eigen::Index row = 0;
+  for (size_t d = 0; d < problem.num_datasets(); ++d) {
+    for (const Eigen::Vector3d& e : problem.Errors(d)) {
+      whitened.row(row++) = (problem.sqrt_information(d) * e).transpose();
+    }
+    inlier.insert(inlier.end(), result->is_inlier[d].begin(), result->is_inlier[d].end());
+  }
+  result->outlier_share = GrossOutlierShare(whitened);
+  if (result->outlier_share > kMaxTrustedOutlierShare) {
+    result->unreliable.push_back(
+        Format("%.0f %% of the intervals disagree grossly with the fit, more than the %.0f %% a "
+               "robust fit survives: the estimate may follow them; check the wheel-speed signs, "
+               "units and the scan matcher",
+               100.0 * result->outlier_share, 100.0 * kMaxTrustedOutlierShare));
+  }
+  const std::string missing = DescribeMissingLaserMotion(CountLaserMotion(joined, &inlier));
+  if (!missing.empty()) {
+    result->unreliable.push_back("the intervals that agree with the fit do not determine it: " +
+                                 missing);
+  }
+  result->warnings.insert(result->warnings.end(), result->unreliable.begin(),
+                          result->unreliable.end());
 }
 
 // Inliers of each log (squared whitened residual below the cut) and their noise level. A log
@@ -205,9 +276,10 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   LaserCalibrationResult result;
   result.samples = static_cast<int>(joined.size());
   result.census = CountLaserMotion(joined);
+  CALIB_RETURN_IF_ERROR(CheckEnoughIntervals(result.census));
 
   auto start = std::chrono::steady_clock::now();
-  CALIB_ASSIGN_OR_RETURN(result.closed_form, CensiClosedForm(joined));
+  CALIB_RETURN_IF_ERROR(ClosedFormWithoutGross(joined, &result));
   // On huge logs an evenly spread subset suffices for a seed.
   const size_t total = joined.size();
   const size_t stride = (total + kWarmStartSubset - 1) / kWarmStartSubset;
@@ -256,12 +328,7 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
     CALIB_RETURN_IF_ERROR(RefitWithIntervalJitter(logs, options, &result));
     result.refinement_seconds += SecondsSince(start);
   }
-  if (result.inliers < result.samples / 2) {
-    result.observability.warnings.push_back(
-        "only " + std::to_string(result.inliers) + " of " + std::to_string(result.samples) +
-        " intervals agree with the model: check the wheel-speed signs, units and the scan "
-        "matcher");
-  }
+  JudgeInliers(problem, joined, &result);
   result.consistency = CheckLaserConsistencyJoint(logs, result.estimate, result.covariance,
                                                   result.noise_sigma, result.is_inlier);
   result.warnings.insert(result.warnings.end(), result.consistency.warnings.begin(),

@@ -48,7 +48,10 @@ struct LaserCalibrationResult {
   LaserCalibration estimate;
   LaserParamMatrix covariance = LaserParamMatrix::Zero();
   LaserParamVector stddev = LaserParamVector::Zero();
-  CensiClosedFormResult closed_form;          // The paper's closed form on all data.
+  // The paper's closed form on all data but the gross intervals (censi_consensus.h).
+  CensiClosedFormResult closed_form;
+  int gross_intervals = 0;  // Left out of the closed forms by the consensus screen.
+  std::string gross_note;   // How many and the first, in words ("" when none).
   CensiClosedFormResult closed_form_trimmed;  // With its trimming: the refinement's seed.
   bool seed_trimmed = true;  // False: the trimming failed and the seed is `closed_form`.
   int samples = 0;
@@ -65,6 +68,10 @@ struct LaserCalibrationResult {
   // What went wrong on the way without stopping the calibration (a failed trimming, no
   // convergence, a log without inliers); also appended to observability.warnings.
   std::vector<std::string> warnings;
+  // Why the numbers cannot be relied on although the fit ran (most intervals gross, the inliers
+  // not determining the parameters); each also in `warnings`. Empty when none.
+  std::vector<std::string> unreliable;
+  double outlier_share = 0.0;  // GrossOutlierShare of the final residuals (outlier_share.h).
   // Per log, the boundary-stamp jitter estimated at the base fit (empty when not asked for), and
   // whether the result is the refit with it (then noise_sigma, is_inlier and the covariance are
   // the refit's, and the covariance a sandwich that keeps the neighbours' correlation).

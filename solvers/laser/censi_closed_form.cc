@@ -1,5 +1,7 @@
 #include <calib/core/se2.h>
 #include <calib/solvers/laser/censi_closed_form.h>
+#include <calib/solvers/laser/censi_closed_form_internal.h>
+#include <calib/solvers/laser/censi_consensus.h>
 #include <calib/solvers/laser/laser_motion.h>
 
 #include <Eigen/Dense>
@@ -8,13 +10,8 @@
 #include <string>
 
 namespace calib {
-namespace {
+namespace censi_internal {
 
-using Vector5d = Eigen::Matrix<double, 5, 1>;
-using Matrix5d = Eigen::Matrix<double, 5, 5>;
-
-// Condition number of a symmetric positive semi-definite matrix after scaling it to unit
-// diagonal, so that parameters of different units compare fairly.
 double ScaledConditionNumber(const Eigen::MatrixXd& a) {
   const Eigen::VectorXd d = a.diagonal();
   if ((d.array() <= 0.0).any()) return std::numeric_limits<double>::infinity();
@@ -26,13 +23,50 @@ double ScaledConditionNumber(const Eigen::MatrixXd& a) {
   return lo > 0.0 ? hi / lo : std::numeric_limits<double>::infinity();
 }
 
-// The robot displacement per unit wheelbase (b = 1): o = (b·c_x, b·c_y, o_θ), eqs. 12–13 and
-// §II-D, with r_l = −J21, r_r = J22.
-Pose2d DisplacementPerUnitWheelbase(const LaserInterval& interval, double j21, double j22) {
-  return IntervalRobotMotion(-j21, j22, 1.0, interval);
+TranslationRows TranslationEquations(const LaserInterval& interval, double j21, double j22) {
+  // The robot displacement per unit wheelbase (b = 1): o = (b·c_x, b·c_y, o_θ), eqs. 12–13 and
+  // §II-D, with r_l = −J21, r_r = J22.
+  const Pose2d c = IntervalRobotMotion(-j21, j22, 1.0, interval);
+  const double co = std::cos(c(2)), so = std::sin(c(2));
+  const Pose2d& s = interval.sensor_motion;
+  TranslationRows l;
+  l << -c(0), 1.0 - co, so, s(0), -s(1),  //
+      -c(1), -so, 1.0 - co, s(1), s(0);
+  return l;
 }
 
-}  // namespace
+StatusOr<Vector5d> SolveTranslation(const Matrix5d& m, const CensiClosedFormOptions& options,
+                                    double* lambda) {
+  // §II-E: min xᵀMx subject to x4² + x5² = 1. With x = [p; q], the optimal p = −A⁻¹Bq, and q is
+  // the unit eigenvector of the Schur complement S = C − BᵀA⁻¹B with the smallest eigenvalue
+  // (equivalent to the paper's det(M + λW) = 0 with λ = −eigenvalue, but numerically stable).
+  const Eigen::Matrix3d a = m.topLeftCorner<3, 3>();
+  const Eigen::Matrix<double, 3, 2> b = m.topRightCorner<3, 2>();
+  const Eigen::Matrix2d cc = m.bottomRightCorner<2, 2>();
+  const double a_condition = ScaledConditionNumber(a);
+  if (!(a_condition < options.max_condition_number * options.max_condition_number)) {
+    return Status::NotObservable(
+        "the system for b and the sensor position is degenerate (condition number " +
+        std::to_string(a_condition) + "): the log needs both arcs (or straight runs) and turns");
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> a_ldlt(a);
+  const Eigen::Matrix2d schur = cc - b.transpose() * a_ldlt.solve(b);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(schur);
+  const Eigen::Vector2d q = eig.eigenvectors().col(0);  // Eigenvalues come sorted ascending.
+  if (lambda != nullptr) *lambda = -eig.eigenvalues()(0);
+  Vector5d x;
+  x.head<3>() = -a_ldlt.solve(b * q);
+  x.tail<2>() = q;
+  if (x(0) < 0.0) x = -x;  // Constraint (19): b > 0.
+  if (!(x(0) > 0.0) || !x.allFinite()) {
+    return Status::NotObservable(
+        "the closed form gave a non-positive wheelbase: the data do not fit a "
+        "differential-drive robot");
+  }
+  return x;
+}
+
+}  // namespace censi_internal
 
 StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>& intervals,
                                                 const std::vector<bool>* use,
@@ -53,7 +87,7 @@ StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>
   CensiClosedFormResult result;
   result.samples_used = census.total;
   // Condition number of the stacked system itself is the square root of that of AᵀA.
-  result.j_condition_number = std::sqrt(ScaledConditionNumber(ata));
+  result.j_condition_number = std::sqrt(censi_internal::ScaledConditionNumber(ata));
   if (!(result.j_condition_number < options.max_condition_number)) {
     return Status::NotObservable(
         "the rotation system for J21, J22 is degenerate (condition number " +
@@ -65,44 +99,15 @@ StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>
   result.j22 = j(1);
 
   // §II-C: eq. 16 stacked into M = Σ L_kᵀ L_k over x = [b, ℓx, ℓy, cos ℓθ, sin ℓθ].
-  Matrix5d m = Matrix5d::Zero();
+  censi_internal::Matrix5d m = censi_internal::Matrix5d::Zero();
   for (size_t k = 0; k < intervals.size(); ++k) {
     if (use != nullptr && !(*use)[k]) continue;
-    const Pose2d c = DisplacementPerUnitWheelbase(intervals[k], result.j21, result.j22);
-    const double co = std::cos(c(2)), so = std::sin(c(2));
-    const Pose2d& s = intervals[k].sensor_motion;
-    Eigen::Matrix<double, 2, 5> l;
-    l << -c(0), 1.0 - co, so, s(0), -s(1),  //
-        -c(1), -so, 1.0 - co, s(1), s(0);
+    const censi_internal::TranslationRows l =
+        censi_internal::TranslationEquations(intervals[k], result.j21, result.j22);
     m += l.transpose() * l;
   }
-
-  // §II-E: min xᵀMx subject to x4² + x5² = 1. With x = [p; q], the optimal p = −A⁻¹Bq, and q is
-  // the unit eigenvector of the Schur complement S = C − BᵀA⁻¹B with the smallest eigenvalue
-  // (equivalent to the paper's det(M + λW) = 0 with λ = −eigenvalue, but numerically stable).
-  const Eigen::Matrix3d a = m.topLeftCorner<3, 3>();
-  const Eigen::Matrix<double, 3, 2> b = m.topRightCorner<3, 2>();
-  const Eigen::Matrix2d cc = m.bottomRightCorner<2, 2>();
-  const double a_condition = ScaledConditionNumber(a);
-  if (!(a_condition < options.max_condition_number * options.max_condition_number)) {
-    return Status::NotObservable(
-        "the system for b and the sensor position is degenerate (condition number " +
-        std::to_string(a_condition) + "): the log needs both arcs (or straight runs) and turns");
-  }
-  const Eigen::LDLT<Eigen::Matrix3d> a_ldlt(a);
-  const Eigen::Matrix2d schur = cc - b.transpose() * a_ldlt.solve(b);
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(schur);
-  const Eigen::Vector2d q = eig.eigenvectors().col(0);  // Eigenvalues come sorted ascending.
-  result.lambda = -eig.eigenvalues()(0);
-  Vector5d x;
-  x.head<3>() = -a_ldlt.solve(b * q);
-  x.tail<2>() = q;
-  if (x(0) < 0.0) x = -x;  // Constraint (19): b > 0.
-  if (!(x(0) > 0.0) || !x.allFinite()) {
-    return Status::NotObservable(
-        "the closed form gave a non-positive wheelbase: the data do not fit a "
-        "differential-drive robot");
-  }
+  CALIB_ASSIGN_OR_RETURN(const censi_internal::Vector5d x,
+                         censi_internal::SolveTranslation(m, options, &result.lambda));
   // r_l = −b·J21 and r_r = +b·J22 (the paper's final formulas print the signs the wrong way).
   result.calibration.odometry = OdometryParams{-x(0) * result.j21, x(0) * result.j22, x(0)};
   result.calibration.base_T_sensor = Pose2d(x(1), x(2), std::atan2(x(4), x(3)));
@@ -121,6 +126,18 @@ StatusOr<TrimmedClosedFormResult> CensiClosedFormTrimmed(
     const std::vector<LaserInterval>& intervals, const TrimmedClosedFormOptions& options) {
   TrimmedClosedFormResult result;
   result.kept.assign(intervals.size(), true);
+  if (options.screen_gross) {
+    ConsensusScreenOptions screen_options;
+    screen_options.closed_form = options.closed_form;
+    ConsensusScreen screen = ScreenGrossIntervals(intervals, screen_options);
+    // A screen that leaves too little motion for the closed form is not used.
+    if (screen.outliers() > 0 &&
+        CensiClosedForm(intervals, &screen.kept, options.closed_form).ok()) {
+      result.kept = std::move(screen.kept);
+      result.gross = screen.outliers();
+      result.first_gross = screen.first_outlier;
+    }
+  }
   for (int round = 0;; ++round) {
     CALIB_ASSIGN_OR_RETURN(result.estimate,
                            CensiClosedForm(intervals, &result.kept, options.closed_form));

@@ -34,14 +34,19 @@ StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>
 // The paper's §III-B outlier handling, kept as a baseline: estimate, drop the worst `fraction`
 // of the samples by the residual e = ℓ ⊕ ŝ − ô ⊕ ℓ (separately on |e_xy| and |e_θ|), repeat
 // `rounds` times (the paper: 5 % three times).
+// Before the first round, gross records are left out by a consensus (censi_consensus.h) unless
+// `screen_gross` is false (the paper's own procedure), so that one glitch costs one interval.
 struct TrimmedClosedFormOptions {
   int rounds = 3;
   double fraction = 0.05;
+  bool screen_gross = true;
   CensiClosedFormOptions closed_form;
 };
 struct TrimmedClosedFormResult {
   CensiClosedFormResult estimate;
   std::vector<bool> kept;
+  int gross = 0;  // Intervals the consensus screen left out before the rounds.
+  int first_gross = -1;
 };
 StatusOr<TrimmedClosedFormResult> CensiClosedFormTrimmed(
     const std::vector<LaserInterval>& intervals, const TrimmedClosedFormOptions& options = {});

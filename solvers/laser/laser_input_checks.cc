@@ -2,6 +2,7 @@
 #include <calib/core/se2.h>
 #include <calib/core/text_format.h>
 #include <calib/solvers/laser/censi_closed_form.h>
+#include <calib/solvers/laser/censi_consensus.h>
 #include <calib/solvers/laser/laser_input_checks.h>
 
 #include <algorithm>
@@ -32,7 +33,8 @@ double Median(std::vector<double> v) {
 }
 
 Fit FitClosedForm(const std::vector<LaserInterval>& intervals) {
-  const StatusOr<CensiClosedFormResult> closed = CensiClosedForm(intervals);
+  // Screened, so that a handful of glitches cannot make a log look like another reading.
+  const StatusOr<CensiClosedFormResult> closed = CensiClosedFormScreened(intervals);
   Fit fit;
   if (!closed.ok()) return fit;
   const LaserCalibration& cal = closed->calibration;

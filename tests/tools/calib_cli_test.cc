@@ -299,8 +299,8 @@ TEST_F(CalibCliTest, AnAbsurdValueCostsOneInterval) {
   const nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
   EXPECT_EQ(json["samples"], 299);
   const std::string warnings = json["warnings"].dump();
-  EXPECT_NE(warnings.find("1 record(s) dropped for a value no unit explains (first: record 31 "
-                          "(line 32): sm_theta = 5e+307)"),
+  EXPECT_NE(warnings.find("1 implausible record(s) dropped (first: record 31 (line 32): "
+                          "sm_theta = 5e+307, which no unit explains)"),
             std::string::npos)
       << warnings;
   const nlohmann::json expected = nlohmann::json::parse(ReadFile(truth))["estimate"];

@@ -5,11 +5,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
+#include <vector>
 
 // Runs build/bin/calib as a user would (no standard input) and captures what it says.
 namespace calib::testing {
@@ -30,10 +33,13 @@ inline std::string ReadFile(const std::filesystem::path& path) {
 // A fresh folder in the temporary directory, named `prefix`, the process id and the running
 // test's name (so that concurrent runs do not meet); the caller removes it.
 inline std::filesystem::path MakeScratchDir(const std::string& prefix) {
+  // Outside a test (a suite's set-up) there is no running test: the suite's name instead.
+  const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
+  const ::testing::TestSuite* suite = ::testing::UnitTest::GetInstance()->current_test_suite();
+  std::string name = test != nullptr ? test->name() : suite != nullptr ? suite->name() : "setup";
+  std::replace(name.begin(), name.end(), '/', '_');  // Parameterized names hold slashes.
   const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() /
-      (prefix + std::to_string(::getpid()) + "_" +
-       ::testing::UnitTest::GetInstance()->current_test_info()->name());
+      std::filesystem::temp_directory_path() / (prefix + std::to_string(::getpid()) + "_" + name);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
@@ -53,6 +59,40 @@ inline CliRun RunCalib(const std::string& args, const std::filesystem::path& scr
   run.out = ReadFile(out);
   run.err = ReadFile(err);
   return run;
+}
+
+// `source` (a CSV with a header) rewritten into `target` with `edit` applied to every row's
+// numbers, in order.
+using CsvRowEdit =
+    std::function<void(const std::vector<std::string>& header, std::vector<double>* row)>;
+inline void RewriteCsv(const std::filesystem::path& source, const std::filesystem::path& target,
+                       const CsvRowEdit& edit) {
+  std::istringstream in(ReadFile(source));
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> header;
+  std::stringstream names(line);
+  for (std::string name; std::getline(names, name, ',');) header.push_back(name);
+  std::ostringstream out;
+  out.precision(17);
+  out << line << "\n";
+  while (std::getline(in, line)) {
+    std::vector<double> row;
+    std::stringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');) row.push_back(std::stod(cell));
+    edit(header, &row);
+    for (size_t i = 0; i < row.size(); ++i) out << (i ? "," : "") << row[i];
+    out << "\n";
+  }
+  std::ofstream(target) << out.str();
+}
+
+inline size_t CsvColumn(const std::vector<std::string>& header, const std::string& name) {
+  for (size_t i = 0; i < header.size(); ++i) {
+    if (header[i] == name) return i;
+  }
+  ADD_FAILURE() << "no column " << name;
+  return 0;
 }
 
 }  // namespace calib::testing

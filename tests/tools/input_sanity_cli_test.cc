@@ -19,7 +19,9 @@ namespace {
 namespace fs = std::filesystem;
 
 using ::calib::testing::CliRun;
+using ::calib::testing::CsvColumn;
 using ::calib::testing::ReadFile;
+using ::calib::testing::RewriteCsv;
 
 constexpr double kTicksPerRev = 4096.0;
 
@@ -38,38 +40,6 @@ class InputSanityCliTest : public ::testing::Test {
         Calib("simulate --intervals 300 --seed 3" + encoders + " --output " + path.string());
     EXPECT_EQ(run.exit_code, 0) << run.err;
     return path;
-  }
-
-  // `source` (a CSV with a header) rewritten with `edit` applied to every row's numbers.
-  static void Rewrite(const fs::path& source, const fs::path& target,
-                      const std::function<void(const std::vector<std::string>& header,
-                                               std::vector<double>* row)>& edit) {
-    std::istringstream in(ReadFile(source));
-    std::string line;
-    std::getline(in, line);
-    std::vector<std::string> header;
-    std::stringstream names(line);
-    for (std::string name; std::getline(names, name, ',');) header.push_back(name);
-    std::ostringstream out;
-    out.precision(17);
-    out << line << "\n";
-    while (std::getline(in, line)) {
-      std::vector<double> row;
-      std::stringstream cells(line);
-      for (std::string cell; std::getline(cells, cell, ',');) row.push_back(std::stod(cell));
-      edit(header, &row);
-      for (size_t i = 0; i < row.size(); ++i) out << (i ? "," : "") << row[i];
-      out << "\n";
-    }
-    std::ofstream(target) << out.str();
-  }
-
-  static size_t Column(const std::vector<std::string>& header, const std::string& name) {
-    for (size_t i = 0; i < header.size(); ++i) {
-      if (header[i] == name) return i;
-    }
-    ADD_FAILURE() << "no column " << name;
-    return 0;
   }
 
   std::string Calibrate(const fs::path& input, const std::string& extra = "") {
@@ -104,9 +74,9 @@ TEST_F(InputSanityCliTest, TicksAreRefusedAndTicksPerRevGivesTheCorrectResult) {
   const nlohmann::json expected = Result(Calib(Calibrate(good)));
   EXPECT_EQ(expected["verdict"], "trusted") << expected["warnings"];
   const fs::path ticks = dir_ / "ticks.csv";
-  Rewrite(good, ticks, [](const std::vector<std::string>& header, std::vector<double>* row) {
+  RewriteCsv(good, ticks, [](const std::vector<std::string>& header, std::vector<double>* row) {
     for (const char* wheel : {"phi_l", "phi_r"}) {
-      (*row)[Column(header, wheel)] *= kTicksPerRev / (2.0 * M_PI);
+      (*row)[CsvColumn(header, wheel)] *= kTicksPerRev / (2.0 * M_PI);
     }
   });
   ExpectRefused(Calib(Calibrate(ticks)),
@@ -132,11 +102,11 @@ TEST_F(InputSanityCliTest, StreamTicksAreConvertedByTicksPerRev) {
   const fs::path ticks = dir_ / "ticks_streams";
   fs::create_directories(ticks);
   fs::copy_file(good / "sensor_poses.csv", ticks / "sensor_poses.csv");
-  Rewrite(good / "odometry.csv", ticks / "odometry.csv",
-          [](const std::vector<std::string>&, std::vector<double>* row) {
-            (*row)[1] *= kTicksPerRev / (2.0 * M_PI);
-            (*row)[2] *= kTicksPerRev / (2.0 * M_PI);
-          });
+  RewriteCsv(good / "odometry.csv", ticks / "odometry.csv",
+             [](const std::vector<std::string>&, std::vector<double>* row) {
+               (*row)[1] *= kTicksPerRev / (2.0 * M_PI);
+               (*row)[2] *= kTicksPerRev / (2.0 * M_PI);
+             });
   ExpectRefused(Calib(Calibrate(ticks, "--timing off")),
                 {"the left and right columns of odometry.csv", "encoder ticks"});
   const nlohmann::json expected = Result(Calib(Calibrate(good, "--timing off")));
@@ -151,8 +121,8 @@ TEST_F(InputSanityCliTest, StreamTicksAreConvertedByTicksPerRev) {
 TEST_F(InputSanityCliTest, ThetaInDegreesIsRefused) {
   const fs::path good = Simulate("good.csv");
   const fs::path degrees = dir_ / "degrees.csv";
-  Rewrite(good, degrees, [](const std::vector<std::string>& header, std::vector<double>* row) {
-    (*row)[Column(header, "sm_theta")] *= 180.0 / M_PI;
+  RewriteCsv(good, degrees, [](const std::vector<std::string>& header, std::vector<double>* row) {
+    (*row)[CsvColumn(header, "sm_theta")] *= 180.0 / M_PI;
   });
   ExpectRefused(Calib(Calibrate(degrees)), {"degrees.csv: sm_theta looks like degrees, not radians",
                                             "Convert sm_theta to radians"});
@@ -161,8 +131,8 @@ TEST_F(InputSanityCliTest, ThetaInDegreesIsRefused) {
 TEST_F(InputSanityCliTest, SwappedWheelsAreNamed) {
   const fs::path good = Simulate("good.csv");
   const fs::path swapped = dir_ / "swapped.csv";
-  Rewrite(good, swapped, [](const std::vector<std::string>& header, std::vector<double>* row) {
-    std::swap((*row)[Column(header, "phi_l")], (*row)[Column(header, "phi_r")]);
+  RewriteCsv(good, swapped, [](const std::vector<std::string>& header, std::vector<double>* row) {
+    std::swap((*row)[CsvColumn(header, "phi_l")], (*row)[CsvColumn(header, "phi_r")]);
   });
   const CliRun run = Calib(Calibrate(swapped));
   EXPECT_EQ(run.exit_code, 1);
@@ -176,11 +146,11 @@ TEST_F(InputSanityCliTest, WrappedWheelAnglesAreUnwrappedWithAWarning) {
   const fs::path wrapped = dir_ / "wrapped_streams";
   fs::create_directories(wrapped);
   fs::copy_file(good / "sensor_poses.csv", wrapped / "sensor_poses.csv");
-  Rewrite(good / "odometry.csv", wrapped / "odometry.csv",
-          [](const std::vector<std::string>&, std::vector<double>* row) {
-            (*row)[1] = std::remainder((*row)[1], 2.0 * M_PI);
-            (*row)[2] = std::remainder((*row)[2], 2.0 * M_PI);
-          });
+  RewriteCsv(good / "odometry.csv", wrapped / "odometry.csv",
+             [](const std::vector<std::string>&, std::vector<double>* row) {
+               (*row)[1] = std::remainder((*row)[1], 2.0 * M_PI);
+               (*row)[2] = std::remainder((*row)[2], 2.0 * M_PI);
+             });
   const nlohmann::json expected = Result(Calib(Calibrate(good, "--timing off")));
   const CliRun run = Calib(Calibrate(wrapped, "--timing off"));
   const nlohmann::json result = Result(run);
@@ -206,8 +176,8 @@ TEST_F(InputSanityCliTest, RecordingWheelJointsSwappedOrReversedAreNamed) {
     const fs::path dir = dir_ / name;
     fs::create_directories(dir);
     fs::copy_file(good / "scans.csv", dir / "scans.csv");
-    Rewrite(good / "odometry.csv", dir / "odometry.csv",
-            [&](const std::vector<std::string>&, std::vector<double>* row) { edit(row); });
+    RewriteCsv(good / "odometry.csv", dir / "odometry.csv",
+               [&](const std::vector<std::string>&, std::vector<double>* row) { edit(row); });
     return dir;
   };
   const fs::path swapped =

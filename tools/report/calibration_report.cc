@@ -48,6 +48,7 @@ VerdictInputs LaserVerdict(const LaserCalibrationResult& result,
   verdict.converged = result.converged;
   verdict.warnings = result.observability.warnings;
   verdict.disagreements = result.consistency.warnings;
+  verdict.unreliable = result.unreliable;
   verdict.streams = streams;
   return verdict;
 }
@@ -148,12 +149,15 @@ CalibrationReport BearingCalibrationReport(const BearingCalibrationResult& resul
   report.json = BearingResultJson(result, input, loss, timing);
   VerdictInputs verdict;
   verdict.converged = result.converged;
-  verdict.warnings = result.warnings;
+  verdict.warnings = log.warnings;
+  verdict.warnings.insert(verdict.warnings.end(), result.warnings.begin(), result.warnings.end());
   verdict.streams = &timing;
   verdict.timing_treated = true;  // Offset and stamp jitter are modelled (calibrate_bearing).
   const std::optional<DriftReport> drift = BearingDrift(result, log);
   if (drift) report.json["odometry_drift"] = DriftJson(*drift);
-  report.summary = BearingResultSummary(result, input, loss, timing) +
+  std::string read;  // What the reader dropped (glitches).
+  for (const std::string& warning : log.warnings) read += "  warning: " + warning + "\n";
+  report.summary = BearingResultSummary(result, input, loss, timing) + read +
                    (drift ? DriftSummary(*drift) : "") +
                    AddVerdict(JudgeResult(verdict), &report.json);
   return report;

@@ -51,6 +51,7 @@ nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
   out["closed_form_trimmed"] = ParamObject(result.closed_form_trimmed.calibration.ToVector());
   out["samples"] = result.samples;
   out["inliers"] = result.inliers;
+  out["gross_outlier_share"] = result.outlier_share;
   out["loss"] = loss;
   out["covariance"] = {{"order", kLaserParamNames}, {"matrix", MatrixJson(result.covariance)}};
   nlohmann::ordered_json noise = nlohmann::ordered_json::array();
@@ -75,7 +76,8 @@ nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
                           {"warnings", result.observability.warnings}};
   out["closed_form_detail"] = {{"J21", result.closed_form.j21},
                                {"J22", result.closed_form.j22},
-                               {"J_condition_number", result.closed_form.j_condition_number}};
+                               {"J_condition_number", result.closed_form.j_condition_number},
+                               {"gross_intervals_left_out", result.gross_intervals}};
   if (!result.interval_jitter.empty()) {
     out["timing"]["treatment"] = "interval_jitter";
     out["timing"]["interval_jitter"] = IntervalJitterJson(result);
@@ -124,6 +126,7 @@ std::string LaserResultSummary(const LaserCalibrationResult& result, const std::
                   estimate(i) * k, result.stddev(i) * k, closed(i) * k);
     text += line;
   }
+  if (!result.gross_note.empty()) text += "  " + result.gross_note + "\n";
   if (loss == "none") {
     // Without a robust loss every interval weighs fully: the cut only names the large ones.
     std::snprintf(line, sizeof(line),

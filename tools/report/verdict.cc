@@ -31,9 +31,13 @@ Verdict JudgeResult(const VerdictInputs& inputs) {
   }
   for (const std::string& sentence : inputs.disagreements) AddUnique(sentence, &verdict.warnings);
 
+  for (const std::string& sentence : inputs.unreliable) AddUnique(sentence, &verdict.warnings);
   if (!inputs.converged) {
     verdict.verdict = "unreliable";
     verdict.reason = "the refinement did not converge";
+  } else if (!inputs.unreliable.empty()) {
+    verdict.verdict = "unreliable";
+    verdict.reason = inputs.unreliable.front();
   } else if (!untreated.empty() && !inputs.timing_treated) {
     verdict.verdict = "unreliable";
     verdict.reason = "the stamps of " + untreated.front() + " are not the sample times";

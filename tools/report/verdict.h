@@ -8,8 +8,9 @@
 #include <vector>
 
 // The contract's "verdict" and "warnings" of `calib calibrate`, one rule for both problems:
-//   unreliable — the fit did not converge, or a stream's stamps are not sample times and the
-//                problem has no validated treatment for it;
+//   unreliable — the fit did not converge, the data cannot support the answer (most samples
+//                gross, inliers that do not determine it), or a stream's stamps are not sample
+//                times and the problem has no validated treatment for it;
 //   check      — any other warning (the timing-free consistency check disagrees, the model
 //                screen finds physics the model leaves out, weak observability, modelled
 //                timing, outliers, ...);
@@ -19,7 +20,8 @@ namespace calib {
 struct VerdictInputs {
   bool converged = true;
   std::vector<std::string> warnings;       // The result's own sentences.
-  std::vector<std::string> disagreements;  // Failed consistency checks (→ unreliable).
+  std::vector<std::string> disagreements;  // Failed consistency checks (→ check).
+  std::vector<std::string> unreliable;     // Why the numbers cannot be relied on (→ unreliable).
   const std::vector<StreamTiming>* streams = nullptr;
   // True when the calibration models stamps that are not sample times well enough to trust
   // (the bearing problem's offset and jitter); false for the laser problem, whose latent-time

@@ -445,9 +445,29 @@ TEST_F(CalibrateBearingCliTest, RunWithoutBearingsIsRejected) {
   ExpectFailure(log_dir, {"bearings.csv", "run 2 has no bearings"});
 }
 
-TEST_F(CalibrateBearingCliTest, BearingOutsideTheOdometrySpanIsRejected) {
+// One bearing outside its run's odometry is a glitch: dropped, with a warning naming its line.
+// Many are a clock or unit problem: refused.
+TEST_F(CalibrateBearingCliTest, BearingOutsideTheOdometrySpan) {
   const fs::path log_dir = WriteLog();
-  Rewrite(log_dir / "bearings.csv", ReadFile(log_dir / "bearings.csv") + "1,99999,0.5\n");
+  const std::string bearings = ReadFile(log_dir / "bearings.csv");
+  Rewrite(log_dir / "bearings.csv", bearings + "1,99999,0.5\n");
+  const fs::path out = dir_ / "glitch.json";
+  const CliRun run = Calib("calibrate --input " + log_dir.string() + " --output " + out.string());
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const std::string warnings = nlohmann::json::parse(ReadFile(out))["warnings"].dump();
+  EXPECT_NE(warnings.find("1 bearing(s) dropped"), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find("t = 99999"), std::string::npos) << warnings;
+  std::string shifted = "run,t,bearing\n";
+  std::istringstream in(bearings);
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    const size_t a = line.find(','), b = line.rfind(',');
+    shifted += line.substr(0, a + 1) +
+               std::to_string(std::stod(line.substr(a + 1, b - a - 1)) + 1e5) + line.substr(b) +
+               "\n";
+  }
+  Rewrite(log_dir / "bearings.csv", shifted);
   ExpectFailure(log_dir, {"bearings.csv:", "outside the run's odometry time span"});
 }
 

@@ -1,0 +1,182 @@
+#include <calib/core/random.h>
+#include <calib/solvers/laser/censi_closed_form_internal.h>
+#include <calib/solvers/laser/censi_consensus.h>
+#include <calib/solvers/laser/laser_motion.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+namespace calib {
+namespace {
+
+using censi_internal::Matrix5d;
+using censi_internal::TranslationRows;
+using censi_internal::Vector5d;
+
+constexpr double kStillRad = 1e-6;  // Wheels at rest: no say in the rotation consensus.
+constexpr double kMadToSigma = 1.4826;
+constexpr uint64_t kSeed = 20080519;  // Fixed: the same log gives the same screen.
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Up to `count` indices evenly spread over `from`.
+std::vector<size_t> Spread(const std::vector<size_t>& from, int count) {
+  if (from.size() <= static_cast<size_t>(count)) return from;
+  std::vector<size_t> out;
+  for (int i = 0; i < count; ++i) out.push_back(from[from.size() * i / count]);
+  return out;
+}
+
+double RotationResidual(const LaserInterval& interval, const Eigen::Vector2d& j) {
+  return interval.sensor_motion(2) - IntervalWheelRotation(interval).dot(j);
+}
+
+// J by least squares over `indices`, or nothing when they do not determine it.
+std::optional<Eigen::Vector2d> FitRotation(const std::vector<LaserInterval>& intervals,
+                                           const std::vector<size_t>& indices) {
+  Eigen::Matrix2d ata = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d atb = Eigen::Vector2d::Zero();
+  for (size_t k : indices) {
+    const Eigen::Vector2d a = IntervalWheelRotation(intervals[k]);
+    ata += a * a.transpose();
+    atb += a * intervals[k].sensor_motion(2);
+  }
+  // Scaled, the 2×2 system is singular when the wheel-speed ratios are (nearly) all the same.
+  const Eigen::Vector2d d = ata.diagonal();
+  if (!(d.minCoeff() > 0.0) || !(ata.determinant() > 1e-8 * d(0) * d(1))) return std::nullopt;
+  const Eigen::Vector2d j = ata.ldlt().solve(atb);
+  if (!j.allFinite()) return std::nullopt;
+  return j;
+}
+
+// Stage 1: the J that the median moving interval agrees with best, and the gross intervals.
+std::optional<Eigen::Vector2d> RotationConsensus(const std::vector<LaserInterval>& intervals,
+                                                 const std::vector<size_t>& moving,
+                                                 const ConsensusScreenOptions& options,
+                                                 ConsensusScreen* screen) {
+  const std::vector<size_t> scored = Spread(moving, options.evaluated);
+  const auto score = [&](const Eigen::Vector2d& j) {
+    std::vector<double> r;
+    r.reserve(scored.size());
+    for (size_t k : scored) r.push_back(std::abs(RotationResidual(intervals[k], j)));
+    return Median(std::move(r));
+  };
+  std::optional<Eigen::Vector2d> best = FitRotation(intervals, moving);
+  double best_score = best ? score(*best) : std::numeric_limits<double>::infinity();
+  Random random(kSeed, 1);
+  for (int t = 0; t < options.trials; ++t) {
+    const std::vector<size_t> pair = {moving[random.Index(moving.size())],
+                                      moving[random.Index(moving.size())]};
+    const std::optional<Eigen::Vector2d> j = FitRotation(intervals, pair);
+    if (!j) continue;
+    const double s = score(*j);
+    if (s < best_score) best_score = s, best = j;
+  }
+  if (!best) return std::nullopt;
+  const double cut = options.cut * kMadToSigma * best_score + 1e-12;
+  for (size_t k = 0; k < intervals.size(); ++k) {
+    if (std::abs(RotationResidual(intervals[k], *best)) > cut) {
+      screen->kept[k] = false;
+      ++screen->rotation_outliers;
+    }
+  }
+  return best;
+}
+
+std::optional<Vector5d> SolveRows(const std::vector<TranslationRows>& rows,
+                                  const std::vector<size_t>& which,
+                                  const ConsensusScreenOptions& options) {
+  Matrix5d m = Matrix5d::Zero();
+  for (size_t i : which) m += rows[i].transpose() * rows[i];
+  const StatusOr<Vector5d> x = censi_internal::SolveTranslation(m, options.closed_form, nullptr);
+  if (!x.ok()) return std::nullopt;
+  return *x;
+}
+
+// Stage 2: eq. 16's x that the median kept interval agrees with best, and the gross intervals.
+void TranslationConsensus(const std::vector<LaserInterval>& intervals, const Eigen::Vector2d& j,
+                          const ConsensusScreenOptions& options, ConsensusScreen* screen) {
+  std::vector<size_t> kept_moving;
+  for (size_t k = 0; k < intervals.size(); ++k) {
+    if (screen->kept[k] && IntervalWheelRotation(intervals[k]).cwiseAbs().sum() >= kStillRad) {
+      kept_moving.push_back(k);
+    }
+  }
+  const std::vector<size_t> scored = Spread(kept_moving, options.evaluated);
+  if (scored.size() < 4) return;
+  std::vector<TranslationRows> rows;
+  for (size_t k : scored)
+    rows.push_back(censi_internal::TranslationEquations(intervals[k], j(0), j(1)));
+  const auto score = [&](const Vector5d& x) {
+    std::vector<double> e;
+    e.reserve(rows.size());
+    for (const TranslationRows& l : rows) e.push_back((l * x).norm());
+    return Median(std::move(e));
+  };
+  std::vector<size_t> all(rows.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+  std::optional<Vector5d> best = SolveRows(rows, all, options);
+  double best_score = best ? score(*best) : std::numeric_limits<double>::infinity();
+  Random random(kSeed, 2);
+  for (int t = 0; t < options.trials; ++t) {
+    std::vector<size_t> subset(4);
+    for (size_t& i : subset) i = random.Index(rows.size());
+    const std::optional<Vector5d> x = SolveRows(rows, subset, options);
+    if (!x) continue;
+    const double s = score(*x);
+    if (s < best_score) best_score = s, best = x;
+  }
+  if (!best) return;
+  const double cut = options.cut * kMadToSigma * best_score + 1e-12;
+  for (size_t k = 0; k < intervals.size(); ++k) {
+    if (!screen->kept[k]) continue;
+    const TranslationRows l = censi_internal::TranslationEquations(intervals[k], j(0), j(1));
+    if (!((l * *best).norm() <= cut)) {
+      screen->kept[k] = false;
+      ++screen->translation_outliers;
+    }
+  }
+}
+
+}  // namespace
+
+ConsensusScreen ScreenGrossIntervals(const std::vector<LaserInterval>& intervals,
+                                     const ConsensusScreenOptions& options) {
+  ConsensusScreen screen;
+  screen.kept.assign(intervals.size(), true);
+  std::vector<size_t> moving;
+  for (size_t k = 0; k < intervals.size(); ++k) {
+    if (IntervalWheelRotation(intervals[k]).cwiseAbs().sum() >= kStillRad) moving.push_back(k);
+  }
+  if (moving.size() < 4) return screen;
+  const std::optional<Eigen::Vector2d> rotation =
+      RotationConsensus(intervals, moving, options, &screen);
+  if (!rotation) return screen;
+  // J again by least squares, now over the rotation stage's inliers only.
+  std::vector<size_t> inliers;
+  for (size_t k : moving) {
+    if (screen.kept[k]) inliers.push_back(k);
+  }
+  const std::optional<Eigen::Vector2d> j = FitRotation(intervals, inliers);
+  if (j) TranslationConsensus(intervals, *j, options, &screen);
+  const auto first = std::find(screen.kept.begin(), screen.kept.end(), false);
+  if (first != screen.kept.end())
+    screen.first_outlier = static_cast<int>(first - screen.kept.begin());
+  return screen;
+}
+
+StatusOr<CensiClosedFormResult> CensiClosedFormScreened(const std::vector<LaserInterval>& intervals,
+                                                        ConsensusScreen* screen) {
+  ConsensusScreen local = ScreenGrossIntervals(intervals);
+  const StatusOr<CensiClosedFormResult> result = CensiClosedForm(intervals, &local.kept);
+  if (screen != nullptr) *screen = std::move(local);
+  return result;
+}
+
+}  // namespace calib
