@@ -8,8 +8,8 @@
 
 // Cumulative wheel angles that jump away and come back: one logged value of 1000 rad (or 1e300)
 // among angles that move by milliradians per sample. Taken as given, the glitch is a burst of
-// wheel travel that no calibration explains. A sample is a spike when a finite value is beyond 1e9, or
-// when the steps into and out of it are opposite and both more than 1000 times the stream's own
+// wheel travel that no calibration explains. A sample is a spike when a finite value is beyond 1e9,
+// or when the steps into and out of it are opposite and both more than 1000 times the stream's own
 // step scale (the (m+1)-th largest step, m = max(4, n/25), so that a few spikes cannot raise the
 // scale they are judged by).
 namespace calib {
