@@ -3,12 +3,14 @@
 #include <calib/solvers/bearing/bearing_text.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
 #include <calib/solvers/bearing/calibrate_bearing_internal.h>
+#include <calib/solvers/common/outlier_share.h>
 #include <calib/solvers/common/solver_options.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <utility>
 
@@ -247,6 +249,44 @@ Status CheckDetermined(const BearingCalibrationOptions& options, BearingCalibrat
   return Status::Ok();
 }
 
+// Fewer bearings than this per unknown (the five calibration parameters and each run's start
+// pose) give neither an estimate nor error bars worth reporting.
+constexpr int kMinBearingsPerUnknown = 4;
+
+Status CheckEnoughBearings(const BearingLog& log) {
+  size_t bearings = 0;
+  for (const BearingRun& run : log.runs) bearings += run.bearings.size();
+  const size_t unknowns = 5 + 3 * log.runs.size();
+  if (bearings >= kMinBearingsPerUnknown * unknowns) return Status::Ok();
+  return Status::NotObservable(
+      "only " + std::to_string(bearings) + " bearings for " + std::to_string(unknowns) +
+      " unknowns (φ, ψ, η, δ, ξ and each run's start pose): at least " +
+      std::to_string(kMinBearingsPerUnknown * unknowns) + ", " +
+      std::to_string(kMinBearingsPerUnknown) +
+      " per unknown, are needed for an estimate and its error bars; record longer runs");
+}
+
+// Most bearings gross: the robust loss then follows them, and the result is unreliable.
+void JudgeOutliers(BearingCalibrationResult* result) {
+  size_t n = 0;
+  for (const std::vector<double>& run : result->residuals_rad) n += run.size();
+  Eigen::MatrixXd residuals(static_cast<Eigen::Index>(n), 1);
+  Eigen::Index row = 0;
+  for (const std::vector<double>& run : result->residuals_rad) {
+    for (const double r : run) residuals(row++, 0) = r;
+  }
+  result->outlier_share = GrossOutlierShare(residuals);
+  if (result->outlier_share <= kMaxTrustedOutlierShare) return;
+  char text[256];
+  std::snprintf(text, sizeof(text),
+                "%.0f %% of the bearings disagree grossly with the fit, more than the %.0f %% a "
+                "robust fit survives: the estimate may follow them; check the bearing sign, unit "
+                "and the landmark detector",
+                100.0 * result->outlier_share, 100.0 * kMaxTrustedOutlierShare);
+  result->unreliable.push_back(text);
+  result->warnings.push_back(text);
+}
+
 void SummarizeRuns(const BearingLog& log, const BearingProblem& problem, const BearingMask& inlier,
                    BearingCalibrationResult* result) {
   for (size_t i = 0; i < log.runs.size(); ++i) {
@@ -337,6 +377,7 @@ StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
                                                     const BearingCalibrationOptions& options) {
   CALIB_RETURN_IF_ERROR(ValidateBearingLog(log));
   const std::string source = log.source.empty() ? "bearing log" : log.source;
+  CALIB_RETURN_IF_ERROR(CheckEnoughBearings(log).Prefixed(source + ": "));
   const Progress progress = [&](const std::string& line) {
     if (options.progress) options.progress(line);
   };
@@ -401,6 +442,7 @@ StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
   result.covariance_seconds = Seconds(clock);
   CALIB_RETURN_IF_ERROR(CheckDetermined(options, &result).Prefixed(source + ": "));
   SummarizeRuns(log, final_problem, *inlier, &result);
+  JudgeOutliers(&result);
   result.is_inlier = *inlier;
   if (options.timing.sensor_clock) {
     CALIB_ASSIGN_OR_RETURN(

@@ -150,6 +150,10 @@ struct BearingCalibrationResult {
   BearingTiming timing;
   // What went wrong on the way without stopping the calibration (e.g. no convergence).
   std::vector<std::string> warnings;
+  // Why the numbers cannot be relied on although the fit ran (most bearings gross); each also in
+  // `warnings`. Empty when none.
+  std::vector<std::string> unreliable;
+  double outlier_share = 0.0;  // GrossOutlierShare of the final bearing residuals.
   double seed_seconds = 0.0;
   double adjustment_seconds = 0.0;
   double covariance_seconds = 0.0;

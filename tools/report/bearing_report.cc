@@ -95,6 +95,7 @@ nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
           : "coarse search (the closed form does not apply: " + result.closed_form_message + ")";
   out["samples"] = result.samples;
   out["inliers"] = result.inliers;
+  out["gross_outlier_share"] = result.outlier_share;
   out["converged"] = result.converged;
   out["warnings"] = result.warnings;
   out["loss"] = loss;

@@ -151,6 +151,7 @@ CalibrationReport BearingCalibrationReport(const BearingCalibrationResult& resul
   verdict.converged = result.converged;
   verdict.warnings = log.warnings;
   verdict.warnings.insert(verdict.warnings.end(), result.warnings.begin(), result.warnings.end());
+  verdict.unreliable = result.unreliable;
   verdict.streams = &timing;
   verdict.timing_treated = true;  // Offset and stamp jitter are modelled (calibrate_bearing).
   const std::optional<DriftReport> drift = BearingDrift(result, log);
