@@ -1,4 +1,5 @@
 #include <calib/core/text_format.h>
+#include <calib/core/text_number.h>
 #include <calib/solvers/common/outlier_share.h>
 #include <calib/solvers/common/solver_options.h>
 #include <calib/solvers/laser/calibrate_laser.h>
@@ -23,6 +24,9 @@ std::string IntervalName(const LaserInterval& interval, size_t index) {
   if (interval.line > 0) name += " (line " + std::to_string(interval.line) + ")";
   return name;
 }
+
+// Beyond this, no unit explains a value (DropImplausibleIntervals drops such records on reading).
+constexpr double kLargestValue = 1e9;
 
 // A relative change of the noise level below which another fit would move the estimate by a
 // negligible fraction of its sigma.
@@ -244,6 +248,14 @@ Status ValidateLaserIntervals(const std::vector<LaserInterval>& intervals) {
       return Status::InvalidInput(IntervalName(interval, k) +
                                   ": wheel speeds and sm must be finite");
     }
+    // The readers drop such records; a log built in memory is refused before any solver sees it.
+    const double largest =
+        std::max({interval.duration_s, std::abs(interval.left_speed),
+                  std::abs(interval.right_speed), interval.sensor_motion.cwiseAbs().maxCoeff()});
+    if (largest > kLargestValue) {
+      return Status::InvalidInput(IntervalName(interval, k) + ": a value of " + Num(largest) +
+                                  " is beyond what any unit explains (1e9)");
+    }
     for (const WheelStep& step : interval.steps) {
       if (!std::isfinite(step.left_rad) || !std::isfinite(step.right_rad)) {
         return Status::InvalidInput(IntervalName(interval, k) + ": wheel steps must be finite");
@@ -293,6 +305,12 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
 
   start = std::chrono::steady_clock::now();
   LaserCalibration initial = result.closed_form_trimmed.calibration;
+  if (!initial.ToVector().allFinite() || !(initial.odometry.left_radius_m > 0.0) ||
+      !(initial.odometry.right_radius_m > 0.0) || !(initial.odometry.wheelbase_m > 0.0)) {
+    return Status::NotObservable(
+        "the closed form gave no usable seed: the data do not fit a "
+        "differential-drive robot");
+  }
   std::vector<Eigen::Vector3d> initial_sigma;
   if (total > kWarmStartAbove) {
     CALIB_RETURN_IF_ERROR(
