@@ -336,5 +336,32 @@ TEST(CalibrateLaserTest, FailedTrimmingFallsBackWithAWarning) {
   EXPECT_TRUE(HasWarning(*result, "the trimmed closed form failed"));
 }
 
+// Intervals built in memory bypass the readers' bounds: an absurd value is an error naming the
+// interval, never a CHECK inside Ceres; a single big glitch costs its interval.
+TEST(CalibrateLaserTest, AbsurdValueInMemoryIsRefusedAndGlitchCostsOneInterval) {
+  LaserSimOptions sim;
+  sim.num_intervals = 300;
+  std::vector<LaserInterval> intervals = SimulateLaserLog(sim).intervals;
+  const StatusOr<LaserCalibrationResult> clean = CalibrateLaser(intervals);
+  ASSERT_TRUE(clean.ok()) << clean.message();
+  intervals[100].sensor_motion(2) = 5e307;
+  const StatusOr<LaserCalibrationResult> absurd = CalibrateLaser(intervals);
+  ASSERT_FALSE(absurd.ok());
+  EXPECT_NE(absurd.message().find("101"), std::string::npos) << absurd.message();
+  EXPECT_NE(absurd.message().find("beyond what any unit explains"), std::string::npos)
+      << absurd.message();
+  intervals[100].sensor_motion(2) = 0.0;
+  intervals[100].left_speed = 500.0;
+  const StatusOr<LaserCalibrationResult> glitch = CalibrateLaser(intervals);
+  ASSERT_TRUE(glitch.ok()) << glitch.message();
+  EXPECT_EQ(glitch->gross_intervals, 1);
+  for (int i = 0; i < kNumLaserParams; ++i) {
+    EXPECT_NEAR(glitch->estimate.ToVector()(i), clean->estimate.ToVector()(i),
+                0.5 * clean->stddev(i))
+        << kLaserParamNames[i];
+  }
+  EXPECT_TRUE(glitch->unreliable.empty());
+}
+
 }  // namespace
 }  // namespace calib
