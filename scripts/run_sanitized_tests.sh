@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The sanitizer suite: builds calib and its tests with AddressSanitizer (with LeakSanitizer) and
-# UndefinedBehaviorSanitizer into build-asan/ (gcc, -O1 -g, NDEBUG as in Release) and runs them;
+# UndefinedBehaviorSanitizer into build-asan/ (gcc, -O1 -g1, NDEBUG as in Release) and runs them;
 # a memory error, a leak or undefined behaviour aborts the test that shows it. The command-line
 # tests run the sanitized build-asan/bin/calib, so its bad-input and output paths are covered too.
 #
