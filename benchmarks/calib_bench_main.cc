@@ -60,8 +60,9 @@ std::set<std::string> ParseSections(const std::string& text, bool* ok) {
   return sections;
 }
 
-// RMSE against N for b and sensor_x, default noise without outliers, with the √CRLB line.
-void WritePlot(const std::vector<McScenarioResult>& results, const std::string& path) {
+// RMSE against N for b and sensor_x, default noise without outliers, with the √CRLB line; false
+// when the file could not be written.
+bool WritePlot(const std::vector<McScenarioResult>& results, const std::string& path) {
   const char* colors[kNumMcMethods] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728"};
   std::vector<PlotPanel> panels;
   for (int param : {2, 3}) {
@@ -99,6 +100,7 @@ void WritePlot(const std::vector<McScenarioResult>& results, const std::string& 
       panels);
   std::printf("%s %s\n", written.ok() ? "Plot written to" : "Plot FAILED:",
               written.ok() ? path.c_str() : written.message().c_str());
+  return written.ok();
 }
 
 int Main(int argc, char** argv) {
@@ -149,17 +151,23 @@ int Main(int argc, char** argv) {
       std::printf("\nResults written to %s\n", FLAGS_json.c_str());
     } else {
       std::printf("\nFAILED to write %s\n", FLAGS_json.c_str());
+      std::fprintf(stderr, "calib_bench: error: cannot write %s\n", FLAGS_json.c_str());
       ok = false;
     }
     if (!mc_results.empty()) {
       std::filesystem::path plot = FLAGS_json;
       plot.replace_extension();
-      WritePlot(mc_results, plot.string() + "_rmse.svg");
+      ok = WritePlot(mc_results, plot.string() + "_rmse.svg") && ok;
     }
   } else if (!mc_results.empty()) {
     std::printf("\n(no --json: the RMSE plot is not written)\n");
   }
   std::printf("calib_bench finished in %.1f s\n", total.Seconds());
+  // The tables on stdout count as output too: a full disk behind them is a failure.
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    std::fprintf(stderr, "calib_bench: error: cannot write to standard output\n");
+    ok = false;
+  }
   return ok ? 0 : 1;
 }
 

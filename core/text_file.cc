@@ -1,5 +1,7 @@
 #include <calib/core/text_file.h>
 
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <system_error>
@@ -25,11 +27,14 @@ Status ReadWholeFile(const std::string& path, std::string* text) {
 }
 
 Status WriteWholeFile(const std::string& path, const std::string& text) {
+  // errno says why (no such folder, no space left on device, ...), when the system set it.
+  const auto why = [] { return errno != 0 ? std::string(" (") + std::strerror(errno) + ")" : ""; };
+  errno = 0;
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) return Status::Io(path + ": cannot open for writing");
+  if (!out) return Status::Io(path + ": cannot open for writing" + why());
   out.write(text.data(), static_cast<std::streamsize>(text.size()));
   out.close();
-  if (!out) return Status::Io(path + ": write failed");
+  if (!out) return Status::Io(path + ": write failed" + why());
   return Status::Ok();
 }
 

@@ -5,7 +5,9 @@
 #include <calib/tools/commands/help.h>
 #include <calib/tools/process_memory.h>
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <string>
 
 namespace {
@@ -17,10 +19,7 @@ constexpr char kUsage[] =
     "  simulate  --output LOG [--truth T.json]    write a simulated laser log (.tuple, .csv, or a\n"
     "            raw stream directory when LOG has no extension or with --format stream)\n";
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  calib::KeepFreedMemory();
+int RunCommand(int argc, char** argv) {
   int exit_code = 0;
   if (calib::cli::HandleHelpOrVersion(argc, argv, kUsage, &exit_code)) return exit_code;
   calib::cli::ParseFlags(kUsage, &argc, &argv);
@@ -35,4 +34,20 @@ int main(int argc, char** argv) {
   if (command == "simulate") return calib::cli::RunSimulate(calib::cli::SimulateOptionsFromFlags());
   std::fprintf(stderr, "calib: unknown command '%s'\n%s", command.c_str(), kUsage);
   return 2;
+}
+
+}  // namespace
+
+// Whatever a command printed on stdout (a summary, the JSON, the help) must have arrived: a full
+// disk or a closed pipe behind stdout is an error, not exit 0.
+int main(int argc, char** argv) {
+  calib::KeepFreedMemory();
+  const int exit_code = RunCommand(argc, argv);
+  errno = 0;
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    std::fprintf(stderr, "calib: error: cannot write to standard output%s%s\n",
+                 errno != 0 ? ": " : "", errno != 0 ? std::strerror(errno) : "");
+    return exit_code != 0 ? exit_code : 1;
+  }
+  return exit_code;
 }

@@ -98,6 +98,11 @@ std::vector<std::string> SplitCommas(const std::string& text) {
 
 std::string DefaultPlotsDir(const std::string& output) {
   const std::filesystem::path path(output);
+  // A device or a pipe (/dev/stdout, /dev/full) has no folder of its own to put plots beside.
+  std::error_code error;
+  if (std::filesystem::exists(path, error) && !std::filesystem::is_regular_file(path, error)) {
+    return "";
+  }
   return (path.parent_path() / (path.stem().string() + "_plots")).string();
 }
 

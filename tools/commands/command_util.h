@@ -86,7 +86,8 @@ StatusOr<LaserLog> ReadLaserInput(const std::string& path, LaserFormat format,
 // "a.json,b.json" → {"a.json", "b.json"} (empty parts dropped).
 std::vector<std::string> SplitCommas(const std::string& text);
 
-// The default plot folder: OUT_plots beside OUT.json.
+// The default plot folder: OUT_plots beside OUT.json; none ("") when OUT is not a regular file
+// (a device or a pipe).
 std::string DefaultPlotsDir(const std::string& output);
 
 // The end of every command: writes `json` to `output`, then prints `summary` on stdout unless

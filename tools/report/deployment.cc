@@ -68,6 +68,11 @@ std::string MountingYaml(const Deployment& d) {
 std::string Stem(const std::string& output) {
   if (output.empty() || output == "-") return "calib_calibration";
   const std::filesystem::path path(output);
+  // Nothing is written beside a device or a pipe (/dev/stdout): the working directory instead.
+  std::error_code error;
+  if (std::filesystem::exists(path, error) && !std::filesystem::is_regular_file(path, error)) {
+    return "calib_calibration";
+  }
   return (path.parent_path() / path.stem()).string();
 }
 

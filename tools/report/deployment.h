@@ -60,7 +60,8 @@ std::string DeploymentUrdf(const Deployment& deployment);
 std::string DeploymentStaticTransform(const Deployment& deployment);
 
 // Writes each format beside `output` (OUT.json → OUT.yaml, OUT.urdf, OUT.tf.txt), or in the
-// working directory as calib_calibration.* when there is no output file; returns the paths.
+// working directory as calib_calibration.* when there is no output file (or it is a device or a
+// pipe); returns the paths.
 StatusOr<std::vector<std::string>> WriteDeployment(const Deployment& deployment,
                                                    const std::vector<std::string>& formats,
                                                    const std::string& output);

@@ -1,15 +1,35 @@
 #include <calib/tools/report/json_output.h>
 
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <system_error>
 
 namespace calib {
+namespace {
+
+// "cannot write PATH: why" (errno, when the system said why).
+Status CannotWrite(const std::string& path, int error) {
+  return Status::Io("cannot write " + path +
+                    (error != 0 ? ": " + std::string(std::strerror(error)) : ""));
+}
+
+}  // namespace
 
 Status WriteTextFile(const std::string& path, const std::string& text) {
+  errno = 0;
   std::ofstream out(path);
-  if (!out) return Status::Io("cannot write " + path);
+  if (!out) return CannotWrite(path, errno);
   out << text;
   out.close();
-  if (!out) return Status::Io("cannot write " + path);
+  if (!out) {
+    const int error = errno;
+    // A report cut short (a full disk) is removed, not left to be read as complete.
+    std::error_code ignored;
+    if (std::filesystem::is_regular_file(path, ignored)) std::filesystem::remove(path, ignored);
+    return CannotWrite(path, error);
+  }
   return Status::Ok();
 }
 

@@ -11,7 +11,8 @@
 // JSON pieces its reports share.
 namespace calib {
 
-// Writes `text` to `path`, replacing the file; Status::Io "cannot write PATH" when it cannot.
+// Writes `text` to `path`, replacing the file; Status::Io "cannot write PATH: why" when it cannot
+// (a regular file cut short by a failed write is removed).
 Status WriteTextFile(const std::string& path, const std::string& text);
 
 // Writes json.dump(indent) and a newline: the layout of every JSON file calib writes (indent 2

@@ -1,7 +1,9 @@
 // The one JSON file writer: the layout of every file calib writes, and its errors.
 #include <calib/tools/report/json_output.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -51,8 +53,31 @@ TEST_F(JsonOutputTest, AnUnwritablePathIsAnIoErrorNamingIt) {
   const Status status = WriteJsonFile(path, nlohmann::ordered_json::object());
   ASSERT_FALSE(status.ok());
   EXPECT_EQ(status.code(), StatusCode::kIo);
-  EXPECT_EQ(status.message(), "cannot write " + path);
+  EXPECT_EQ(status.message(), "cannot write " + path + ": No such file or directory");
   EXPECT_EQ(WriteTextFile(path, "x").code(), StatusCode::kIo);
+}
+
+TEST_F(JsonOutputTest, AFullDiskIsAnIoErrorSayingSo) {
+  const Status status = WriteTextFile("/dev/full", std::string(1 << 16, 'x'));
+  EXPECT_EQ(status.code(), StatusCode::kIo);
+  EXPECT_EQ(status.message(), "cannot write /dev/full: No space left on device");
+}
+
+TEST_F(JsonOutputTest, AFileCutShortIsRemoved) {
+  // A file size limit makes the write fail part way, as a full disk does (EFBIG, not SIGXFSZ).
+  const fs::path path = dir_ / "report.json";
+  std::signal(SIGXFSZ, SIG_IGN);
+  rlimit old_limit{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  rlimit small = old_limit;
+  small.rlim_cur = 4096;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  const Status status = WriteTextFile(path.string(), std::string(1 << 16, 'x'));
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  EXPECT_EQ(status.code(), StatusCode::kIo);
+  EXPECT_EQ(status.message().rfind("cannot write " + path.string() + ": ", 0), 0u)
+      << status.message();
+  EXPECT_FALSE(fs::exists(path));
 }
 
 TEST_F(JsonOutputTest, MatrixIsAnArrayOfRows) {
