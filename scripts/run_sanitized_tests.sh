@@ -5,10 +5,12 @@
 # tests run the sanitized build-asan/bin/calib, so its bad-input and output paths are covered too.
 #
 # By default only the tests labelled `sanitize` (CALIB_SANITIZE_TESTS in tests/CMakeLists.txt:
-# readers, core, residuals, report writers, the command line) are built and run, so that CI
+# readers, core, residuals, report writers, the consensus screen, the command line's bad-input
+# battery) are built and run, so that CI
 # (scripts/run_tests.sh) stays within its time limit. Left out, as too slow under the sanitizers
 # for CI: the solver sweeps over the Censi recordings (censi_data_test, the diagnosis data
-# tests), the Monte Carlo and coverage studies (calibrate_laser_test, laser_consistency_test,
+# tests), the command-line tests that calibrate many logs (bags, deploy, diagnose, plots,
+# output failures), the Monte Carlo and coverage studies (calibrate_laser_test, laser_consistency_test,
 # the timing and scan-point calibrations), the Python bindings (an ASan runtime cannot be loaded
 # into an uninstrumented python3) and the find_package consumer test (it builds a project of its
 # own, without the sanitizer flags). `--all` builds and runs every other test (the Python module
