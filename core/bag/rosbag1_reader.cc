@@ -60,8 +60,14 @@ class Ros1BagReader {
     out_.source = path;
   }
 
+  // Reads `bytes` instead of the file at the path (which only names them).
+  void UseBytes(std::string_view bytes) {
+    in_memory_ = true;
+    file_.OpenBytes(bytes);
+  }
+
   StatusOr<RobotMessages> Read() {
-    const Status status = ReadAll();
+    const Status status = GuardAllocation(path_, [&] { return ReadAll(); });
     if (!status.ok()) return status.Prefixed(path_ + ": ");
     Finish();
     return std::move(out_);
@@ -69,7 +75,7 @@ class Ros1BagReader {
 
  private:
   Status ReadAll() {
-    CALIB_RETURN_IF_ERROR(file_.Open(path_));
+    if (!in_memory_) CALIB_RETURN_IF_ERROR(file_.Open(path_));
     uint64_t index_pos = 0, first_record = 0;
     uint32_t conn_count = 0, chunk_count = 0;
     CALIB_RETURN_IF_ERROR(ReadBagHeader(&index_pos, &conn_count, &chunk_count, &first_record));
@@ -399,7 +405,7 @@ class Ros1BagReader {
   std::map<uint32_t, Connection> connections_;
   std::vector<ChunkInfo> chunks_;
   uint32_t index_connections_ = 0;
-  bool counting_ = false, reading_index_ = false;
+  bool counting_ = false, reading_index_ = false, in_memory_ = false;
   int64_t next_record_ = 0;  // Every message's index in the bag, in file order.
   std::string buffer_, chunk_data_;
   Record record_;
@@ -410,6 +416,13 @@ class Ros1BagReader {
 
 StatusOr<RobotMessages> ReadRos1Bag(const std::string& path, const BagReadOptions& options) {
   return Ros1BagReader(path, options).Read();
+}
+
+StatusOr<RobotMessages> ReadRos1BagBytes(std::string_view bytes, const std::string& source,
+                                         const BagReadOptions& options) {
+  Ros1BagReader reader(source, options);
+  reader.UseBytes(bytes);
+  return reader.Read();
 }
 
 }  // namespace calib
