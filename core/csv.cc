@@ -44,13 +44,19 @@ StatusOr<CsvReader> CsvReader::Open(std::string_view text, std::string source,
   return reader;
 }
 
-StatusOr<bool> CsvReader::NextLine(std::string_view* line) {
+StatusOr<bool> CsvReader::NextLine(std::string_view* line, bool header) {
   while (pos_ < text_.size()) {
     // Only kMaxLineBytes + 1 bytes are searched: a line without end costs no more.
     const size_t window = std::min(text_.size() - pos_, kMaxLineBytes + 1);
     const void* newline = std::memchr(text_.data() + pos_, '\n', window);
     ++line_number_;
     if (newline == nullptr && window > kMaxLineBytes) {
+      if (header) {
+        // A header this long is most likely one of too many columns: say so, counted once.
+        const std::string_view rest = text_.substr(pos_, text_.find('\n', pos_) - pos_);
+        const size_t columns = static_cast<size_t>(std::count(rest.begin(), rest.end(), ',')) + 1;
+        if (columns > kMaxCsvColumns) return TooManyColumns(columns);
+      }
       return Status::InvalidInput(At(source_, line_number_) + "line longer than " +
                                   std::to_string(kMaxLineBytes) +
                                   " bytes (the limit of a CSV record): not a log of this format");
@@ -121,9 +127,16 @@ std::string CsvReader::Split(std::string_view line) {
   return std::string();
 }
 
+Status CsvReader::TooManyColumns(size_t columns) const {
+  return Status::InvalidInput(
+      At(source_, line_number_) + "the header has " + std::to_string(columns) +
+      " columns, more than the " + std::to_string(kMaxCsvColumns) +
+      " a CSV log may have (expected a header naming " + RequiredNames() + ")");
+}
+
 Status CsvReader::ReadHeader() {
   std::string_view line;
-  CALIB_ASSIGN_OR_RETURN(const bool found, NextLine(&line));
+  CALIB_ASSIGN_OR_RETURN(const bool found, NextLine(&line, /*header=*/true));
   if (!found) {
     return Status::InvalidInput(source_ +
                                 ": holds no records: no header line (an empty file, or only "
@@ -132,13 +145,8 @@ Status CsvReader::ReadHeader() {
   }
   header_line_ = line_number_;
   // Counted before splitting: a header of a million commas is refused without a million fields.
-  const size_t commas = static_cast<size_t>(std::count(line.begin(), line.end(), ','));
-  if (commas >= kMaxCsvColumns) {
-    return Status::InvalidInput(
-        At(source_, header_line_) + "the header has " + std::to_string(commas + 1) +
-        " columns, more than the " + std::to_string(kMaxCsvColumns) +
-        " a CSV log may have (expected a header naming " + RequiredNames() + ")");
-  }
+  const size_t columns = static_cast<size_t>(std::count(line.begin(), line.end(), ',')) + 1;
+  if (columns > kMaxCsvColumns) return TooManyColumns(columns);
   if (const std::string problem = Split(line); !problem.empty()) {
     std::string all;
     for (const CsvColumn& column : columns_) {

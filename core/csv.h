@@ -67,7 +67,8 @@ class CsvReader {
   std::string Split(std::string_view line);
   // The next line that is neither blank nor a comment, trimmed, in *line; false at the end. An
   // error for a line longer than kMaxLineBytes.
-  StatusOr<bool> NextLine(std::string_view* line);
+  StatusOr<bool> NextLine(std::string_view* line, bool header = false);
+  Status TooManyColumns(size_t columns) const;
   Status ReadHeader();
   std::string ColumnWhere(size_t column) const;
 
