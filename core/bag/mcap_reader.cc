@@ -481,9 +481,11 @@ StatusOr<RobotMessages> ReadMcapBytes(std::string_view bytes, const std::string&
   });
 }
 
-StatusOr<RobotMessages> ReadMcapBag(const std::string& path, const BagReadOptions& options) {
-  CALIB_ASSIGN_OR_RETURN(const std::vector<std::string> files, BagFiles(path));
-  if (files.size() == 1) return ReadMcapFile(files[0], options);
+namespace {
+
+// The files of a split bag, one after the other.
+StatusOr<RobotMessages> ReadSplitBag(const std::string& path, const std::vector<std::string>& files,
+                                     const BagReadOptions& options) {
   RobotMessages all;
   all.source = path;
   int64_t record_base = 0;
@@ -496,6 +498,14 @@ StatusOr<RobotMessages> ReadMcapBag(const std::string& path, const BagReadOption
     record_base = next_base;
   }
   return all;
+}
+
+}  // namespace
+
+StatusOr<RobotMessages> ReadMcapBag(const std::string& path, const BagReadOptions& options) {
+  CALIB_ASSIGN_OR_RETURN(const std::vector<std::string> files, BagFiles(path));
+  if (files.size() == 1) return ReadMcapFile(files[0], options);
+  return GuardAllocation(path, [&] { return ReadSplitBag(path, files, options); });
 }
 
 }  // namespace calib

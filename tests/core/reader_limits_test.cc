@@ -5,6 +5,7 @@
 #include <calib/core/csv.h>
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/core/text_file.h>
+#include <calib/core/timing/stamp_timing.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/resource.h>
@@ -193,6 +194,16 @@ TEST(ReaderLimitsTest, LineCountersCannotOverflow) {
   const std::string tuple = R"({"T":0.5,"phi_l":1,"phi_r":1.2,"sm":[0.05,0.001,0.01]})";
   ExpectMessage(StatusOf(ParseLaserTuples(std::string(100000, '\n') + tuple + " x", "n.tuple")),
                 {"n.tuple:100001:", "unexpected text 'x'"});
+}
+
+TEST(ReaderLimitsTest, HourLongStreamsAreAnalysedWithoutOverflow) {
+  // 320000 samples at 100 Hz (53 min): the grid fit's block bounds once overflowed an int here.
+  std::vector<double> stamps(320000);
+  for (size_t k = 0; k < stamps.size(); ++k) stamps[k] = 0.01 * static_cast<double>(k);
+  const StreamTiming timing = AnalyzeStreamTiming(stamps, {}, "odometry", "long.csv");
+  EXPECT_EQ(timing.samples, 320000);
+  EXPECT_NEAR(timing.period_s, 0.01, 1e-9);
+  EXPECT_EQ(timing.gaps, 0);
 }
 
 TEST(ReaderLimitsTest, AllocationFailureBecomesAnErrorNamingTheFile) {
