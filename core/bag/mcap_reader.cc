@@ -340,6 +340,7 @@ Status BagReader::ReadIndexed(const mcap::FooterRecord& footer, uint64_t footer_
         count == statistics.channel_message_counts.end() ? 0 : static_cast<int64_t>(count->second);
   }
   int64_t first_record = 0;
+  uint64_t read_end = 0;
   for (size_t i = 0; i < chunks.size(); first_record += counts[i++]) {
     bool wanted = false;
     for (const auto& entry : chunks[i].message_index_offsets) {
@@ -348,11 +349,19 @@ Status BagReader::ReadIndexed(const mcap::FooterRecord& footer, uint64_t footer_
     }
     if (!wanted) continue;
     RecordView record;
+    // Each chunk is decompressed once: indexes that point into a chunk already read are corrupt
+    // (and would multiply the work).
+    if (chunks[i].chunk_start_offset < read_end) {
+      return Status::InvalidInput(
+          "Chunk Index points at byte " + std::to_string(chunks[i].chunk_start_offset) +
+          ", inside a chunk already read (which ends at byte " + std::to_string(read_end) + ")");
+    }
     CALIB_RETURN_IF_ERROR(mcap::ReadRecordAt(data_, size_, chunks[i].chunk_start_offset, &record));
     if (record.opcode != mcap::kChunk) {
       return Status::InvalidInput("Chunk Index points at byte " + std::to_string(record.offset) +
                                   ", not at a Chunk record");
     }
+    read_end = record.end();
     next_record_ = first_record;
     CALIB_RETURN_IF_ERROR(ForEachInChunk(record, ""));
     if (next_record_ - first_record != static_cast<int64_t>(counts[i])) {

@@ -199,6 +199,7 @@ class Ros1BagReader {
   Status ReadIndexedChunks() {
     std::stable_sort(chunks_.begin(), chunks_.end(),
                      [](const ChunkInfo& a, const ChunkInfo& b) { return a.pos < b.pos; });
+    uint64_t read_end = 0;
     for (const ChunkInfo& info : chunks_) {
       int64_t messages = 0;
       bool wanted = false;
@@ -211,7 +212,15 @@ class Ros1BagReader {
         continue;
       }
       uint64_t pos = info.pos;
+      // Each chunk is read once: a chunk info pointing into one already read is corrupt (and
+      // would multiply the work).
+      if (info.pos < read_end) {
+        return Status::InvalidInput("a chunk info points at byte " + std::to_string(info.pos) +
+                                    ", inside a chunk already read (which ends at byte " +
+                                    std::to_string(read_end) + ")");
+      }
       CALIB_RETURN_IF_ERROR(file_.ReadRecord(&pos, true, &buffer_, &record_));
+      read_end = pos;
       if (record_.op != rosbag1::kOpChunk) {
         return Status::InvalidInput("a chunk info points at byte " + std::to_string(info.pos) +
                                     ", which holds op " + Hex(record_.op) + ", not a chunk");
