@@ -67,22 +67,20 @@ StatusOr<MappedFile> MappedFile::OpenImpl(const std::string& path, bool text) {
   struct stat st;
   if (fstat(fd.get(), &st) != 0) return Status::Io(path + ": cannot read: " + std::strerror(errno));
   if (S_ISDIR(st.st_mode)) return Status::Io(path + ": is a directory, expected a file");
-  if (!S_ISREG(st.st_mode)) {
+  // A pipe cannot be mapped; a file of size 0 may still hold bytes (/proc): both are read.
+  if (!S_ISREG(st.st_mode) || st.st_size == 0) {
     CALIB_RETURN_IF_ERROR(file.ReadStream(fd.get(), text));
     return StatusOr<MappedFile>(std::move(file));
   }
-  if (st.st_size > 0) {
-    file.size_ = static_cast<size_t>(st.st_size);
-    void* map = mmap(nullptr, file.size_, PROT_READ, MAP_PRIVATE, fd.get(), 0);
-    if (map == MAP_FAILED) {
-      file.size_ = 0;
-      return Status::Io(path + ": cannot read (mmap failed: " + std::strerror(errno) + ")");
-    }
-    file.data_ = static_cast<const char*>(map);
-    file.mapped_ = true;
-    // Parsers run front to back.
-    madvise(map, file.size_, MADV_SEQUENTIAL);
+  file.size_ = static_cast<size_t>(st.st_size);
+  void* map = mmap(nullptr, file.size_, PROT_READ, MAP_PRIVATE, fd.get(), 0);
+  if (map == MAP_FAILED) {
+    file.size_ = 0;
+    return Status::Io(path + ": cannot read (mmap failed: " + std::strerror(errno) + ")");
   }
+  file.data_ = static_cast<const char*>(map);
+  file.mapped_ = true;
+  madvise(map, file.size_, MADV_SEQUENTIAL);  // Parsers run front to back.
   if (text) CALIB_RETURN_IF_ERROR(CheckTextBytes(file.text(), path));
   return StatusOr<MappedFile>(std::move(file));
 }
@@ -123,8 +121,8 @@ Status CheckTextBytes(std::string_view bytes, const std::string& source) {
   if (nul == nullptr) return Status::Ok();
   const size_t at = static_cast<size_t>(static_cast<const char*>(nul) - bytes.data());
   return Status::InvalidInput(source + ": not a text file: a NUL byte at byte " +
-                              std::to_string(at) + " (binary data, or a file of zeros; the " +
-                              std::to_string(bytes.size()) + "-byte file was not parsed)");
+                              std::to_string(at) +
+                              " (binary data, or a file of zeros); nothing was parsed");
 }
 
 Status ReadWholeFile(const std::string& path, std::string* text) {

@@ -150,6 +150,10 @@ TEST(ReaderLimitsTest, MappedFileOwnsItsBytesAcrossMoves) {
   EXPECT_EQ(moved.text(), "hello\n");
   EXPECT_EQ(file.text(), "");
   ExpectMessage(StatusOf(MappedFile::Open(dir / "missing")), {"missing: no such file"});
+  // A file whose size says 0 but that holds bytes is read, not mapped.
+  const StatusOr<MappedFile> proc = MappedFile::OpenText("/proc/self/status");
+  ASSERT_TRUE(proc.ok()) << proc.message();
+  EXPECT_NE(proc->text().find("Name:"), std::string_view::npos);
   ExpectMessage(StatusOf(MappedFile::Open(dir / ".")), {"is a directory"});
 }
 
