@@ -1,8 +1,11 @@
 #include <calib/core/csv.h>
+#include <calib/core/text_file.h>
 #include <calib/core/text_number.h>
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <cstring>
 #include <string>
 #include <system_error>
 #include <unordered_map>
@@ -25,7 +28,7 @@ std::string Lower(std::string_view s) {
   return lower;
 }
 
-std::string At(const std::string& source, int line) {
+std::string At(const std::string& source, int64_t line) {
   return source + ":" + std::to_string(line) + ": ";
 }
 
@@ -41,13 +44,28 @@ StatusOr<CsvReader> CsvReader::Open(std::string_view text, std::string source,
   return reader;
 }
 
-bool CsvReader::NextLine(std::string_view* line) {
+StatusOr<bool> CsvReader::NextLine(std::string_view* line, bool header) {
   while (pos_ < text_.size()) {
-    const size_t newline = text_.find('\n', pos_);
-    const size_t stop = newline == std::string_view::npos ? text_.size() : newline;
+    // Only kMaxLineBytes + 1 bytes are searched: a line without end costs no more.
+    const size_t window = std::min(text_.size() - pos_, kMaxLineBytes + 1);
+    const void* newline = std::memchr(text_.data() + pos_, '\n', window);
+    ++line_number_;
+    if (newline == nullptr && window > kMaxLineBytes) {
+      if (header) {
+        // A header this long is most likely one of too many columns: say so, counted once.
+        const std::string_view rest = text_.substr(pos_, text_.find('\n', pos_) - pos_);
+        const size_t columns = static_cast<size_t>(std::count(rest.begin(), rest.end(), ',')) + 1;
+        if (columns > kMaxCsvColumns) return TooManyColumns(columns);
+      }
+      return Status::InvalidInput(At(source_, line_number_) + "line longer than " +
+                                  std::to_string(kMaxLineBytes) +
+                                  " bytes (the limit of a CSV record): not a log of this format");
+    }
+    const size_t stop = newline == nullptr
+                            ? text_.size()
+                            : static_cast<size_t>(static_cast<const char*>(newline) - text_.data());
     *line = Trim(text_.substr(pos_, stop - pos_));
     pos_ = stop + 1;
-    ++line_number_;
     if (!line->empty() && line->front() != '#') return true;
   }
   return false;
@@ -109,15 +127,26 @@ std::string CsvReader::Split(std::string_view line) {
   return std::string();
 }
 
+Status CsvReader::TooManyColumns(size_t columns) const {
+  return Status::InvalidInput(
+      At(source_, line_number_) + "the header has " + std::to_string(columns) +
+      " columns, more than the " + std::to_string(kMaxCsvColumns) +
+      " a CSV log may have (expected a header naming " + RequiredNames() + ")");
+}
+
 Status CsvReader::ReadHeader() {
   std::string_view line;
-  if (!NextLine(&line)) {
+  CALIB_ASSIGN_OR_RETURN(const bool found, NextLine(&line, /*header=*/true));
+  if (!found) {
     return Status::InvalidInput(source_ +
                                 ": holds no records: no header line (an empty file, or only "
                                 "blank and comment lines); expected a header naming " +
                                 RequiredNames());
   }
   header_line_ = line_number_;
+  // Counted before splitting: a header of a million commas is refused without a million fields.
+  const size_t columns = static_cast<size_t>(std::count(line.begin(), line.end(), ',')) + 1;
+  if (columns > kMaxCsvColumns) return TooManyColumns(columns);
   if (const std::string problem = Split(line); !problem.empty()) {
     std::string all;
     for (const CsvColumn& column : columns_) {
@@ -173,7 +202,8 @@ Status CsvReader::ReadHeader() {
 
 StatusOr<bool> CsvReader::Next() {
   std::string_view line;
-  if (!NextLine(&line)) return false;
+  CALIB_ASSIGN_OR_RETURN(const bool found, NextLine(&line));
+  if (!found) return false;
   line_ = line_number_;
   ++record_;
   if (const std::string problem = Split(line); !problem.empty()) {

@@ -3,6 +3,7 @@
 
 #include <calib/core/status.h>
 
+#include <cstdint>
 #include <deque>
 #include <string>
 #include <string_view>
@@ -18,6 +19,8 @@
 // - header names are matched to the wanted columns case-insensitively after trimming and
 //   unquoting, an exact match first (so that distinct columns such as "T" and "t" stay
 //   distinct); other columns are ignored; a name given twice is an error;
+// - a line longer than kMaxLineBytes or a header of more than kMaxCsvColumns columns
+//   (core/text_file.h) is an error: time and memory stay linear in the input;
 // - every error names the file, the 1-based line (and record and column) and what is wrong.
 namespace calib {
 
@@ -48,9 +51,10 @@ class CsvReader {
   Status Integer(size_t column, int* value, const char* what = "an integer") const;
 
   const std::string& source() const { return source_; }
-  int header_line() const { return header_line_; }
-  int line() const { return line_; }      // 1-based line of the current record.
-  int record() const { return record_; }  // 1-based number of the current record.
+  // Counted in 64 bits; SaturatedInt (core/text_file.h) keeps them in an int field.
+  int64_t header_line() const { return header_line_; }
+  int64_t line() const { return line_; }      // 1-based line of the current record.
+  int64_t record() const { return record_; }  // 1-based number of the current record.
   // "source:line: record n: " for the current record.
   std::string Where() const;
   // The required column names, "run,t,left,right".
@@ -61,21 +65,23 @@ class CsvReader {
   // Splits `line` (trimmed, not blank) into fields_, unescaping quoted ones. Returns what is
   // wrong with its quoting ("" when nothing).
   std::string Split(std::string_view line);
-  // Returns the next line that is neither blank nor a comment, trimmed; false at the end.
-  bool NextLine(std::string_view* line);
+  // The next line that is neither blank nor a comment, trimmed, in *line; false at the end. An
+  // error for a line longer than kMaxLineBytes.
+  StatusOr<bool> NextLine(std::string_view* line, bool header = false);
+  Status TooManyColumns(size_t columns) const;
   Status ReadHeader();
   std::string ColumnWhere(size_t column) const;
 
   std::string_view text_;
   size_t pos_ = 0;
-  int line_number_ = 0;
+  int64_t line_number_ = 0;
   std::string source_;
   std::vector<CsvColumn> columns_;
   std::vector<int> field_of_;  // Header position of each wanted column (−1: absent).
   size_t num_fields_ = 0;
-  int header_line_ = 0;
-  int line_ = 0;
-  int record_ = 0;
+  int64_t header_line_ = 0;
+  int64_t line_ = 0;
+  int64_t record_ = 0;
   std::vector<std::string_view> fields_;
   std::deque<std::string> unescaped_;  // Quoted fields with "" escapes (stable on growth).
 };

@@ -2,10 +2,7 @@
 #include <calib/core/bag/cdr_decoder.h>
 #include <calib/core/bag/mcap_records.h>
 #include <calib/core/bag/robot_messages.h>
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
+#include <calib/core/text_file.h>
 
 #include <algorithm>
 #include <cctype>
@@ -20,37 +17,6 @@ namespace {
 using mcap::ChannelRecord;
 using mcap::ChunkIndexRecord;
 using mcap::RecordView;
-
-// The file mapped read-only: only the chunks read are paged in.
-class MappedFile {
- public:
-  ~MappedFile() {
-    if (data_ != nullptr) munmap(const_cast<uint8_t*>(data_), size_);
-    if (fd_ >= 0) close(fd_);
-  }
-  Status Open(const std::string& path) {
-    fd_ = open(path.c_str(), O_RDONLY);
-    struct stat st;
-    if (fd_ < 0 || fstat(fd_, &st) != 0) {
-      return Status::Io(path + (errno == ENOENT ? ": no such file" : ": cannot open: ") +
-                        (errno == ENOENT ? "" : std::strerror(errno)));
-    }
-    if (S_ISDIR(st.st_mode)) return Status::Io(path + ": is a directory");
-    size_ = static_cast<uint64_t>(st.st_size);
-    if (size_ == 0) return Status::Ok();
-    void* map = mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd_, 0);
-    if (map == MAP_FAILED) return Status::Io(path + ": cannot read (mmap failed)");
-    data_ = static_cast<const uint8_t*>(map);
-    return Status::Ok();
-  }
-  const uint8_t* data() const { return data_; }
-  uint64_t size() const { return size_; }
-
- private:
-  int fd_ = -1;
-  const uint8_t* data_ = nullptr;
-  uint64_t size_ = 0;
-};
 
 // A bag directory's .mcap files (several when rosbag2 split the recording by size or time), in
 // the order their names count them (run_2 before run_10); a file is itself.
@@ -374,6 +340,7 @@ Status BagReader::ReadIndexed(const mcap::FooterRecord& footer, uint64_t footer_
         count == statistics.channel_message_counts.end() ? 0 : static_cast<int64_t>(count->second);
   }
   int64_t first_record = 0;
+  uint64_t read_end = 0;
   for (size_t i = 0; i < chunks.size(); first_record += counts[i++]) {
     bool wanted = false;
     for (const auto& entry : chunks[i].message_index_offsets) {
@@ -382,11 +349,19 @@ Status BagReader::ReadIndexed(const mcap::FooterRecord& footer, uint64_t footer_
     }
     if (!wanted) continue;
     RecordView record;
+    // Each chunk is decompressed once: indexes that point into a chunk already read are corrupt
+    // (and would multiply the work).
+    if (chunks[i].chunk_start_offset < read_end) {
+      return Status::InvalidInput(
+          "Chunk Index points at byte " + std::to_string(chunks[i].chunk_start_offset) +
+          ", inside a chunk already read (which ends at byte " + std::to_string(read_end) + ")");
+    }
     CALIB_RETURN_IF_ERROR(mcap::ReadRecordAt(data_, size_, chunks[i].chunk_start_offset, &record));
     if (record.opcode != mcap::kChunk) {
       return Status::InvalidInput("Chunk Index points at byte " + std::to_string(record.offset) +
                                   ", not at a Chunk record");
     }
+    read_end = record.end();
     next_record_ = first_record;
     CALIB_RETURN_IF_ERROR(ForEachInChunk(record, ""));
     if (next_record_ - first_record != static_cast<int64_t>(counts[i])) {
@@ -427,11 +402,8 @@ bool FindFooter(const uint8_t* data, uint64_t size, mcap::FooterRecord* footer,
 
 namespace {
 
-StatusOr<RobotMessages> ReadMcapFile(const std::string& file, const BagReadOptions& options) {
-  MappedFile mapped;
-  CALIB_RETURN_IF_ERROR(mapped.Open(file));
-  const uint8_t* data = mapped.data();
-  const uint64_t size = mapped.size();
+StatusOr<RobotMessages> ReadMcap(const uint8_t* data, uint64_t size, const std::string& file,
+                                 const BagReadOptions& options) {
   if (size < sizeof(mcap::kMagic) || std::memcmp(data, mcap::kMagic, sizeof(mcap::kMagic)) != 0) {
     return Status::InvalidInput(file + ": not an MCAP file (bad magic at byte 0)");
   }
@@ -448,6 +420,12 @@ StatusOr<RobotMessages> ReadMcapFile(const std::string& file, const BagReadOptio
   messages.source = file;
   reader.Finish(&messages);
   return messages;
+}
+
+StatusOr<RobotMessages> ReadMcapFile(const std::string& file, const BagReadOptions& options) {
+  CALIB_ASSIGN_OR_RETURN(const MappedFile mapped, MappedFile::Open(file));
+  return GuardAllocation(file,
+                         [&] { return ReadMcap(mapped.data(), mapped.size(), file, options); });
 }
 
 // `part` (the next file of a split bag) appended to `all`: its records numbered on after
@@ -505,9 +483,18 @@ void AppendPart(RobotMessages&& part, int64_t record_base, RobotMessages* all) {
 
 }  // namespace
 
-StatusOr<RobotMessages> ReadMcapBag(const std::string& path, const BagReadOptions& options) {
-  CALIB_ASSIGN_OR_RETURN(const std::vector<std::string> files, BagFiles(path));
-  if (files.size() == 1) return ReadMcapFile(files[0], options);
+StatusOr<RobotMessages> ReadMcapBytes(std::string_view bytes, const std::string& source,
+                                      const BagReadOptions& options) {
+  return GuardAllocation(source, [&] {
+    return ReadMcap(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), source, options);
+  });
+}
+
+namespace {
+
+// The files of a split bag, one after the other.
+StatusOr<RobotMessages> ReadSplitBag(const std::string& path, const std::vector<std::string>& files,
+                                     const BagReadOptions& options) {
   RobotMessages all;
   all.source = path;
   int64_t record_base = 0;
@@ -520,6 +507,14 @@ StatusOr<RobotMessages> ReadMcapBag(const std::string& path, const BagReadOption
     record_base = next_base;
   }
   return all;
+}
+
+}  // namespace
+
+StatusOr<RobotMessages> ReadMcapBag(const std::string& path, const BagReadOptions& options) {
+  CALIB_ASSIGN_OR_RETURN(const std::vector<std::string> files, BagFiles(path));
+  if (files.size() == 1) return ReadMcapFile(files[0], options);
+  return GuardAllocation(path, [&] { return ReadSplitBag(path, files, options); });
 }
 
 }  // namespace calib

@@ -11,7 +11,7 @@ namespace mcap {
 namespace {
 
 // Chunks larger than this are refused rather than allocated (rosbag2 writes chunks of ~1 MB).
-constexpr uint64_t kMaxChunkBytes = uint64_t{1} << 30;
+constexpr uint64_t kMaxChunkBytes = uint64_t{1} << 28;
 
 // "Chunk record", "record of opcode 0x4d".
 std::string RecordName(uint8_t opcode) {
@@ -234,7 +234,7 @@ Status ParseChunk(const RecordView& record, ChunkRecord* chunk) {
   if (chunk->uncompressed_size > kMaxChunkBytes) {
     return Status::InvalidInput("Chunk record at byte " + std::to_string(record.offset) +
                                 ": uncompressed_size " + std::to_string(chunk->uncompressed_size) +
-                                " is beyond the 1 GiB this reader accepts");
+                                " is beyond the 256 MiB this reader accepts");
   }
   return Status::Ok();
 }

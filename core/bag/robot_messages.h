@@ -10,6 +10,7 @@
 #include <map>
 #include <set>
 #include <string>
+#include <string_view>
 #include <vector>
 
 // The messages of a robot's recording that a calibration uses, decoded from a ROS 2 bag (MCAP,
@@ -72,6 +73,12 @@ StatusOr<RobotMessages> ReadMcapBag(const std::string& path, const BagReadOption
 
 // A ROS 1 bag, format 2.0 (uncompressed, bz2 or lz4 chunks).
 StatusOr<RobotMessages> ReadRos1Bag(const std::string& path, const BagReadOptions& options = {});
+
+// The same over a file's bytes in memory; `source` names them in messages.
+StatusOr<RobotMessages> ReadMcapBytes(std::string_view bytes, const std::string& source,
+                                      const BagReadOptions& options = {});
+StatusOr<RobotMessages> ReadRos1BagBytes(std::string_view bytes, const std::string& source,
+                                         const BagReadOptions& options = {});
 
 }  // namespace calib
 

@@ -60,8 +60,14 @@ class Ros1BagReader {
     out_.source = path;
   }
 
+  // Reads `bytes` instead of the file at the path (which only names them).
+  void UseBytes(std::string_view bytes) {
+    in_memory_ = true;
+    file_.OpenBytes(bytes);
+  }
+
   StatusOr<RobotMessages> Read() {
-    const Status status = ReadAll();
+    const Status status = GuardAllocation(path_, [&] { return ReadAll(); });
     if (!status.ok()) return status.Prefixed(path_ + ": ");
     Finish();
     return std::move(out_);
@@ -69,7 +75,7 @@ class Ros1BagReader {
 
  private:
   Status ReadAll() {
-    CALIB_RETURN_IF_ERROR(file_.Open(path_));
+    if (!in_memory_) CALIB_RETURN_IF_ERROR(file_.Open(path_));
     uint64_t index_pos = 0, first_record = 0;
     uint32_t conn_count = 0, chunk_count = 0;
     CALIB_RETURN_IF_ERROR(ReadBagHeader(&index_pos, &conn_count, &chunk_count, &first_record));
@@ -193,6 +199,7 @@ class Ros1BagReader {
   Status ReadIndexedChunks() {
     std::stable_sort(chunks_.begin(), chunks_.end(),
                      [](const ChunkInfo& a, const ChunkInfo& b) { return a.pos < b.pos; });
+    uint64_t read_end = 0;
     for (const ChunkInfo& info : chunks_) {
       int64_t messages = 0;
       bool wanted = false;
@@ -205,7 +212,15 @@ class Ros1BagReader {
         continue;
       }
       uint64_t pos = info.pos;
+      // Each chunk is read once: a chunk info pointing into one already read is corrupt (and
+      // would multiply the work).
+      if (info.pos < read_end) {
+        return Status::InvalidInput("a chunk info points at byte " + std::to_string(info.pos) +
+                                    ", inside a chunk already read (which ends at byte " +
+                                    std::to_string(read_end) + ")");
+      }
       CALIB_RETURN_IF_ERROR(file_.ReadRecord(&pos, true, &buffer_, &record_));
+      read_end = pos;
       if (record_.op != rosbag1::kOpChunk) {
         return Status::InvalidInput("a chunk info points at byte " + std::to_string(info.pos) +
                                     ", which holds op " + Hex(record_.op) + ", not a chunk");
@@ -399,7 +414,7 @@ class Ros1BagReader {
   std::map<uint32_t, Connection> connections_;
   std::vector<ChunkInfo> chunks_;
   uint32_t index_connections_ = 0;
-  bool counting_ = false, reading_index_ = false;
+  bool counting_ = false, reading_index_ = false, in_memory_ = false;
   int64_t next_record_ = 0;  // Every message's index in the bag, in file order.
   std::string buffer_, chunk_data_;
   Record record_;
@@ -410,6 +425,13 @@ class Ros1BagReader {
 
 StatusOr<RobotMessages> ReadRos1Bag(const std::string& path, const BagReadOptions& options) {
   return Ros1BagReader(path, options).Read();
+}
+
+StatusOr<RobotMessages> ReadRos1BagBytes(std::string_view bytes, const std::string& source,
+                                         const BagReadOptions& options) {
+  Ros1BagReader reader(source, options);
+  reader.UseBytes(bytes);
+  return reader.Read();
 }
 
 }  // namespace calib

@@ -3,11 +3,13 @@
 #include <lz4frame.h>
 
 #include <algorithm>
-#include <filesystem>
 #include <memory>
 
 namespace calib::rosbag1 {
 namespace {
+
+// Chunks larger than this are refused rather than decompressed.
+constexpr uint32_t kMaxChunkBytes = uint32_t{1} << 28;
 
 std::string Quoted(std::string_view s) { return "'" + std::string(s) + "'"; }
 
@@ -212,53 +214,49 @@ Status ParseRecord(std::string_view buffer, uint64_t base, uint64_t* pos, Record
 }
 
 Status BagFile::Open(const std::string& path) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  const fs::file_status status = fs::status(path, ec);
-  if (!fs::exists(status)) return Status::Io("no such file");
-  if (fs::is_directory(status)) return Status::Io("is a directory, expected a .bag file");
-  in_.open(path, std::ios::binary);
-  if (!in_) return Status::Io("cannot open for reading");
-  in_.seekg(0, std::ios::end);
-  const std::streamoff size = in_.tellg();
-  if (size < 0) return Status::Io("cannot read");
-  size_ = static_cast<uint64_t>(size);
+  StatusOr<MappedFile> file = MappedFile::Open(path);
+  if (!file.ok()) {
+    // Messages here do not name the file: the reader puts it in front.
+    const std::string& message = file.message();
+    return Status(file.code(), message.compare(0, path.size(), path) == 0
+                                   ? message.substr(std::min(message.size(), path.size() + 2))
+                                   : message);
+  }
+  file_ = std::move(file).value();
+  bytes_ = file_.text();
   return Status::Ok();
 }
 
 Status BagFile::ReadAt(uint64_t pos, uint64_t n, std::string* out) {
-  if (pos > size_ || n > size_ - pos) {
+  const uint64_t size = bytes_.size();
+  if (pos > size || n > size - pos) {
     return Status::InvalidInput("truncated: " + std::to_string(n) + " bytes at byte " +
                                 std::to_string(pos) + " run past the end of the file at byte " +
-                                std::to_string(size_));
+                                std::to_string(size));
   }
-  out->resize(n);
-  in_.clear();
-  in_.seekg(static_cast<std::streamoff>(pos));
-  if (n > 0 && !in_.read(out->data(), static_cast<std::streamsize>(n))) {
-    return Status::Io("cannot read " + std::to_string(n) + " bytes at byte " + std::to_string(pos));
-  }
+  out->assign(bytes_.data() + pos, n);
   return Status::Ok();
 }
 
 Status BagFile::ReadRecord(uint64_t* pos, bool with_data, std::string* storage, Record* record) {
   const uint64_t start = *pos;
   const auto where = [&] { return "record at byte " + std::to_string(start) + ": "; };
+  const uint64_t file_size = bytes_.size();
   const auto truncated = [&](const char* what, uint64_t at, uint64_t len) {
-    return Status::InvalidInput(where() + "truncated: its " + what + " of " + std::to_string(len) +
-                                " bytes at byte " + std::to_string(at) +
-                                " runs past the end of the file at byte " + std::to_string(size_));
+    return Status::InvalidInput(
+        where() + "truncated: its " + what + " of " + std::to_string(len) + " bytes at byte " +
+        std::to_string(at) + " runs past the end of the file at byte " + std::to_string(file_size));
   };
-  if (start > size_ || size_ - start < 4) return truncated("header length", start, 4);
+  if (start > file_size || file_size - start < 4) return truncated("header length", start, 4);
   CALIB_RETURN_IF_ERROR(ReadAt(start, 4, storage));
   const uint64_t header_len = LoadU32(storage->data());
-  if (header_len + 4 > size_ - start - 4) {
+  if (header_len + 4 > file_size - start - 4) {
     return truncated("header and data length", start + 4, header_len + 4);
   }
   CALIB_RETURN_IF_ERROR(ReadAt(start, 4 + header_len + 4, storage));
   const uint64_t data_len = LoadU32(storage->data() + 4 + header_len);
   const uint64_t data_at = start + 8 + header_len;
-  if (data_len > size_ - data_at) return truncated("data", data_at, data_len);
+  if (data_len > file_size - data_at) return truncated("data", data_at, data_len);
   if (with_data) CALIB_RETURN_IF_ERROR(ReadAt(start, 8 + header_len + data_len, storage));
   auto header = FieldList::Parse(std::string_view(*storage).substr(4, header_len));
   if (!header.ok()) return header.status().Prefixed(where());
@@ -273,6 +271,12 @@ Status BagFile::ReadRecord(uint64_t* pos, bool with_data, std::string* storage, 
 
 Status DecompressChunk(std::string_view compression, std::string_view data, uint32_t size,
                        std::string* out) {
+  if (size > kMaxChunkBytes) {
+    return Status::InvalidInput("the chunk states " + std::to_string(size) +
+                                " uncompressed bytes, beyond the " +
+                                std::to_string(kMaxChunkBytes >> 20) +
+                                " MiB this reader accepts (rosbag writes chunks of ~768 KiB)");
+  }
   if (compression == "none") {
     if (data.size() != size) {
       return Status::InvalidInput("uncompressed chunk holds " + std::to_string(data.size()) +

@@ -2,9 +2,9 @@
 #define CALIB_CORE_BAG_ROSBAG1_RECORDS_H_
 
 #include <calib/core/status.h>
+#include <calib/core/text_file.h>
 
 #include <cstdint>
-#include <fstream>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -74,8 +74,11 @@ Status ParseRecord(std::string_view buffer, uint64_t base, uint64_t* pos, Record
 // gives an error naming its byte, never a huge allocation. Messages do not name the file.
 class BagFile {
  public:
+  // The file mapped read-only.
   Status Open(const std::string& path);
-  uint64_t size() const { return size_; }
+  // Bytes already in memory (they must outlive the BagFile).
+  void OpenBytes(std::string_view bytes) { bytes_ = bytes; }
+  uint64_t size() const { return bytes_.size(); }
   // Reads bytes [pos, pos + n) into *out.
   Status ReadAt(uint64_t pos, uint64_t n, std::string* out);
   // Reads the record at *pos into *storage and parses it (its data left empty unless
@@ -83,8 +86,8 @@ class BagFile {
   Status ReadRecord(uint64_t* pos, bool with_data, std::string* storage, Record* record);
 
  private:
-  std::ifstream in_;
-  uint64_t size_ = 0;
+  MappedFile file_;
+  std::string_view bytes_;
 };
 
 // Decompresses a chunk's data ("none", "bz2" or "lz4", the LZ4 frame format roslz4 writes) into

@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string_view>
@@ -26,7 +27,7 @@ namespace fs = std::filesystem;
 // A bearing this far beyond ±π is still taken as wrapped (rounding in the writer's own output).
 constexpr double kBearingSlack = 1e-9;
 
-std::string At(const std::string& source, int line) {
+std::string At(const std::string& source, int64_t line) {
   return line > 0 ? source + ":" + std::to_string(line) + ": " : source + ": ";
 }
 
@@ -37,10 +38,10 @@ Status NoSamples(const CsvReader& csv) {
 }
 
 // The 1-based line of the first occurrence of `needle` in `text` (0 if absent).
-int LineOf(const std::string& text, const std::string& needle) {
+int64_t LineOf(std::string_view text, const std::string& needle) {
   const size_t at = text.find(needle);
-  if (at == std::string::npos) return 0;
-  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + at, '\n'));
+  if (at == std::string_view::npos) return 0;
+  return 1 + std::count(text.begin(), text.begin() + at, '\n');
 }
 
 const char* JsonTypeName(const nlohmann::json& value) { return value.type_name(); }
@@ -48,8 +49,8 @@ const char* JsonTypeName(const nlohmann::json& value) { return value.type_name()
 // A positive length at most `largest_m` (no robot's wheel is 10 m, no landmark seen 100 km away).
 Status JsonPositiveNumber(const nlohmann::json& object, const std::string& key,
                           const std::string& path, const std::string& what, double largest_m,
-                          const std::string& text, const std::string& source, double* value) {
-  const int line = LineOf(text, "\"" + key + "\"");
+                          std::string_view text, const std::string& source, double* value) {
+  const int64_t line = LineOf(text, "\"" + key + "\"");
   if (!object.contains(key)) {
     return Status::InvalidInput(source + ": missing field \"" + path + "\" (" + what + ")");
   }
@@ -198,12 +199,9 @@ Status CheckMeta(const BearingLogMeta& meta, const std::vector<BearingRun>& runs
   return Status::Ok();
 }
 
-}  // namespace
-
-StatusOr<std::vector<BearingRun>> ParseBearingOdometryCsv(const std::string& text,
-                                                          const std::string& source,
-                                                          StreamTiming* timing,
-                                                          std::vector<std::string>* warnings) {
+StatusOr<std::vector<BearingRun>> ParseOdometry(std::string_view text, const std::string& source,
+                                                StreamTiming* timing,
+                                                std::vector<std::string>* warnings) {
   CALIB_ASSIGN_OR_RETURN(CsvReader csv,
                          CsvReader::Open(text, source, {{"run"}, {"t"}, {"left"}, {"right"}}));
   std::map<int, StreamRecords> records;  // Per run, in file order.
@@ -219,7 +217,7 @@ StatusOr<std::vector<BearingRun>> ParseBearingOdometryCsv(const std::string& tex
     StreamRecords& run = records[id];
     run.stamps_s.push_back(t);
     run.values.insert(run.values.end(), {left, right});
-    run.lines.push_back(csv.line());
+    run.lines.push_back(SaturatedInt(csv.line()));
   }
   if (records.empty()) return NoSamples(csv);
   std::vector<BearingRun> out;
@@ -253,9 +251,9 @@ StatusOr<std::vector<BearingRun>> ParseBearingOdometryCsv(const std::string& tex
   return out;
 }
 
-Status ParseBearingsCsv(const std::string& text, const std::string& source,
-                        std::vector<BearingRun>* runs, StreamTiming* timing,
-                        std::vector<std::string>* warnings) {
+Status ParseBearings(std::string_view text, const std::string& source,
+                     std::vector<BearingRun>* runs, StreamTiming* timing,
+                     std::vector<std::string>* warnings) {
   CALIB_ASSIGN_OR_RETURN(CsvReader csv,
                          CsvReader::Open(text, source, {{"run"}, {"t"}, {"bearing"}}));
   std::map<int, StreamRecords> records;  // Per run, in file order.
@@ -267,16 +265,17 @@ Status ParseBearingsCsv(const std::string& text, const std::string& source,
     CALIB_RETURN_IF_ERROR(csv.Integer(0, &id, "an integer run id"));
     CALIB_RETURN_IF_ERROR(csv.Number(1, &t));
     CALIB_RETURN_IF_ERROR(csv.Number(2, &bearing));
-    const bool known =
-        std::any_of(runs->begin(), runs->end(), [&](const BearingRun& r) { return r.id == id; });
-    if (!known) {
+    // Runs are sorted by id: a search, not a scan per record.
+    const auto run_at = std::lower_bound(runs->begin(), runs->end(), id,
+                                         [](const BearingRun& r, int key) { return r.id < key; });
+    if (run_at == runs->end() || run_at->id != id) {
       return Status::InvalidInput(At(source, csv.line()) + "run " + std::to_string(id) +
                                   " has no encoder samples");
     }
     StreamRecords& run = records[id];
     run.stamps_s.push_back(t);
     run.values.push_back(bearing);
-    run.lines.push_back(csv.line());
+    run.lines.push_back(SaturatedInt(csv.line()));
   }
   if (records.empty()) return NoSamples(csv);
   std::vector<StreamTiming> timings;
@@ -309,7 +308,7 @@ Status ParseBearingsCsv(const std::string& text, const std::string& source,
   return Status::Ok();
 }
 
-StatusOr<BearingLogMeta> ParseBearingMeta(const std::string& text, const std::string& source) {
+StatusOr<BearingLogMeta> ParseMeta(std::string_view text, const std::string& source) {
   nlohmann::json json;
   try {
     json = nlohmann::json::parse(text);
@@ -330,7 +329,7 @@ StatusOr<BearingLogMeta> ParseBearingMeta(const std::string& text, const std::st
                                            text, source, &meta.wheelbase_m));
   if (json.contains("initial_distance")) {
     const nlohmann::json& d = json.at("initial_distance");
-    const int line = LineOf(text, "\"initial_distance\"");
+    const int64_t line = LineOf(text, "\"initial_distance\"");
     if (!d.is_object()) {
       return Status::InvalidInput(At(source, line) +
                                   "field \"initial_distance\" must be an object {\"run\": R, " +
@@ -362,6 +361,26 @@ StatusOr<BearingLogMeta> ParseBearingMeta(const std::string& text, const std::st
   return meta;
 }
 
+}  // namespace
+
+StatusOr<std::vector<BearingRun>> ParseBearingOdometryCsv(std::string_view text,
+                                                          const std::string& source,
+                                                          StreamTiming* timing,
+                                                          std::vector<std::string>* warnings) {
+  return GuardAllocation(source, [&] { return ParseOdometry(text, source, timing, warnings); });
+}
+
+Status ParseBearingsCsv(std::string_view text, const std::string& source,
+                        std::vector<BearingRun>* runs, StreamTiming* timing,
+                        std::vector<std::string>* warnings) {
+  return GuardAllocation(source,
+                         [&] { return ParseBearings(text, source, runs, timing, warnings); });
+}
+
+StatusOr<BearingLogMeta> ParseBearingMeta(std::string_view text, const std::string& source) {
+  return GuardAllocation(source, [&] { return ParseMeta(text, source); });
+}
+
 Status ValidateBearingLog(const BearingLog& log) {
   const std::string& source = log.source.empty() ? std::string("bearing log") : log.source;
   if (log.runs.empty()) return Status::InvalidInput(source + ": no runs");
@@ -384,33 +403,73 @@ Status ValidateBearingLog(const BearingLog& log) {
   return CheckMeta(log.meta, log.runs, source + "/meta.json");
 }
 
+namespace {
+
+StatusOr<BearingLog> ParseLog(std::string_view odometry_csv, std::string_view bearings_csv,
+                              const std::function<StatusOr<std::string_view>()>& meta_json,
+                              const std::string& directory) {
+  const std::string odometry_path = (fs::path(directory) / "odometry.csv").string();
+  const std::string bearings_path = (fs::path(directory) / "bearings.csv").string();
+  const std::string meta_path = (fs::path(directory) / "meta.json").string();
+  std::vector<StreamTiming> timing(2);
+  std::vector<std::string> warnings;
+  CALIB_ASSIGN_OR_RETURN(
+      std::vector<BearingRun> runs,
+      ParseBearingOdometryCsv(odometry_csv, odometry_path, &timing[0], &warnings));
+  CALIB_RETURN_IF_ERROR(
+      ParseBearingsCsv(bearings_csv, bearings_path, &runs, &timing[1], &warnings));
+  CALIB_ASSIGN_OR_RETURN(const std::string_view meta_text, meta_json());
+  if (meta_text.size() > kMaxLineBytes) {
+    return Status::InvalidInput(meta_path + ": " + std::to_string(meta_text.size()) +
+                                " bytes, more than the " + std::to_string(kMaxLineBytes) +
+                                " a meta file of a few numbers may have");
+  }
+  CALIB_ASSIGN_OR_RETURN(const BearingLogMeta meta, ParseBearingMeta(meta_text, meta_path));
+  CALIB_RETURN_IF_ERROR(CheckMeta(meta, runs, meta_path));
+  return GuardAllocation(directory, [&]() -> StatusOr<BearingLog> {
+    BearingLog log;
+    log.source = directory;
+    log.meta = meta;
+    log.runs = std::move(runs);
+    log.stream_timing = std::move(timing);
+    log.warnings = std::move(warnings);
+    return log;
+  });
+}
+
+}  // namespace
+
 StatusOr<BearingLog> ReadBearingLog(const std::string& directory) {
   std::error_code ec;
   if (!fs::is_directory(directory, ec)) {
     return Status::Io(directory + ": not a directory (a bearing log is a directory with " +
                       "odometry.csv, bearings.csv and meta.json)");
   }
-  const std::string odometry_path = (fs::path(directory) / "odometry.csv").string();
-  const std::string bearings_path = (fs::path(directory) / "bearings.csv").string();
-  const std::string meta_path = (fs::path(directory) / "meta.json").string();
-  std::string text;
-  CALIB_RETURN_IF_ERROR(ReadWholeFile(odometry_path, &text));
-  std::vector<StreamTiming> timing(2);
-  std::vector<std::string> warnings;
-  CALIB_ASSIGN_OR_RETURN(std::vector<BearingRun> runs,
-                         ParseBearingOdometryCsv(text, odometry_path, &timing[0], &warnings));
-  CALIB_RETURN_IF_ERROR(ReadWholeFile(bearings_path, &text));
-  CALIB_RETURN_IF_ERROR(ParseBearingsCsv(text, bearings_path, &runs, &timing[1], &warnings));
-  CALIB_RETURN_IF_ERROR(ReadWholeFile(meta_path, &text));
-  CALIB_ASSIGN_OR_RETURN(const BearingLogMeta meta, ParseBearingMeta(text, meta_path));
-  CALIB_RETURN_IF_ERROR(CheckMeta(meta, runs, meta_path));
-  BearingLog log;
-  log.source = directory;
-  log.meta = meta;
-  log.runs = std::move(runs);
-  log.stream_timing = std::move(timing);
-  log.warnings = std::move(warnings);
-  return log;
+  // Each file opened when its turn comes, so that the first problem is the one named.
+  CALIB_ASSIGN_OR_RETURN(const MappedFile odometry,
+                         MappedFile::OpenText((fs::path(directory) / "odometry.csv").string()));
+  StatusOr<MappedFile> bearings =
+      MappedFile::OpenText((fs::path(directory) / "bearings.csv").string());
+  MappedFile meta;
+  const auto read_meta = [&]() -> StatusOr<std::string_view> {
+    CALIB_ASSIGN_OR_RETURN(meta,
+                           MappedFile::OpenText((fs::path(directory) / "meta.json").string()));
+    return meta.text();
+  };
+  if (!bearings.ok()) {
+    // The odometry's problems come first; a missing bearings.csv after them.
+    CALIB_RETURN_IF_ERROR(
+        ParseBearingOdometryCsv(odometry.text(), (fs::path(directory) / "odometry.csv").string()));
+    return bearings.status();
+  }
+  return ParseLog(odometry.text(), bearings->text(), read_meta, directory);
+}
+
+StatusOr<BearingLog> ParseBearingLog(std::string_view odometry_csv, std::string_view bearings_csv,
+                                     std::string_view meta_json, const std::string& directory) {
+  return ParseLog(
+      odometry_csv, bearings_csv, [&]() -> StatusOr<std::string_view> { return meta_json; },
+      directory);
 }
 
 Status WriteBearingLog(const BearingLog& log, const std::string& directory) {

@@ -5,6 +5,7 @@
 #include <calib/core/status.h>
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 // Reader and writer for bearing logs (CONTRACT.md): a directory with odometry.csv
@@ -15,6 +16,9 @@ namespace calib {
 // Reads and validates a log directory: ReadBearingLog = the three parsers + ValidateBearingLog;
 // the log's stream_timing holds {odometry, bearings}.
 StatusOr<BearingLog> ReadBearingLog(const std::string& directory);
+// The same over the three files' text, named in messages as if read from `directory`.
+StatusOr<BearingLog> ParseBearingLog(std::string_view odometry_csv, std::string_view bearings_csv,
+                                     std::string_view meta_json, const std::string& directory);
 
 // Parsers over in-memory text; `source` is the file name used in messages. CSV: a header naming
 // the columns (any order, extra columns ignored), then one sample per line; blank lines and lines
@@ -25,16 +29,16 @@ StatusOr<BearingLog> ReadBearingLog(const std::string& directory);
 // Isolated spikes of a run's wheel angles (encoder_spikes.h) are dropped, with a sentence in
 // `warnings` (may be null).
 StatusOr<std::vector<BearingRun>> ParseBearingOdometryCsv(
-    const std::string& text, const std::string& source, StreamTiming* timing = nullptr,
+    std::string_view text, const std::string& source, StreamTiming* timing = nullptr,
     std::vector<std::string>* warnings = nullptr);
 // Adds the bearings to `runs` (from ParseBearingOdometryCsv), checking each against its run;
 // duplicates and `timing` as above. A handful of bearings outside (−π, π] or outside their run's
 // odometry (at most n/50) are glitches: dropped, with a sentence in `warnings` (may be
 // null); more are an error naming the first.
-Status ParseBearingsCsv(const std::string& text, const std::string& source,
+Status ParseBearingsCsv(std::string_view text, const std::string& source,
                         std::vector<BearingRun>* runs, StreamTiming* timing = nullptr,
                         std::vector<std::string>* warnings = nullptr);
-StatusOr<BearingLogMeta> ParseBearingMeta(const std::string& text, const std::string& source);
+StatusOr<BearingLogMeta> ParseBearingMeta(std::string_view text, const std::string& source);
 
 // The invariants every consumer may rely on, for logs built in memory: positive finite nominal
 // r and B; per run at least two encoder samples with strictly increasing finite times and finite

@@ -15,7 +15,9 @@ using laser_io_internal::CheckWritable;
 using laser_io_internal::LogBuilder;
 
 // The CSV format: a header naming T,phi_l,phi_r,sm_x,sm_y,sm_theta and optionally t.
-StatusOr<LaserLog> ParseLaserCsv(const std::string& text, const std::string& source) {
+namespace {
+
+StatusOr<LaserLog> ParseCsv(std::string_view text, const std::string& source) {
   enum { kT, kPhiL, kPhiR, kSmX, kSmY, kSmTheta, kStart };
   CALIB_ASSIGN_OR_RETURN(CsvReader csv, CsvReader::Open(text, source,
                                                         {{"T"},
@@ -39,11 +41,17 @@ StatusOr<LaserLog> ParseLaserCsv(const std::string& text, const std::string& sou
     interval.right_speed = v[kPhiR];
     interval.sensor_motion = Pose2d(v[kSmX], v[kSmY], v[kSmTheta]);
     interval.start_s = v[kStart];
-    interval.line = csv.line();
-    interval.record = csv.record();
+    interval.line = SaturatedInt(csv.line());
+    interval.record = SaturatedInt(csv.record());
     CALIB_RETURN_IF_ERROR(builder.Add(std::move(interval), has_t));
   }
   return std::move(builder).Finish(" (only a header)");
+}
+
+}  // namespace
+
+StatusOr<LaserLog> ParseLaserCsv(std::string_view text, const std::string& source) {
+  return GuardAllocation(source, [&] { return ParseCsv(text, source); });
 }
 
 Status WriteLaserCsv(const LaserLog& log, const std::string& path) {

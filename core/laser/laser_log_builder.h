@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -18,7 +19,7 @@ namespace laser_io_internal {
 inline bool IsJsonSpace(char c) { return c == ' ' || c == '\n' || c == '\t' || c == '\r'; }
 
 // "source:line: record n: " with the parts that are known.
-inline std::string Where(const std::string& source, int line, int record) {
+inline std::string Where(const std::string& source, int64_t line, int64_t record) {
   std::string where = source;
   if (line > 0) where += ":" + std::to_string(line);
   where += ": ";

@@ -40,18 +40,33 @@ StatusOr<LaserLog> ReadLaserLog(const std::string& path, LaserFormat format) {
     }
     return ReadLaserStream(path);
   }
-  std::string text;
-  CALIB_RETURN_IF_ERROR(ReadWholeFile(path, &text));
+  CALIB_ASSIGN_OR_RETURN(const MappedFile file, MappedFile::OpenText(path));
+  return ParseLaserLog(file.text(), path, format);
+}
+
+StatusOr<LaserLog> ParseLaserLog(std::string_view text, const std::string& source,
+                                 LaserFormat format) {
+  if (format == LaserFormat::kStream) {
+    return Status::InvalidInput(source + ": the stream format is a directory, not one file's text");
+  }
   if (format == LaserFormat::kAuto) {
     const std::string_view body = WithoutBom(text);
     size_t i = 0;
     while (i < body.size() && laser_io_internal::IsJsonSpace(body[i])) ++i;
     format = i < body.size() && body[i] == '{' ? LaserFormat::kTuples : LaserFormat::kCsv;
   }
-  CALIB_ASSIGN_OR_RETURN(LaserLog log, format == LaserFormat::kTuples ? ParseLaserTuples(text, path)
-                                                                      : ParseLaserCsv(text, path));
-  DropImplausibleIntervals(&log);
-  return log;
+  CALIB_ASSIGN_OR_RETURN(LaserLog log, format == LaserFormat::kTuples
+                                           ? ParseLaserTuples(text, source)
+                                           : ParseLaserCsv(text, source));
+  return GuardAllocation(source, [&]() -> StatusOr<LaserLog> {
+    const size_t read = log.intervals.size();
+    DropImplausibleIntervals(&log);
+    if (log.intervals.empty()) {
+      return Status::InvalidInput(source + ": every one of its " + std::to_string(read) +
+                                  " record(s) is implausible: " + log.warnings.back());
+    }
+    return std::move(log);
+  });
 }
 
 }  // namespace calib

@@ -7,6 +7,7 @@
 #include <calib/core/status.h>
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 // Readers and writers for laser–odometry logs (formats in CONTRACT.md). Every error message names
@@ -25,9 +26,15 @@ StatusOr<LaserFormat> ParseLaserFormat(const std::string& name);
 
 StatusOr<LaserLog> ReadLaserLog(const std::string& path, LaserFormat format = LaserFormat::kAuto);
 
-// Parsers over in-memory text; `source` is the name used in messages.
-StatusOr<LaserLog> ParseLaserTuples(const std::string& text, const std::string& source);
-StatusOr<LaserLog> ParseLaserCsv(const std::string& text, const std::string& source);
+// Parsers over in-memory text; `source` is the name used in messages. Records (a CSV line, a
+// tuple) longer than kMaxLineBytes and headers of more than kMaxCsvColumns columns are errors;
+// an allocation failure is an error naming `source`.
+StatusOr<LaserLog> ParseLaserTuples(std::string_view text, const std::string& source);
+StatusOr<LaserLog> ParseLaserCsv(std::string_view text, const std::string& source);
+// What ReadLaserLog does with a file's text (tuples or CSV; kAuto detects, kStream is an error):
+// the parse, then intervals holding a value no unit explains dropped with a warning.
+StatusOr<LaserLog> ParseLaserLog(std::string_view text, const std::string& source,
+                                 LaserFormat format = LaserFormat::kAuto);
 
 // Raw streams: StampedPose and LaserStreams {odometry, sensor_poses} are in laser_log.h.
 
@@ -58,6 +65,10 @@ StatusOr<LaserStreams> ReadLaserStreamSamples(const std::string& directory,
 StatusOr<std::vector<EncoderSample>> ReadOdometryCsv(const std::string& path);
 // ReadLaserStreamSamples + LaserLogFromStreams; the log carries the streams and their timing.
 StatusOr<LaserLog> ReadLaserStream(const std::string& directory);
+// The same over the two files' text, named in messages as if read from `directory`.
+StatusOr<LaserLog> ParseLaserStream(std::string_view odometry_csv,
+                                    std::string_view sensor_poses_csv,
+                                    const std::string& directory);
 // A raw-stream log whose sensor sample stamped t was taken at t + offset_s (a known latency):
 // the sensor poses moved and the intervals built again. An error for a log without raw streams
 // (tuples, CSV), whose intervals carry no sample stamps to move.

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <initializer_list>
 #include <string>
 #include <string_view>
@@ -46,7 +47,7 @@ StatusOr<StreamRecords> ReadRecords(std::string_view text, const std::string& so
       records.values.push_back(0.0);
       CALIB_RETURN_IF_ERROR(csv.Number(c + 1, &records.values.back()));
     }
-    records.lines.push_back(csv.line());
+    records.lines.push_back(SaturatedInt(csv.line()));
   }
   records.value_names = std::move(value_names);
   return records;
@@ -349,23 +350,36 @@ StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometr
                                        const std::string& source, const std::string& odometry_name,
                                        const std::string& poses_name) {
   const StreamNames names{source, odometry_name, poses_name};
-  std::vector<StreamTiming> timing;
-  std::vector<int> segments;
-  for (const StampedPose& p : sensor_poses) segments.push_back(p.segment);
-  std::vector<std::string> warnings;
-  CALIB_ASSIGN_OR_RETURN(LaserStreams streams,
-                         PrepareStreams(OdometryRecords(odometry), PoseRecords(sensor_poses), names,
-                                        &timing, &warnings, segments));
-  CALIB_ASSIGN_OR_RETURN(LaserLog log,
-                         BuildFromStreams(streams.odometry, streams.sensor_poses, names));
-  log.streams = std::move(streams);
-  log.stream_timing = std::move(timing);
-  log.warnings = std::move(warnings);
-  DropImplausibleIntervals(&log);
-  return log;
+  return GuardAllocation(source, [&]() -> StatusOr<LaserLog> {
+    std::vector<StreamTiming> timing;
+    std::vector<int> segments;
+    for (const StampedPose& p : sensor_poses) segments.push_back(p.segment);
+    std::vector<std::string> warnings;
+    CALIB_ASSIGN_OR_RETURN(LaserStreams streams,
+                           PrepareStreams(OdometryRecords(odometry), PoseRecords(sensor_poses),
+                                          names, &timing, &warnings, segments));
+    CALIB_ASSIGN_OR_RETURN(LaserLog log,
+                           BuildFromStreams(streams.odometry, streams.sensor_poses, names));
+    log.streams = std::move(streams);
+    log.stream_timing = std::move(timing);
+    log.warnings = std::move(warnings);
+    DropImplausibleIntervals(&log);
+    return log;
+  });
 }
 
 namespace {
+
+StatusOr<LaserStreams> ParseStreamSamples(std::string_view odometry_text,
+                                          std::string_view poses_text, const StreamNames& names,
+                                          std::vector<StreamTiming>* timing,
+                                          std::vector<std::string>* warnings) {
+  CALIB_ASSIGN_OR_RETURN(StreamRecords odometry,
+                         ReadRecords(odometry_text, names.odometry, {"left", "right"}));
+  CALIB_ASSIGN_OR_RETURN(StreamRecords poses,
+                         ReadRecords(poses_text, names.poses, {"x", "y", "theta"}));
+  return PrepareStreams(std::move(odometry), std::move(poses), names, timing, warnings);
+}
 
 StatusOr<LaserStreams> ReadStreamSamples(const std::string& directory,
                                          std::vector<StreamTiming>* timing,
@@ -377,14 +391,31 @@ StatusOr<LaserStreams> ReadStreamSamples(const std::string& directory,
                       "holding odometry.csv and sensor_poses.csv)");
   }
   const StreamNames names = DirectoryNames(directory);
+  return GuardAllocation(directory, [&]() -> StatusOr<LaserStreams> {
+    CALIB_ASSIGN_OR_RETURN(const MappedFile odometry_file, MappedFile::OpenText(names.odometry));
+    CALIB_ASSIGN_OR_RETURN(StreamRecords odometry,
+                           ReadRecords(odometry_file.text(), names.odometry, {"left", "right"}));
+    CALIB_ASSIGN_OR_RETURN(const MappedFile poses_file, MappedFile::OpenText(names.poses));
+    CALIB_ASSIGN_OR_RETURN(StreamRecords poses,
+                           ReadRecords(poses_file.text(), names.poses, {"x", "y", "theta"}));
+    return PrepareStreams(std::move(odometry), std::move(poses), names, timing, warnings);
+  });
+}
 
-  std::string text;
-  CALIB_RETURN_IF_ERROR(ReadWholeFile(names.odometry, &text));
-  CALIB_ASSIGN_OR_RETURN(StreamRecords odometry,
-                         ReadRecords(text, names.odometry, {"left", "right"}));
-  CALIB_RETURN_IF_ERROR(ReadWholeFile(names.poses, &text));
-  CALIB_ASSIGN_OR_RETURN(StreamRecords poses, ReadRecords(text, names.poses, {"x", "y", "theta"}));
-  return PrepareStreams(std::move(odometry), std::move(poses), names, timing, warnings);
+// The log of the streams read (their timing and the readers' warnings kept).
+StatusOr<LaserLog> LogOfStreams(const StreamNames& names,
+                                const std::function<StatusOr<LaserStreams>(
+                                    std::vector<StreamTiming>*, std::vector<std::string>*)>& read) {
+  std::vector<StreamTiming> timing;
+  std::vector<std::string> warnings;
+  CALIB_ASSIGN_OR_RETURN(LaserStreams streams, read(&timing, &warnings));
+  CALIB_ASSIGN_OR_RETURN(LaserLog log,
+                         BuildFromStreams(streams.odometry, streams.sensor_poses, names));
+  log.streams = std::move(streams);
+  log.stream_timing = std::move(timing);
+  log.warnings = std::move(warnings);
+  DropImplausibleIntervals(&log);
+  return log;
 }
 
 }  // namespace
@@ -395,30 +426,40 @@ StatusOr<LaserStreams> ReadLaserStreamSamples(const std::string& directory,
 }
 
 StatusOr<std::vector<EncoderSample>> ReadOdometryCsv(const std::string& path) {
-  std::string text;
-  CALIB_RETURN_IF_ERROR(ReadWholeFile(path, &text));
-  CALIB_ASSIGN_OR_RETURN(const StreamRecords records, ReadRecords(text, path, {"left", "right"}));
-  std::vector<EncoderSample> samples;
-  for (size_t k = 0; k < records.stamps_s.size(); ++k) {
-    const int line = records.lines.empty() ? 0 : records.lines[k];
-    samples.push_back(
-        EncoderSample{records.stamps_s[k], records.values[2 * k], records.values[2 * k + 1], line});
-  }
-  return samples;
+  CALIB_ASSIGN_OR_RETURN(const MappedFile file, MappedFile::OpenText(path));
+  return GuardAllocation(path, [&]() -> StatusOr<std::vector<EncoderSample>> {
+    CALIB_ASSIGN_OR_RETURN(const StreamRecords records,
+                           ReadRecords(file.text(), path, {"left", "right"}));
+    std::vector<EncoderSample> samples;
+    for (size_t k = 0; k < records.stamps_s.size(); ++k) {
+      const int line = records.lines.empty() ? 0 : records.lines[k];
+      samples.push_back(EncoderSample{records.stamps_s[k], records.values[2 * k],
+                                      records.values[2 * k + 1], line});
+    }
+    return samples;
+  });
 }
 
 StatusOr<LaserLog> ReadLaserStream(const std::string& directory) {
-  std::vector<StreamTiming> timing;
-  std::vector<std::string> warnings;
-  CALIB_ASSIGN_OR_RETURN(LaserStreams streams, ReadStreamSamples(directory, &timing, &warnings));
   const StreamNames names = DirectoryNames(directory);
-  CALIB_ASSIGN_OR_RETURN(LaserLog log,
-                         BuildFromStreams(streams.odometry, streams.sensor_poses, names));
-  log.streams = std::move(streams);
-  log.stream_timing = std::move(timing);
-  log.warnings = std::move(warnings);
-  DropImplausibleIntervals(&log);
-  return log;
+  return GuardAllocation(directory, [&] {
+    return LogOfStreams(names,
+                        [&](std::vector<StreamTiming>* timing, std::vector<std::string>* warnings) {
+                          return ReadStreamSamples(directory, timing, warnings);
+                        });
+  });
+}
+
+StatusOr<LaserLog> ParseLaserStream(std::string_view odometry_csv,
+                                    std::string_view sensor_poses_csv,
+                                    const std::string& directory) {
+  const StreamNames names = DirectoryNames(directory);
+  return GuardAllocation(directory, [&] {
+    return LogOfStreams(
+        names, [&](std::vector<StreamTiming>* timing, std::vector<std::string>* warnings) {
+          return ParseStreamSamples(odometry_csv, sensor_poses_csv, names, timing, warnings);
+        });
+  });
 }
 
 StatusOr<LaserLog> ShiftSensorStamps(LaserLog log, double offset_s) {

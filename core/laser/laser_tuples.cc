@@ -3,7 +3,10 @@
 #include <calib/core/text_file.h>
 #include <calib/core/text_number.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -19,6 +22,9 @@ using laser_io_internal::Where;
 // ---------------------------------------------------------------------------------------------
 // JSON tuples: a hand-written scanner for exactly the subset the published files use.
 
+// The shortest record, {"T":1,"phi_l":1,"phi_r":1,"sm":[1,1,1]}, less a margin.
+constexpr size_t kMinRecordBytes = 32;
+
 enum TupleKey { kKeyT, kKeyPhiL, kKeyPhiR, kKeySm, kKeyStart, kNumKeys };
 constexpr const char* kTupleKeyNames[kNumKeys] = {"T", "phi_l", "phi_r", "sm", "t"};
 
@@ -26,7 +32,8 @@ class TupleParser {
  public:
   TupleParser(std::string_view text, const std::string& source)
       : p_(text.data()), end_(text.data() + text.size()), builder_(source), source_(source) {
-    builder_.Reserve(CountBraces());
+    // A file of braces must not reserve more records than its bytes can hold.
+    builder_.Reserve(std::min(CountBraces(), text.size() / kMinRecordBytes));
   }
 
   StatusOr<LaserLog> Parse() {
@@ -41,7 +48,7 @@ class TupleParser {
       }
       LaserInterval interval;
       bool has_t = false;
-      CALIB_RETURN_IF_ERROR(ParseRecord(&interval, &has_t));
+      CALIB_RETURN_IF_ERROR(ParseBoundedRecord(&interval, &has_t));
       CALIB_RETURN_IF_ERROR(builder_.Add(std::move(interval), has_t));
       SkipSpace();
     }
@@ -139,11 +146,27 @@ class TupleParser {
     return Status::Ok();
   }
 
+  // A record is parsed with the input cut kMaxLineBytes after its '{', so that no record costs
+  // more than that (several records may share a line: the bound is per record).
+  Status ParseBoundedRecord(LaserInterval* interval, bool* has_t) {
+    const char* const end = end_;
+    const bool cut = static_cast<size_t>(end - p_) > kMaxLineBytes;
+    if (cut) end_ = p_ + kMaxLineBytes;
+    Status status = ParseRecord(interval, has_t);
+    if (!status.ok() && cut && p_ >= end_) {
+      status = Status::InvalidInput(Where(source_, record_line_, record_) + "record longer than " +
+                                    std::to_string(kMaxLineBytes) +
+                                    " bytes without its closing '}' (the limit of one record)");
+    }
+    end_ = end;
+    return status;
+  }
+
   Status ParseRecord(LaserInterval* interval, bool* has_t) {
     ++record_;
     record_line_ = line_;
-    interval->line = line_;
-    interval->record = record_;
+    interval->line = SaturatedInt(line_);
+    interval->record = SaturatedInt(record_);
     ++p_;  // '{'
     bool seen[kNumKeys] = {};
     double values[kNumKeys] = {};
@@ -213,15 +236,16 @@ class TupleParser {
   const char* end_;
   LogBuilder builder_;
   const std::string& source_;
-  int line_ = 1;
-  int record_ = 0;
-  int record_line_ = 0;
+  // 64 bits: a file may hold more than 2^31 newlines.
+  int64_t line_ = 1;
+  int64_t record_ = 0;
+  int64_t record_line_ = 0;
 };
 
 }  // namespace
 
-StatusOr<LaserLog> ParseLaserTuples(const std::string& text, const std::string& source) {
-  return TupleParser(WithoutBom(text), source).Parse();
+StatusOr<LaserLog> ParseLaserTuples(std::string_view text, const std::string& source) {
+  return GuardAllocation(source, [&] { return TupleParser(WithoutBom(text), source).Parse(); });
 }
 
 Status WriteLaserTuples(const LaserLog& log, const std::string& path) {

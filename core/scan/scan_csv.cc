@@ -205,9 +205,7 @@ void AppendLimit(std::string* out, double value) {
   if (std::isfinite(value)) AppendGeneral(out, value);
 }
 
-}  // namespace
-
-StatusOr<std::vector<LaserScan>> ParseScanCsv(const std::string& text, const std::string& source) {
+StatusOr<std::vector<LaserScan>> ParseScan(std::string_view text, const std::string& source) {
   // The header alone tells the layout: a column "angle" means long.
   CALIB_ASSIGN_OR_RETURN(CsvReader header, CsvReader::Open(text, source, {}));
   (void)header;
@@ -235,10 +233,15 @@ StatusOr<std::vector<LaserScan>> ParseScanCsv(const std::string& text, const std
   return is_long ? ParseLong(text, source) : ParseWide(text, source, names);
 }
 
+}  // namespace
+
+StatusOr<std::vector<LaserScan>> ParseScanCsv(std::string_view text, const std::string& source) {
+  return GuardAllocation(source, [&] { return ParseScan(text, source); });
+}
+
 StatusOr<std::vector<LaserScan>> ReadScanCsv(const std::string& path) {
-  std::string text;
-  CALIB_RETURN_IF_ERROR(ReadWholeFile(path, &text));
-  return ParseScanCsv(text, path);
+  CALIB_ASSIGN_OR_RETURN(const MappedFile file, MappedFile::OpenText(path));
+  return ParseScanCsv(file.text(), path);
 }
 
 std::string FormatScanCsv(const std::vector<LaserScan>& scans, ScanCsvLayout layout) {

@@ -5,6 +5,7 @@
 #include <calib/core/status.h>
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 // Raw scans as CSV, for logs that are not bags. Two layouts (the header tells which):
@@ -19,7 +20,7 @@ namespace calib {
 enum class ScanCsvLayout { kWide, kLong };
 
 // `source` names the text in messages ("file:line: record n: ...").
-StatusOr<std::vector<LaserScan>> ParseScanCsv(const std::string& text, const std::string& source);
+StatusOr<std::vector<LaserScan>> ParseScanCsv(std::string_view text, const std::string& source);
 StatusOr<std::vector<LaserScan>> ReadScanCsv(const std::string& path);
 
 // In the long layout a scan's beam angles are written as angle_min + i·angle_increment, and read

@@ -1,6 +1,7 @@
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/core/scan/scan_csv.h>
 #include <calib/core/scan/scan_directory.h>
+#include <calib/core/text_file.h>
 
 #include <filesystem>
 
@@ -16,7 +17,9 @@ bool IsScanDirectory(const std::string& path) {
          !fs::exists(dir / "sensor_poses.csv", ec);
 }
 
-StatusOr<RobotMessages> ReadScanDirectory(const std::string& path) {
+namespace {
+
+StatusOr<RobotMessages> ReadDirectory(const std::string& path) {
   const fs::path dir(path);
   RobotMessages out;
   out.source = path;
@@ -39,6 +42,12 @@ StatusOr<RobotMessages> ReadScanDirectory(const std::string& path) {
   out.scans["scans.csv"] = std::move(scans);
   out.joint_states["odometry.csv"] = std::move(joints);
   return out;
+}
+
+}  // namespace
+
+StatusOr<RobotMessages> ReadScanDirectory(const std::string& path) {
+  return GuardAllocation(path, [&] { return ReadDirectory(path); });
 }
 
 }  // namespace calib

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -127,7 +128,9 @@ void AnalyzeGrid(const std::vector<double>& t, StreamTiming* timing) {
     if (length >= 4) {
       const int blocks = std::max(1, length / kWindow);
       for (int b = 0; b < blocks; ++b) {
-        const int lo = length * b / blocks, hi = length * (b + 1) / blocks;
+        // In 64 bits: length · b passes 2^31 in an hour of 100 Hz samples.
+        const int lo = static_cast<int>(int64_t{length} * b / blocks);
+        const int hi = static_cast<int>(int64_t{length} * (b + 1) / blocks);
         FitBlock(&t[segment + lo], &index[lo], hi - lo, &residuals, &deviations);
       }
     }

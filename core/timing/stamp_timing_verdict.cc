@@ -50,7 +50,8 @@ bool SteadyWindow(const double* d, int w, double tolerance, std::vector<int>* k_
       const double ratio = d[i] / unit;
       const double k = std::round(ratio);
       fits = k <= 4 && std::abs(ratio - k) <= tolerance;
-      (*k_of)[i] = static_cast<int>(k);
+      // Converted only when it fits: a step of 1e13 units is no int.
+      (*k_of)[i] = fits ? static_cast<int>(k) : 0;
     }
     for (int i = 0; i < w && fits; ++i) {
       // A zero inside motion, caught up by the next step; not a start or a stop.

@@ -98,9 +98,9 @@ TEST(CsvTest, HeaderErrors) {
 
 TEST(CsvTest, DuplicateDetectionIsLinearInTheColumns) {
   std::string header = "a,b";
-  for (int i = 0; i < 20000; ++i) header += ",x" + std::to_string(i);
+  for (int i = 0; i < 9000; ++i) header += ",x" + std::to_string(i);
   EXPECT_TRUE(FirstError(header + "\n").ok());
-  ExpectError(FirstError(header + ",X19999\n"), {"'X19999'", "columns 20002 and 20003"});
+  ExpectError(FirstError(header + ",X8999\n"), {"'X8999'", "columns 9002 and 9003"});
 }
 
 TEST(CsvTest, RecordErrorsNameLineRecordAndColumn) {
