@@ -336,6 +336,22 @@ void AppendCsvRow(std::string* out, std::initializer_list<double> values) {
   *out += '\n';
 }
 
+// The log of the streams read (their timing and the readers' warnings kept).
+StatusOr<LaserLog> LogOfStreams(const StreamNames& names,
+                                const std::function<StatusOr<LaserStreams>(
+                                    std::vector<StreamTiming>*, std::vector<std::string>*)>& read) {
+  std::vector<StreamTiming> timing;
+  std::vector<std::string> warnings;
+  CALIB_ASSIGN_OR_RETURN(LaserStreams streams, read(&timing, &warnings));
+  CALIB_ASSIGN_OR_RETURN(LaserLog log,
+                         BuildFromStreams(streams.odometry, streams.sensor_poses, names));
+  log.streams = std::move(streams);
+  log.stream_timing = std::move(timing);
+  log.warnings = std::move(warnings);
+  DropImplausibleIntervals(&log);
+  return log;
+}
+
 }  // namespace
 
 StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometry,
@@ -350,21 +366,14 @@ StatusOr<LaserLog> LaserLogFromStreams(const std::vector<EncoderSample>& odometr
                                        const std::string& source, const std::string& odometry_name,
                                        const std::string& poses_name) {
   const StreamNames names{source, odometry_name, poses_name};
-  return GuardAllocation(source, [&]() -> StatusOr<LaserLog> {
-    std::vector<StreamTiming> timing;
-    std::vector<int> segments;
-    for (const StampedPose& p : sensor_poses) segments.push_back(p.segment);
-    std::vector<std::string> warnings;
-    CALIB_ASSIGN_OR_RETURN(LaserStreams streams,
-                           PrepareStreams(OdometryRecords(odometry), PoseRecords(sensor_poses),
-                                          names, &timing, &warnings, segments));
-    CALIB_ASSIGN_OR_RETURN(LaserLog log,
-                           BuildFromStreams(streams.odometry, streams.sensor_poses, names));
-    log.streams = std::move(streams);
-    log.stream_timing = std::move(timing);
-    log.warnings = std::move(warnings);
-    DropImplausibleIntervals(&log);
-    return log;
+  std::vector<int> segments;
+  for (const StampedPose& p : sensor_poses) segments.push_back(p.segment);
+  return GuardAllocation(source, [&] {
+    return LogOfStreams(
+        names, [&](std::vector<StreamTiming>* timing, std::vector<std::string>* warnings) {
+          return PrepareStreams(OdometryRecords(odometry), PoseRecords(sensor_poses), names, timing,
+                                warnings, segments);
+        });
   });
 }
 
@@ -400,22 +409,6 @@ StatusOr<LaserStreams> ReadStreamSamples(const std::string& directory,
                            ReadRecords(poses_file.text(), names.poses, {"x", "y", "theta"}));
     return PrepareStreams(std::move(odometry), std::move(poses), names, timing, warnings);
   });
-}
-
-// The log of the streams read (their timing and the readers' warnings kept).
-StatusOr<LaserLog> LogOfStreams(const StreamNames& names,
-                                const std::function<StatusOr<LaserStreams>(
-                                    std::vector<StreamTiming>*, std::vector<std::string>*)>& read) {
-  std::vector<StreamTiming> timing;
-  std::vector<std::string> warnings;
-  CALIB_ASSIGN_OR_RETURN(LaserStreams streams, read(&timing, &warnings));
-  CALIB_ASSIGN_OR_RETURN(LaserLog log,
-                         BuildFromStreams(streams.odometry, streams.sensor_poses, names));
-  log.streams = std::move(streams);
-  log.stream_timing = std::move(timing);
-  log.warnings = std::move(warnings);
-  DropImplausibleIntervals(&log);
-  return log;
 }
 
 }  // namespace
