@@ -27,21 +27,9 @@ fi
 harnesses=(${FUZZ_HARNESSES:-laser_tuples laser_csv laser_stream bearing_log scan_csv mcap rosbag1
   laser_calibrate})
 
-# clang and its libFuzzer/sanitizer runtimes (Debian 12: clang-14, libclang-rt-14-dev), when
-# missing, like scripts/install_deps.sh; the project's own packages through that script.
-need=()
-command -v clang++ >/dev/null 2>&1 || need+=(clang)
-ls /usr/lib/llvm-*/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a >/dev/null 2>&1 ||
-  need+=(libclang-rt-14-dev)
-if ((${#need[@]})); then
-  echo "run_fuzzers: installing ${need[*]}" >&2
-  sudo_cmd=()
-  [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
-  export DEBIAN_FRONTEND=noninteractive
-  "${sudo_cmd[@]}" apt-get update -qq
-  "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${need[@]}" >&2
-fi
-"$root/scripts/install_deps.sh"
+# The project's packages, and clang with its libFuzzer and sanitizer runtimes (Debian 12:
+# clang-14, libclang-rt-14-dev), each only when missing.
+bash "$root/scripts/install_deps.sh" clang libclang-rt-14-dev
 
 launcher=()
 command -v ccache >/dev/null 2>&1 && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
