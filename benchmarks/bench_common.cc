@@ -43,6 +43,12 @@ double ToDisplay(int param, double value, bool degrees) {
   return degrees ? value * 180.0 / M_PI : value * 1e3;
 }
 
+LaserParamVector LaserError(const LaserCalibration& estimate, const LaserCalibration& truth) {
+  LaserParamVector d = estimate.ToVector() - truth.ToVector();
+  d(5) = WrapAngle(d(5));
+  return d;
+}
+
 nlohmann::json ToJson(const LaserParamVector& v) {
   return std::vector<double>(v.data(), v.data() + v.size());
 }

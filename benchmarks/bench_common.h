@@ -46,6 +46,9 @@ double LogLogSlope(const std::vector<double>& x, const std::vector<double>& y);
 // Parameter i of a LaserParamVector in display units: mm for lengths, mrad (or deg) for θ.
 double ToDisplay(int param, double value, bool degrees = false);
 
+// estimate − truth with θ wrapped.
+LaserParamVector LaserError(const LaserCalibration& estimate, const LaserCalibration& truth);
+
 nlohmann::json ToJson(const LaserParamVector& v);
 nlohmann::json ToJson(const Eigen::Vector3d& v);
 

@@ -20,12 +20,6 @@ namespace {
 
 const Eigen::Vector3d kDefaultNoise(0.001, 0.001, 0.002);
 
-LaserParamVector ErrorOf(const LaserCalibration& estimate, const LaserCalibration& truth) {
-  LaserParamVector d = estimate.ToVector() - truth.ToVector();
-  d(5) = WrapAngle(d(5));
-  return d;
-}
-
 LaserSimOptions SimOptions(const McScenario& scenario, int seed) {
   LaserSimOptions sim;
   sim.num_intervals = scenario.intervals;
@@ -59,7 +53,7 @@ McSeedRun RunSeed(const McScenario& scenario, int seed) {
     run.ok[m] = status.ok();
     run.message[m] = status.message();
     if (!status.ok()) return;
-    run.error[m] = ErrorOf(*estimate, truth);
+    run.error[m] = LaserError(*estimate, truth);
     run.sigma[m] = sigma != nullptr ? *sigma : LaserParamVector::Zero();
   };
   {

@@ -82,8 +82,7 @@ SubsetSpread CalibrateSubsets(const fs::path& dir, const std::string& set) {
   }
   for (size_t a = 0; a < out.results.size(); ++a) {
     for (size_t b = a + 1; b < out.results.size(); ++b) {
-      LaserParamVector d = out.results[a].estimate.ToVector() - out.results[b].estimate.ToVector();
-      d(5) = WrapAngle(d(5));
+      const LaserParamVector d = LaserError(out.results[a].estimate, out.results[b].estimate);
       const LaserParamVector s =
           (out.results[a].stddev.cwiseAbs2() + out.results[b].stddev.cwiseAbs2()).cwiseSqrt();
       out.spread = out.spread.cwiseMax(d.cwiseAbs());

@@ -45,6 +45,11 @@ nlohmann::ordered_json RunScansBench(const BenchConfig& config);
 // Part of it: the two-stage route against the refinement on the scan points.
 nlohmann::ordered_json RunScanPointComparison(const BenchConfig& config);
 
+// Section robust_scale: the bias that slip outliers leave against the reported σ as N grows
+// (10⁴, 10⁵, 10⁶ intervals; 5 % and 20 % slips), Cauchy alone against Cauchy then Tukey's biweight:
+// mean z per parameter, 2σ coverage, d² against χ²₆.
+nlohmann::ordered_json RunRobustScale(const BenchConfig& config);
+
 // Google Benchmark micro-benchmarks: one LaserResidual evaluation with Jacobians, and
 // CensiClosedForm on 1000 intervals. Prints Google Benchmark's console table; returns the runs.
 nlohmann::json RunMicroBenchmarks();

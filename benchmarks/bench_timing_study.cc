@@ -60,9 +60,7 @@ namespace {
 
 LaserParamVector ZScore(const LaserCalibration& estimate, const LaserParamVector& stddev,
                         const LaserCalibration& truth) {
-  LaserParamVector d = estimate.ToVector() - truth.ToVector();
-  d(kLaserTheta) = WrapAngle(d(kLaserTheta));
-  return d.cwiseQuotient(stddev);
+  return LaserError(estimate, truth).cwiseQuotient(stddev);
 }
 
 void RunStampsAsTruth(const LaserStreams& streams, const LaserCalibration& truth, bool diagnose,

@@ -19,7 +19,7 @@
 
 DEFINE_bool(quick, false, "Reduced grid and seeds (CI smoke test, under a minute)");
 DEFINE_string(json, "", "Write every result to this JSON file (and the RMSE plot beside it)");
-DEFINE_string(sections, "laser_mc,laser_real,bearing,diagnose,timing,scans,speed",
+DEFINE_string(sections, "laser_mc,laser_real,bearing,diagnose,timing,scans,robust_scale,speed",
               "Comma-separated sections to run");
 DEFINE_int32(
     seeds, 0,
@@ -35,12 +35,12 @@ namespace {
 
 constexpr const char* kUsage =
     "calib_bench [--quick] [--json OUT.json] [--sections "
-    "laser_mc,laser_real,bearing,diagnose,timing,scans,speed] [--seeds N] "
+    "laser_mc,laser_real,bearing,diagnose,timing,scans,robust_scale,speed] [--seeds N] "
     "[--censi_dir DIR]";
 
 std::set<std::string> ParseSections(const std::string& text, bool* ok) {
-  const std::set<std::string> known = {"laser_mc", "laser_real", "bearing", "diagnose",
-                                       "timing",   "scans",      "speed"};
+  const std::set<std::string> known = {"laser_mc", "laser_real", "bearing",      "diagnose",
+                                       "timing",   "scans",      "robust_scale", "speed"};
   std::set<std::string> sections;
   std::stringstream stream(text);
   std::string name;
@@ -51,7 +51,7 @@ std::set<std::string> ParseSections(const std::string& text, bool* ok) {
       std::fprintf(
           stderr,
           "unknown section '%s' (expected laser_mc, laser_real, bearing, diagnose, timing, scans, "
-          "speed)\n",
+          "robust_scale, speed)\n",
           name.c_str());
       *ok = false;
     }
@@ -143,6 +143,9 @@ int Main(int argc, char** argv) {
   if (sections.count("timing")) root["timing"] = RunTimingStudy(config);
   std::fflush(stdout);
   if (sections.count("scans")) root["scans"] = RunScansBench(config);
+  std::fflush(stdout);
+  if (sections.count("robust_scale")) root["robust_scale"] = RunRobustScale(config);
+  std::fflush(stdout);
   if (sections.count("speed")) root["speed"] = RunSpeed(config);
   root["seconds"] = total.Seconds();
 

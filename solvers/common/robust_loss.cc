@@ -6,7 +6,9 @@ StatusOr<RobustLoss> ParseRobustLoss(const std::string& name) {
   if (name == "cauchy") return RobustLoss::kCauchy;
   if (name == "huber") return RobustLoss::kHuber;
   if (name == "none") return RobustLoss::kNone;
-  return Status::InvalidInput("unknown loss '" + name + "' (expected cauchy, huber or none)");
+  if (name == "tukey") return RobustLoss::kTukey;
+  return Status::InvalidInput("unknown loss '" + name +
+                              "' (expected cauchy, huber, tukey or none)");
 }
 
 std::string RobustLossName(RobustLoss loss) {
@@ -17,6 +19,8 @@ std::string RobustLossName(RobustLoss loss) {
       return "huber";
     case RobustLoss::kNone:
       return "none";
+    case RobustLoss::kTukey:
+      return "tukey";
   }
   return "none";
 }
@@ -29,8 +33,23 @@ std::unique_ptr<ceres::LossFunction> MakeLossFunction(RobustLoss loss, double sc
       return std::make_unique<ceres::HuberLoss>(scale);
     case RobustLoss::kNone:
       return nullptr;
+    case RobustLoss::kTukey:
+      return std::make_unique<TukeyBiweightLoss>(scale);
   }
   return nullptr;
+}
+
+void TukeyBiweightLoss::Evaluate(double s, double rho[3]) const {
+  if (s >= a2_) {
+    rho[0] = a2_ / 3.0;
+    rho[1] = 0.0;
+    rho[2] = 0.0;
+    return;
+  }
+  const double u = 1.0 - s / a2_;
+  rho[0] = a2_ / 3.0 * (1.0 - u * u * u);
+  rho[1] = u * u;
+  rho[2] = -2.0 * u / a2_;
 }
 
 }  // namespace calib

@@ -323,6 +323,9 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
                                                  : DiagonalSqrtInformation(initial_sigma[d])});
   }
   LaserProblem problem(datasets, initial, options.refinement);
+  // The warm start ended under the redescending loss: the full problem starts there directly.
+  if (!initial_sigma.empty()) problem.Redescend();
+  result.loss = problem.LossDescription();
   CALIB_ASSIGN_OR_RETURN(const SolveOutcome outcome, RefineWithNoise(options, &problem, report));
   result.iterations += outcome.iterations;
   result.converged = outcome.converged;

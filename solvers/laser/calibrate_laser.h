@@ -63,6 +63,7 @@ struct LaserCalibrationResult {
   // Timing-free totals over long windows, wheel model against sensor (warnings also in `warnings`).
   LaserConsistency consistency;
   double covariance_scale = 1.0;  // The loss correction κ applied to Ceres' covariance.
+  std::string loss;               // The refinement's losses, e.g. "cauchy, then tukey (6)".
   int iterations = 0;
   bool converged = true;  // The final refinement stopped by a convergence test.
   // What went wrong on the way without stopping the calibration (a failed trimming, no

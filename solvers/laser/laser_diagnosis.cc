@@ -274,6 +274,8 @@ StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& interva
   // of the diagnosis, not part of its base fit).
   LaserCalibrationOptions base_options = options.calibration;
   base_options.interval_jitter = false;
+  // Only a seed of the effect fits below, which use the problem's own loss.
+  base_options.refinement.redescending_scale = 0.0;
   CALIB_ASSIGN_OR_RETURN(const LaserCalibrationResult base,
                          CalibrateLaser(intervals, base_options));
   LaserEffectData data(intervals, SqrtInformation(intervals, base.estimate, options),

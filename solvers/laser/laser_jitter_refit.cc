@@ -55,6 +55,7 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
         JitterSqrtInformation(sensitivities[d], jitter[d].noise_sigma, UsedJitter(jitter[d]))});
   }
   LaserProblem problem(datasets, result->estimate, options.refinement);
+  problem.Redescend();  // It starts at the robust estimate: no first, convex stage.
   std::vector<std::vector<bool>> inliers(logs.size());
   for (int round = 0; round < std::max(1, options.noise_rounds); ++round) {
     ceres::Solver::Summary summary;

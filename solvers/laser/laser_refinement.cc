@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 
 namespace calib {
 
@@ -26,7 +27,10 @@ constexpr size_t kMinChunk = 5000;
 LaserProblem::LaserProblem(const std::vector<LaserDataset>& datasets,
                            const LaserCalibration& initial, const LaserRefinementOptions& options)
     : datasets_(datasets), options_(options) {
-  loss_ = MakeLossFunction(options.loss, options.loss_scale);
+  loss_ = std::make_unique<ceres::LossFunctionWrapper>(
+      MakeLossFunction(options.loss, options.loss_scale).release(), ceres::TAKE_OWNERSHIP);
+  // Without a robust loss the blocks get none: plain least squares, no per-block corrector.
+  ceres::LossFunction* block_loss = options.loss == RobustLoss::kNone ? nullptr : loss_.get();
   ceres::Problem::Options problem_options;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   // Residual blocks are only added, never removed: skip the bookkeeping that removal needs.
@@ -53,7 +57,7 @@ LaserProblem::LaserProblem(const std::vector<LaserDataset>& datasets,
                                         ? sqrt_information_.back().get()
                                         : &interval_sqrt_information_[d][k];
       ceres::CostFunction* cost = LaserResidual::Create((*dataset.intervals)[k], root);
-      problem_->AddResidualBlock(cost, loss_.get(), odometry_, base_T_sensor_);
+      problem_->AddResidualBlock(cost, block_loss, odometry_, base_T_sensor_);
       cost_functions_.push_back(cost);
       cost_dataset_.push_back(sqrt_information_.size() - 1);
     }
@@ -63,16 +67,45 @@ LaserProblem::LaserProblem(const std::vector<LaserDataset>& datasets,
 LaserProblem::~LaserProblem() = default;
 
 Status LaserProblem::Solve(ceres::Solver::Summary* summary) {
-  CALIB_RETURN_IF_ERROR(
-      calib::Solve(LaserRefinementSettings(cost_functions_.size(), options_.max_iterations,
-                                           options_.num_threads),
-                   "the refinement", problem_.get(), summary));
+  const auto solve = [&](ceres::Solver::Summary* stage) {
+    return calib::Solve(LaserRefinementSettings(cost_functions_.size(), options_.max_iterations,
+                                                options_.num_threads),
+                        "the refinement", problem_.get(), stage);
+  };
+  ceres::Solver::Summary own;
+  if (summary == nullptr) summary = &own;
+  if (redescends() && !redescended_) {
+    // Tukey's loss is not convex: it starts from the optimum of the first loss.
+    ceres::Solver::Summary first;
+    CALIB_RETURN_IF_ERROR(solve(&first));
+    Redescend();
+    CALIB_RETURN_IF_ERROR(solve(summary));
+    summary->iterations.insert(summary->iterations.begin(), first.iterations.begin(),
+                               first.iterations.end());
+  } else {
+    CALIB_RETURN_IF_ERROR(solve(summary));
+  }
   if (!(odometry_[0] > 0.0 && odometry_[1] > 0.0 && odometry_[2] > 0.0)) {
     return Status::NotObservable(
         "the refinement drove a wheel radius or the wheelbase to a non-positive "
         "value: the data do not fit a differential-drive robot");
   }
   return Status::Ok();
+}
+
+void LaserProblem::Redescend() {
+  if (!redescends() || redescended_) return;
+  loss_->Reset(MakeLossFunction(RobustLoss::kTukey, options_.redescending_scale).release(),
+               ceres::TAKE_OWNERSHIP);
+  redescended_ = true;
+}
+
+std::string LaserProblem::LossDescription() const {
+  std::string text = RobustLossName(options_.loss);
+  if (!redescends()) return text;
+  char scale[32];
+  std::snprintf(scale, sizeof(scale), "%g", options_.redescending_scale);
+  return text + ", then tukey (" + scale + ")";
 }
 
 LaserCalibration LaserProblem::calibration() const {

@@ -23,6 +23,11 @@ struct LaserRefinementOptions {
   // Scale of the loss on the norm of the whitened 3-vector residual: Gaussian inliers
   // (‖r‖² ~ χ²₃, mean 3) keep most of their weight, gross slips lose nearly all of it.
   double loss_scale = 3.0;
+  // The last passes, from the optimum under `loss`, use Tukey's biweight at this scale on the
+  // whitened norm (an inlier's ‖r‖² ~ χ²₃ passes 6² with probability 1e-7): a gross slip then has
+  // no influence, where under Cauchy it leaks a fixed bias that a σ shrinking as 1/√N stops
+  // covering on long logs. 0: stay with `loss`; unused without a robust loss.
+  double redescending_scale = 6.0;
   int max_iterations = 100;
   int num_threads = 2;
 };
@@ -53,7 +58,14 @@ class LaserProblem {
   LaserProblem(const LaserProblem&) = delete;
   LaserProblem& operator=(const LaserProblem&) = delete;
 
+  // Solves; the first solve of a redescending problem runs under `loss`, then under Tukey's
+  // biweight from that optimum (the summary then holds both stages' iterations).
   Status Solve(ceres::Solver::Summary* summary = nullptr);
+  // Switches to the redescending loss now (for a start already near the robust optimum, e.g. a
+  // warm start); no effect when the options ask for none or it is in use.
+  void Redescend();
+  // The loss the next solve ends with, e.g. "cauchy, then tukey (6)".
+  std::string LossDescription() const;
   LaserCalibration calibration() const;
   void set_calibration(const LaserCalibration& calibration);
 
@@ -112,7 +124,13 @@ class LaserProblem {
   std::vector<std::unique_ptr<Eigen::Matrix3d>> sqrt_information_;  // Stable addresses.
   // Per dataset, per interval (empty: shared); never resized after construction.
   std::vector<std::vector<Eigen::Matrix3d>> interval_sqrt_information_;
-  std::unique_ptr<ceres::LossFunction> loss_;
+  bool redescends() const {
+    return options_.loss != RobustLoss::kNone && options_.redescending_scale > 0.0;
+  }
+
+  // The residuals' loss; Redescend() swaps what it wraps.
+  std::unique_ptr<ceres::LossFunctionWrapper> loss_;
+  bool redescended_ = false;
   std::unique_ptr<ceres::Problem> problem_;
   std::vector<const ceres::CostFunction*> cost_functions_;  // Owned by problem_.
   std::vector<size_t> cost_dataset_;

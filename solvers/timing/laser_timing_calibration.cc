@@ -216,6 +216,8 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
                          LaserLogFromStreams(distinct.odometry, distinct.sensor_poses, "streams"));
   LaserCalibrationOptions stamps_options = options.calibration;
   stamps_options.interval_jitter = false;  // The seed and the comparison: stamps as sample times.
+  // The latent-time fit keeps its own (Cauchy) loss; its seed comes from the same loss.
+  stamps_options.refinement.redescending_scale = 0.0;
   CALIB_ASSIGN_OR_RETURN(result.stamps_as_truth, CalibrateLaser(log.intervals, stamps_options));
 
   LatentTimeState initial;

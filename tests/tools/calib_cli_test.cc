@@ -74,6 +74,12 @@ TEST_F(CalibCliTest, SampleLogGivesTheContractJson) {
   EXPECT_LE(json["inliers"].get<int>(), json["samples"].get<int>());
   EXPECT_TRUE(json["warnings"].is_array());
   EXPECT_EQ(json["verdict"], "trusted") << json["warnings"];
+  EXPECT_EQ(json["loss"], "cauchy");
+  EXPECT_EQ(json["loss_stages"], "cauchy, then tukey (6)");
+  EXPECT_NE(run.out.find("loss cauchy, then tukey (6)"), std::string::npos) << run.out;
+  const CliRun single = Calib(Calibrate(sample) + " --redescending_scale 0");
+  ASSERT_EQ(single.exit_code, 0) << single.err;
+  EXPECT_EQ(nlohmann::json::parse(ReadFile(dir_ / "out.json"))["loss_stages"], "cauchy");
 }
 
 // Stamps that are pick-up times (data/timing/README.md): the stream diagnostics see it and the
@@ -223,6 +229,8 @@ TEST_F(CalibCliTest, MissingFileAndBadFlags) {
   ExpectFailure(Calibrate(dir_ / "nope.tuple"), {"nope.tuple"});
   const fs::path sample = fs::path(CALIB_SOURCE_DIR) / "data" / "sample_laser.tuple";
   ExpectFailure(Calibrate(sample) + " --loss banana", {"banana", "cauchy"});
+  ExpectFailure(Calibrate(sample) + " --redescending_scale -1", {"--redescending_scale"});
+  ExpectFailure(Calibrate(sample) + " --redescending_scale nan", {"--redescending_scale"});
   ExpectFailure(Calibrate(sample) + " --format yaml", {"yaml"});
   ExpectFailure("calibrate --output " + (dir_ / "o.json").string(), {"--input"});
   EXPECT_EQ(Calib("frobnicate").exit_code, 2);

@@ -131,6 +131,10 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   LaserCalibrationOptions options;
   options.refinement.loss = *loss;
   options.refinement.loss_scale = flags.loss_scale;
+  if (!(flags.redescending_scale >= 0.0) || !std::isfinite(flags.redescending_scale)) {
+    return Fail("--redescending_scale must be 0 (off) or a positive number");
+  }
+  options.refinement.redescending_scale = flags.redescending_scale;
   options.progress = ProgressPrinter(clock, flags.quiet);
   if (IsRobotInput(flags.input)) {
     return CalibrateRobotBag(flags, options, clock);

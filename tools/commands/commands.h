@@ -16,9 +16,11 @@ struct CalibrateOptions {
   std::string input;
   std::string output;
   std::string format = "auto";  // Laser log format: auto, tuples, csv or stream.
-  std::string loss = "cauchy";  // cauchy, huber or none.
+  std::string loss = "cauchy";  // cauchy, huber, tukey or none.
   double loss_scale = 3.0;      // In whitened residual units.
-  bool quiet = false;           // No summary on stdout, no progress on stderr.
+  // Laser: the last passes under Tukey's biweight at this scale (0: none).
+  double redescending_scale = 6.0;
+  bool quiet = false;  // No summary on stdout, no progress on stderr.
   // Raw laser streams: auto (latent sample times, the clock model chosen by the data), stamps or
   // free_running (that model only), off (stamps taken as sample times).
   std::string timing = "auto";

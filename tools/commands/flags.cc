@@ -16,9 +16,13 @@ DEFINE_string(output, "",
               "Where to write the JSON result (optional: without it only the summary is "
               "printed; - writes the JSON on stdout and the summary on stderr)");
 DEFINE_string(format, kDiagnose.format.c_str(), "Laser log format: auto, tuples, csv or stream");
-DEFINE_string(loss, kDiagnose.loss.c_str(), "Robust loss: cauchy, huber or none");
+DEFINE_string(loss, kDiagnose.loss.c_str(), "Robust loss: cauchy, huber, tukey or none");
 DEFINE_double(loss_scale, kDiagnose.loss_scale,
               "Scale of the robust loss, in whitened residual units");
+DEFINE_double(redescending_scale, calib::cli::CalibrateOptions().redescending_scale,
+              "calibrate (laser): after the fit under --loss, refit under Tukey's biweight at "
+              "this scale (whitened units), so that gross slips leave no bias on long logs; "
+              "0 keeps the first loss");
 DEFINE_bool(quiet, kDiagnose.quiet, "Do not print the summary on stdout");
 DEFINE_string(timing, kDiagnose.timing.c_str(),
               "calibrate, diagnose (raw laser streams): auto estimates every sample's true time "
@@ -184,6 +188,7 @@ CalibrateOptions CalibrateOptionsFromFlags() {
   options.format = FLAGS_format;
   options.loss = FLAGS_loss;
   options.loss_scale = FLAGS_loss_scale;
+  options.redescending_scale = FLAGS_redescending_scale;
   options.quiet = FLAGS_quiet;
   options.timing = FLAGS_timing;
   options.scan_topic = FLAGS_scan_topic;

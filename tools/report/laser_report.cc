@@ -53,6 +53,7 @@ nlohmann::ordered_json LaserResultJson(const LaserCalibrationResult& result,
   out["inliers"] = result.inliers;
   out["gross_outlier_share"] = result.outlier_share;
   out["loss"] = loss;
+  out["loss_stages"] = result.loss.empty() ? loss : result.loss;
   out["covariance"] = {{"order", kLaserParamNames}, {"matrix", MatrixJson(result.covariance)}};
   nlohmann::ordered_json noise = nlohmann::ordered_json::array();
   for (const Eigen::Vector3d& sigma : result.noise_sigma) {
@@ -111,7 +112,8 @@ std::string LaserResultSummary(const LaserCalibrationResult& result, const std::
   std::string text;
   char line[256];
   std::snprintf(line, sizeof(line), "%s: laser–odometry calibration, %d intervals, loss %s\n",
-                input.c_str(), result.samples, loss.c_str());
+                input.c_str(), result.samples,
+                result.loss.empty() ? loss.c_str() : result.loss.c_str());
   text += line;
   std::snprintf(line, sizeof(line), "  %-18s %12s   %-10s %12s\n", "parameter", "estimate", "± σ",
                 "closed form");
