@@ -80,8 +80,10 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
           errors,
           JitterSqrtInformation(sensitivities[d], jitter[d].noise_sigma, UsedJitter(jitter[d])),
           options.inlier_chi2);
-      IntervalJitterEstimate next = EstimateIntervalJitter(
-          errors, sensitivities[d], jitter[d].noise_sigma, inliers[d], options.jitter);
+      IntervalJitterOptions near = options.jitter;
+      near.previous_jitter_s = jitter[d].jitter_s;  // The refit moves σ_j little.
+      IntervalJitterEstimate next =
+          EstimateIntervalJitter(errors, sensitivities[d], jitter[d].noise_sigma, inliers[d], near);
       // The decision to model the jitter was taken at the base fit; keep it.
       next.significant = jitter[d].significant;
       change = std::max(change, Change(next, jitter[d]));

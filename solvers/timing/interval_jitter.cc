@@ -109,11 +109,11 @@ double ProfileLogLikelihood(const JitterData& data, double jitter_s, bool estima
 
 // Golden-section maximum of f on [lo, hi].
 template <typename F>
-double GoldenMaximum(const F& f, double lo, double hi) {
+double GoldenMaximum(const F& f, double lo, double hi, double tolerance = 1e-6) {
   const double ratio = (std::sqrt(5.0) - 1.0) / 2.0;
   double a = hi - ratio * (hi - lo), b = lo + ratio * (hi - lo);
   double fa = f(a), fb = f(b);
-  for (int i = 0; i < 60 && hi - lo > 1e-6 * hi; ++i) {
+  for (int i = 0; i < 60 && hi - lo > tolerance * hi; ++i) {
     if (fa < fb) {
       lo = a, a = b, fa = fb, b = lo + ratio * (hi - lo), fb = f(b);
     } else {
@@ -121,6 +121,36 @@ double GoldenMaximum(const F& f, double lo, double hi) {
     }
   }
   return fa > fb ? a : b;
+}
+
+// The maximum of the profile on a grid 0, scale·10^(−2.5 … 1.5) (`value_at_zero` at 0), refined
+// by golden section between the best point's neighbours.
+template <typename F>
+void SearchFromGrid(const F& profile, double scale, int grid_points, double value_at_zero,
+                    double* jitter_s, double* value) {
+  const int points = std::max(grid_points, 5);
+  std::vector<double> grid = {0.0}, values = {value_at_zero};
+  for (int i = 0; i + 1 < points; ++i) {
+    grid.push_back(scale * std::pow(10.0, -2.5 + 4.0 * i / (points - 2)));
+    values.push_back(profile(grid.back()));
+  }
+  const size_t best = std::max_element(values.begin(), values.end()) - values.begin();
+  const double lo = best == 0 ? 0.0 : grid[best - 1];
+  const double hi = best + 1 < grid.size() ? grid[best + 1] : grid[best] * 10.0;
+  *jitter_s = GoldenMaximum(profile, lo, hi);
+  *value = profile(*jitter_s);
+  if (*value < values[best]) *jitter_s = grid[best], *value = values[best];
+}
+
+// The maximum within a factor of 3 of `previous`; false when it lies on the bracket's edge (the
+// grid must then look further).
+template <typename F>
+bool NearPrevious(const F& profile, double previous, double* jitter_s, double* value) {
+  const double lo = previous / 3.0, hi = previous * 3.0;
+  // 10⁻⁴ of σ_j, far below its σ (a few per cent), as the refit's rounds need.
+  *jitter_s = GoldenMaximum(profile, lo, hi, 1e-4);
+  *value = profile(*jitter_s);
+  return *jitter_s > 1.01 * lo && *jitter_s < 0.99 * hi;
 }
 
 }  // namespace
@@ -237,24 +267,18 @@ IntervalJitterEstimate EstimateIntervalJitter(
   if (!(median > 0.0) || !std::isfinite(median)) return estimate;
   const double scale = 1.0 / std::sqrt(median);
 
-  // Grid 0, scale·10^(−2.5 … 1.5); each point warm-starts the noise from the previous.
-  const int points = std::max(options.grid_points, 5);
-  std::vector<double> grid = {0.0}, values = {estimate.log_likelihood_without_jitter};
-  for (int i = 0; i + 1 < points; ++i) {
-    grid.push_back(scale * std::pow(10.0, -2.5 + 4.0 * i / (points - 2)));
-    values.push_back(ProfileLogLikelihood(data, grid.back(), options.estimate_noise, &theta));
-  }
-  const size_t best = std::max_element(values.begin(), values.end()) - values.begin();
-  const double lo = best == 0 ? 0.0 : grid[best - 1];
-  const double hi = best + 1 < grid.size() ? grid[best + 1] : grid[best] * 10.0;
   // Each evaluation starts the scoring where the previous one ended (nearby σ_j: a few steps).
   Eigen::Vector3d warm = theta;
   const auto profile = [&](double jitter_s) {
     return ProfileLogLikelihood(data, jitter_s, options.estimate_noise, &warm);
   };
-  double jitter_s = GoldenMaximum(profile, lo, hi);
-  double value = profile(jitter_s);
-  if (value < values[best]) jitter_s = grid[best], value = values[best];
+  double jitter_s = 0.0, value = 0.0;
+  if (!(options.previous_jitter_s > 0.0) ||
+      !NearPrevious(profile, options.previous_jitter_s, &jitter_s, &value)) {
+    warm = theta;
+    SearchFromGrid(profile, scale, options.grid_points, estimate.log_likelihood_without_jitter,
+                   &jitter_s, &value);
+  }
   Eigen::Vector3d theta_best = warm;
   ProfileLogLikelihood(data, jitter_s, options.estimate_noise, &theta_best);
 

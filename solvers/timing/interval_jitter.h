@@ -76,6 +76,10 @@ struct IntervalJitterOptions {
   // Above this many inliers the likelihood runs on an evenly spread subset of this size (σ_j is
   // then known to a few per cent; the profile costs ~10³ 3×3 factorizations per interval).
   int max_intervals = 20000;
+  // > 0: an estimate from a nearby fit (a refit's previous round). The maximum is then searched
+  // within a factor of 3 of it, without the grid; the grid runs when it lies on that bracket's
+  // edge.
+  double previous_jitter_s = 0.0;
 };
 
 struct IntervalJitterEstimate {
