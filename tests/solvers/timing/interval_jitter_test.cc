@@ -88,6 +88,27 @@ TEST(IntervalJitterTest, RecoversTheJitterWithinItsSigma) {
   }
 }
 
+// A previous round's estimate narrows the search without moving the answer (beyond 1e-3 of its σ);
+// one far from the maximum (its bracket's edge) falls back to the grid.
+TEST(IntervalJitterTest, PreviousEstimateGivesTheGridsAnswer) {
+  LaserSimOptions sim;
+  sim.num_intervals = 2000;
+  sim.seed = 6;
+  const LaserLog log = JitteredTupleLog(sim, 0.03);
+  const std::vector<bool> all(log.intervals.size(), true);
+  const IntervalJitterEstimate grid =
+      EstimateIntervalJitter(log.intervals, Truth(sim), sim.scan_noise_sigma, all);
+  for (double previous : {0.8 * grid.jitter_s, 1.5 * grid.jitter_s, 20.0 * grid.jitter_s}) {
+    IntervalJitterOptions options;
+    options.previous_jitter_s = previous;
+    const IntervalJitterEstimate near =
+        EstimateIntervalJitter(log.intervals, Truth(sim), sim.scan_noise_sigma, all, options);
+    EXPECT_NEAR(near.jitter_s, grid.jitter_s, 1e-3 * grid.jitter_stddev_s) << previous;
+    EXPECT_NEAR(near.jitter_stddev_s, grid.jitter_stddev_s, 1e-2 * grid.jitter_stddev_s);
+    EXPECT_NEAR(near.log_likelihood, grid.log_likelihood, 1e-6);
+  }
+}
+
 // At the fitted parameters of clean logs the test rejects σ_j = 0 at about its level.
 TEST(IntervalJitterTest, FewFalseAlarmsOnCleanLogs) {
   int alarms = 0;
