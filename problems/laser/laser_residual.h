@@ -4,6 +4,7 @@
 #include <calib/core/laser/laser_log.h>
 #include <calib/core/se2.h>
 #include <ceres/autodiff_cost_function.h>
+#include <ceres/jet.h>
 
 #include <Eigen/Core>
 
@@ -52,6 +53,25 @@ class LaserResidual {
     Eigen::Vector3d error;
     LaserResidual(interval, &identity)(odometry, base_T_sensor, error.data());
     return error;
+  }
+
+  // Whitened residual r and its Jacobian J = ∂r/∂(r_l, r_r, b, x, y, θ) (3×6) at the given
+  // parameters, by forward-mode differentiation without a cost-function object: the fused
+  // passes and the covariances call it once per interval.
+  static void Linearize(const LaserInterval& interval, const Eigen::Matrix3d& sqrt_information,
+                        const double* odometry, const double* base_T_sensor, Eigen::Vector3d* r,
+                        Eigen::Matrix<double, 3, 6>* jacobian) {
+    using Jet = ceres::Jet<double, 6>;
+    Jet odometry_jet[3], sensor_jet[3], residual[3];
+    for (int i = 0; i < 3; ++i) {
+      odometry_jet[i] = Jet(odometry[i], i);
+      sensor_jet[i] = Jet(base_T_sensor[i], 3 + i);
+    }
+    LaserResidual(interval, &sqrt_information)(odometry_jet, sensor_jet, residual);
+    for (int row = 0; row < 3; ++row) {
+      (*r)(row) = residual[row].a;
+      jacobian->row(row) = residual[row].v.transpose();
+    }
   }
 
   static ceres::CostFunction* Create(const LaserInterval& interval,

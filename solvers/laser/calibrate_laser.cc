@@ -39,10 +39,6 @@ Eigen::Matrix3d DiagonalSqrtInformation(const Eigen::Vector3d& sigma) {
 // Above this many intervals the refinement starts from a fit to a subset of this size.
 constexpr size_t kWarmStartAbove = 100000;
 constexpr size_t kWarmStartSubset = 50000;
-// ceres::Covariance factorizes the whole 3N×6 Jacobian and takes seconds for a million
-// intervals; above this size the sandwich, one pass over the Jacobians, gives the same matrix
-// (the tests check that the two agree).
-constexpr size_t kCeresCovarianceUpTo = 200000;
 
 // What a sequence of solves did: iterations summed, and whether the last one converged.
 struct SolveOutcome {
@@ -335,9 +331,10 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   ClassifyInliers(problem, options.inlier_chi2, &result);
 
   start = std::chrono::steady_clock::now();
-  CALIB_ASSIGN_OR_RETURN(
-      const CorrectedCovariance<LaserParamMatrix> covariance,
-      total <= kCeresCovarianceUpTo ? problem.Covariance() : problem.SandwichCovariance());
+  // The fused problem hands ceres::Covariance a 7×6 Jacobian whatever N: one pass, no switch to
+  // another estimator on long logs.
+  CALIB_ASSIGN_OR_RETURN(const CorrectedCovariance<LaserParamMatrix> covariance,
+                         problem.Covariance());
   result.covariance = covariance.covariance;
   result.covariance_scale = covariance.kappa;
   result.stddev = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();

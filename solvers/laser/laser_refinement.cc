@@ -1,5 +1,6 @@
 #include <calib/problems/laser/laser_residual.h>
 #include <calib/problems/positive_manifold.h>
+#include <calib/solvers/common/fused_normal_cost.h>
 #include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/common/solver_options.h>
 #include <calib/solvers/laser/laser_refinement.h>
@@ -44,6 +45,7 @@ LaserProblem::LaserProblem(const std::vector<LaserDataset>& datasets,
   problem_->AddParameterBlock(odometry_, 3, new PositiveManifold<3>());
   problem_->AddParameterBlock(base_T_sensor_, 3);
   interval_sqrt_information_.resize(datasets_.size());
+  dataset_begin_.push_back(0);
   for (size_t d = 0; d < datasets_.size(); ++d) {
     LaserDataset& dataset = datasets_[d];
     sqrt_information_.push_back(std::make_unique<Eigen::Matrix3d>(dataset.sqrt_information));
@@ -52,25 +54,60 @@ LaserProblem::LaserProblem(const std::vector<LaserDataset>& datasets,
       interval_sqrt_information_[d] = std::move(dataset.interval_sqrt_information);
     }
     dataset.interval_sqrt_information.clear();
-    for (size_t k = 0; k < dataset.intervals->size(); ++k) {
-      const Eigen::Matrix3d* root = interval_sqrt_information_[d].empty()
-                                        ? sqrt_information_.back().get()
-                                        : &interval_sqrt_information_[d][k];
-      ceres::CostFunction* cost = LaserResidual::Create((*dataset.intervals)[k], root);
-      problem_->AddResidualBlock(cost, block_loss, odometry_, base_T_sensor_);
-      cost_functions_.push_back(cost);
-      cost_dataset_.push_back(sqrt_information_.size() - 1);
+    dataset_begin_.push_back(dataset_begin_.back() + dataset.intervals->size());
+  }
+  if (options_.per_interval_blocks) {
+    AddResidualBlocks(block_loss);
+  } else {
+    AddFusedBlock(block_loss);
+  }
+}
+
+void LaserProblem::AddResidualBlocks(ceres::LossFunction* block_loss) {
+  for (size_t d = 0; d < datasets_.size(); ++d) {
+    for (size_t k = 0; k < datasets_[d].intervals->size(); ++k) {
+      problem_->AddResidualBlock(
+          LaserResidual::Create((*datasets_[d].intervals)[k], &IntervalSqrtInformation(d, k)),
+          block_loss, odometry_, base_T_sensor_);
     }
   }
+}
+
+void LaserProblem::AddFusedBlock(ceres::LossFunction* block_loss) {
+  using Cost = FusedNormalCost<3, kNumLaserParams>;
+  Cost::Linearize linearize = [this](size_t i, const double* const* parameters, Cost::Residual* r,
+                                     Cost::Jacobian* j) {
+    const size_t d = DatasetOf(i);
+    const size_t k = i - dataset_begin_[d];
+    const LaserInterval& interval = (*datasets_[d].intervals)[k];
+    const Eigen::Matrix3d& root = IntervalSqrtInformation(d, k);
+    if (j != nullptr) {
+      LaserResidual::Linearize(interval, root, parameters[0], parameters[1], r, j);
+    } else {
+      LaserResidual(interval, &root)(parameters[0], parameters[1], r->data());
+    }
+    return true;
+  };
+  problem_->AddResidualBlock(
+      new Cost({3, 3}, num_intervals(), std::move(linearize), block_loss, options_.num_threads),
+      nullptr, odometry_, base_T_sensor_);
+}
+
+void LaserProblem::Linearize(size_t d, size_t k, Eigen::Vector3d* r,
+                             Eigen::Matrix<double, 3, 6>* j) const {
+  LaserResidual::Linearize((*datasets_[d].intervals)[k], IntervalSqrtInformation(d, k), odometry_,
+                           base_T_sensor_, r, j);
 }
 
 LaserProblem::~LaserProblem() = default;
 
 Status LaserProblem::Solve(ceres::Solver::Summary* summary) {
   const auto solve = [&](ceres::Solver::Summary* stage) {
-    return calib::Solve(LaserRefinementSettings(cost_functions_.size(), options_.max_iterations,
-                                                options_.num_threads),
-                        "the refinement", problem_.get(), stage);
+    // The fused block evaluates its intervals on its own threads.
+    return calib::Solve(
+        LaserRefinementSettings(num_intervals(), options_.max_iterations,
+                                options_.per_interval_blocks ? options_.num_threads : 1),
+        "the refinement", problem_.get(), stage);
   };
   ceres::Solver::Summary own;
   if (summary == nullptr) summary = &own;
@@ -188,25 +225,22 @@ StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::SandwichCovariance
   const int threads = std::max(1, options_.num_threads);
   std::vector<SandwichSums<kNumLaserParams>> sums(threads);
   std::atomic<bool> failed{false};
-  ParallelChunks(cost_functions_.size(), threads, kMinChunk,
-                 [&](size_t chunk, size_t begin, size_t end) {
-                   const double* parameters[2] = {odometry_, base_T_sensor_};
-                   Eigen::Matrix<double, 3, 3, Eigen::RowMajor> j_odometry, j_sensor;
-                   double* jacobians[2] = {j_odometry.data(), j_sensor.data()};
-                   Eigen::Matrix<double, 3, kNumLaserParams> j;
-                   Eigen::Vector3d r;
-                   for (size_t k = begin; k < end; ++k) {
-                     if (!cost_functions_[k]->Evaluate(parameters, r.data(), jacobians)) {
-                       failed = true;
-                       return;
-                     }
-                     j << j_odometry, j_sensor;
-                     sums[chunk].Add(j, r, EvaluateLoss(loss_.get(), r.squaredNorm()));
-                   }
-                 });
+  ParallelChunks(num_intervals(), threads, kMinChunk, [&](size_t chunk, size_t begin, size_t end) {
+    Eigen::Matrix<double, 3, kNumLaserParams> j;
+    Eigen::Vector3d r;
+    for (size_t i = begin; i < end; ++i) {
+      const size_t d = DatasetOf(i);
+      Linearize(d, i - dataset_begin_[d], &r, &j);
+      if (!r.allFinite() || !j.allFinite()) {
+        failed = true;
+        return;
+      }
+      sums[chunk].Add(j, r, EvaluateLoss(loss_.get(), r.squaredNorm()));
+    }
+  });
   if (failed) return Status::Internal("a residual could not be evaluated at the estimate");
   for (int c = 1; c < threads; ++c) sums[0] += sums[c];
-  const double n = 3.0 * cost_functions_.size();
+  const double n = 3.0 * num_intervals();
   if (n <= kNumLaserParams) return Status::NotObservable(kTooFew);
   StatusOr<CorrectedCovariance<LaserParamMatrix>> sandwich =
       calib::SandwichCovariance(sums[0], n, n - kNumLaserParams);
@@ -219,20 +253,16 @@ StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::SandwichCovariance
 StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::CorrelatedSandwichCovariance(
     const std::vector<std::vector<Eigen::Matrix3d>>& lag_one) const {
   SandwichSums<kNumLaserParams> sums;
-  const double* parameters[2] = {odometry_, base_T_sensor_};
-  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> j_odometry, j_sensor;
-  double* jacobians[2] = {j_odometry.data(), j_sensor.data()};
   Eigen::Matrix<double, 3, kNumLaserParams> j, j_previous;
   Eigen::Vector3d r;
   double weight_previous = 0.0;
-  size_t k = 0;  // The interval's index within its dataset.
-  for (size_t c = 0; c < cost_functions_.size(); ++c, ++k) {
-    const size_t d = cost_dataset_[c];
-    if (c > 0 && cost_dataset_[c - 1] != d) k = 0;
-    if (!cost_functions_[c]->Evaluate(parameters, r.data(), jacobians)) {
+  for (size_t i = 0; i < num_intervals(); ++i) {
+    const size_t d = DatasetOf(i);
+    const size_t k = i - dataset_begin_[d];
+    Linearize(d, k, &r, &j);
+    if (!r.allFinite() || !j.allFinite()) {
       return Status::Internal("a residual could not be evaluated at the estimate");
     }
-    j << j_odometry, j_sensor;
     const LossDerivatives rho = EvaluateLoss(loss_.get(), r.squaredNorm());
     sums.Add(j, r, rho);
     if (k > 0 && d < lag_one.size() && k - 1 < lag_one[d].size()) {
@@ -246,7 +276,7 @@ StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::CorrelatedSandwich
     j_previous = j;
     weight_previous = rho.rho1;
   }
-  const double n = 3.0 * cost_functions_.size();
+  const double n = 3.0 * num_intervals();
   if (n <= kNumLaserParams) return Status::NotObservable(kTooFew);
   StatusOr<CorrectedCovariance<LaserParamMatrix>> sandwich =
       calib::SandwichCovariance(sums, n, n - kNumLaserParams);
@@ -273,14 +303,9 @@ LaserInterval ShiftIncrements(LaserInterval interval, const Eigen::Vector2d& inc
 LaserParamVector Score(const LaserInterval& interval, const Eigen::Matrix3d& root,
                        const double* const* parameters, double weight,
                        LaserParamMatrix* hessian = nullptr) {
-  const LaserResidual residual(interval, &root);
-  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> j_odometry, j_sensor;
-  double* jacobians[2] = {j_odometry.data(), j_sensor.data()};
-  Eigen::Vector3d r;
-  ceres::AutoDiffCostFunction<LaserResidual, 3, 3, 3> cost(new LaserResidual(residual));
-  cost.Evaluate(parameters, r.data(), jacobians);
   Eigen::Matrix<double, 3, kNumLaserParams> j;
-  j << j_odometry, j_sensor;
+  Eigen::Vector3d r;
+  LaserResidual::Linearize(interval, root, parameters[0], parameters[1], &r, &j);
   if (hessian) *hessian += weight * j.transpose() * j;
   return weight * j.transpose() * r;
 }

@@ -1,0 +1,193 @@
+#include <calib/core/laser/laser_simulator.h>
+#include <calib/problems/laser/laser_residual.h>
+#include <calib/solvers/common/fused_normal_cost.h>
+#include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/solvers/laser/laser_refinement.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+
+namespace calib {
+namespace {
+
+LaserRefinementOptions PerInterval(LaserRefinementOptions options = {}) {
+  options.per_interval_blocks = true;
+  return options;
+}
+
+LaserLog NoisyLogWithSlips(int intervals, int seed) {
+  LaserSimOptions sim;
+  sim.num_intervals = intervals;
+  sim.outlier_fraction = 0.05;
+  sim.seed = seed;
+  return SimulateLaserLog(sim);
+}
+
+// The dataset whitened by the calibration's own noise level, as CalibrateLaser builds it.
+LaserDataset Whitened(const LaserLog& log, const LaserCalibrationResult& result) {
+  return LaserDataset{&log.intervals, result.noise_sigma[0].cwiseInverse().asDiagonal()};
+}
+
+// Ceres' cost, gradient and Gauss–Newton matrix of a problem at its current parameters.
+struct Linearization {
+  double cost = 0.0;
+  Eigen::VectorXd gradient;
+  Eigen::MatrixXd gauss_newton;
+};
+
+Linearization Linearize(ceres::Problem* problem) {
+  Linearization out;
+  std::vector<double> gradient;
+  ceres::CRSMatrix jacobian;
+  EXPECT_TRUE(problem->Evaluate(ceres::Problem::EvaluateOptions(), &out.cost, nullptr, &gradient,
+                                &jacobian));
+  out.gradient = Eigen::Map<Eigen::VectorXd>(gradient.data(), gradient.size());
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(jacobian.num_rows, jacobian.num_cols);
+  for (int row = 0; row < jacobian.num_rows; ++row) {
+    for (int i = jacobian.rows[row]; i < jacobian.rows[row + 1]; ++i) {
+      dense(row, jacobian.cols[i]) = jacobian.values[i];
+    }
+  }
+  out.gauss_newton = dense.transpose() * dense;
+  return out;
+}
+
+// A loss with ρ'' > 0 (no loss here has one), to exercise Ceres' curvature correction.
+class ConvexLoss : public ceres::LossFunction {
+ public:
+  void Evaluate(double s, double rho[3]) const override {
+    rho[0] = s + 0.05 * s * s;
+    rho[1] = 1.0 + 0.1 * s;
+    rho[2] = 0.1;
+  }
+};
+
+// Ceres sees the same cost, gradient and Gauss–Newton matrix from the one fused block as from a
+// block per interval, for a loss with ρ'' < 0 (Cauchy), without a loss, and with ρ'' > 0 (the
+// cost is then not exact: e² would be negative; the gradient and matrix are).
+TEST(FusedNormalCostTest, CeresSeesTheSameLinearizationAsFromSeparateBlocks) {
+  const LaserLog log = NoisyLogWithSlips(500, 3);
+  const Eigen::Matrix3d root = Eigen::Vector3d(1e3, 1e3, 5e2).asDiagonal();
+  // Off the optimum, so the gradient is not small.
+  const double odometry_init[3] = {0.033, 0.031, 0.31};
+  const double sensor_init[3] = {0.1, 0.02, 0.3};
+  ceres::CauchyLoss cauchy(3.0);
+  ConvexLoss convex;
+  const std::vector<std::pair<const ceres::LossFunction*, bool>> losses = {
+      {&cauchy, true}, {nullptr, true}, {&convex, false}};
+  for (const auto& [loss, cost_exact] : losses) {
+    ceres::Problem::Options options;
+    options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem separate(options), fused(options);
+    double odometry[2][3], sensor[2][3];
+    for (int p = 0; p < 2; ++p) {
+      std::copy(odometry_init, odometry_init + 3, odometry[p]);
+      std::copy(sensor_init, sensor_init + 3, sensor[p]);
+    }
+    for (const LaserInterval& interval : log.intervals) {
+      separate.AddResidualBlock(LaserResidual::Create(interval, &root),
+                                const_cast<ceres::LossFunction*>(loss), odometry[0], sensor[0]);
+    }
+    using Cost = FusedNormalCost<3, 6>;
+    const auto linearize = [&](size_t k, const double* const* parameters, Cost::Residual* r,
+                               Cost::Jacobian* j) {
+      if (j == nullptr)
+        return LaserResidual(log.intervals[k], &root)(parameters[0], parameters[1], r->data());
+      LaserResidual::Linearize(log.intervals[k], root, parameters[0], parameters[1], r, j);
+      return true;
+    };
+    fused.AddResidualBlock(new Cost({3, 3}, log.intervals.size(), linearize, loss, 2), nullptr,
+                           odometry[1], sensor[1]);
+    const Linearization a = Linearize(&separate);
+    const Linearization b = Linearize(&fused);
+    if (cost_exact) {
+      EXPECT_NEAR(b.cost, a.cost, 1e-10 * a.cost);
+    }
+    EXPECT_LT((b.gradient - a.gradient).norm(), 1e-9 * a.gradient.norm());
+    EXPECT_LT((b.gauss_newton - a.gauss_newton).norm(), 1e-9 * a.gauss_newton.norm());
+    // A cost-only evaluation gives the same cost.
+    double cost_only = 0.0;
+    ASSERT_TRUE(
+        fused.Evaluate(ceres::Problem::EvaluateOptions(), &cost_only, nullptr, nullptr, nullptr));
+    if (cost_exact) {
+      EXPECT_NEAR(cost_only, a.cost, 1e-10 * a.cost);
+    }
+  }
+}
+
+// The fused refinement (the default) ends where the per-interval one does, after the same
+// iterations, with the same covariance: Ceres' and the sandwich.
+TEST(FusedRefinementTest, EqualsThePerIntervalBlocksPath) {
+  const LaserLog log = NoisyLogWithSlips(3000, 21);
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(log.intervals);
+  ASSERT_TRUE(result.ok()) << result.message();
+  // From the closed form, so that LM has a way to go.
+  const LaserCalibration start = result->closed_form.calibration;
+  LaserProblem fused({Whitened(log, *result)}, start, LaserRefinementOptions{});
+  LaserProblem separate({Whitened(log, *result)}, start, PerInterval());
+  ceres::Solver::Summary fused_summary, separate_summary;
+  ASSERT_TRUE(fused.Solve(&fused_summary).ok());
+  ASSERT_TRUE(separate.Solve(&separate_summary).ok());
+  EXPECT_EQ(fused_summary.iterations.size(), separate_summary.iterations.size());
+  const StatusOr<CorrectedCovariance<LaserParamMatrix>> covariance = separate.Covariance();
+  const StatusOr<CorrectedCovariance<LaserParamMatrix>> fused_covariance = fused.Covariance();
+  ASSERT_TRUE(covariance.ok() && fused_covariance.ok());
+  const LaserParamVector sigma = covariance->covariance.diagonal().cwiseSqrt();
+  const LaserParamVector difference =
+      fused.calibration().ToVector() - separate.calibration().ToVector();
+  EXPECT_LT(difference.cwiseQuotient(sigma).cwiseAbs().maxCoeff(), 1e-6) << difference.transpose();
+  EXPECT_NEAR(fused_covariance->kappa, covariance->kappa, 1e-9);
+  EXPECT_LT((fused_covariance->covariance - covariance->covariance).norm(),
+            1e-6 * covariance->covariance.norm());
+  const StatusOr<CorrectedCovariance<LaserParamMatrix>> sandwich = fused.SandwichCovariance();
+  const StatusOr<CorrectedCovariance<LaserParamMatrix>> separate_sandwich =
+      separate.SandwichCovariance();
+  ASSERT_TRUE(sandwich.ok() && separate_sandwich.ok());
+  EXPECT_LT((sandwich->covariance - separate_sandwich->covariance).norm(),
+            1e-6 * separate_sandwich->covariance.norm());
+}
+
+// Without a robust loss and on noise-free data both paths recover the truth exactly.
+TEST(FusedRefinementTest, NoiseFreeLeastSquaresRecoversTheTruth) {
+  LaserSimOptions sim;
+  sim.num_intervals = 400;
+  sim.speed_time_constant_s = 0.0;
+  sim.scan_noise_sigma.setZero();
+  const LaserLog log = SimulateLaserLog(sim);
+  const LaserCalibration truth{sim.odometry, sim.base_T_sensor};
+  const LaserCalibration nominal{OdometryParams{0.021, 0.021, 0.09}, Pose2d(0.0, 0.0, -1.4)};
+  LaserRefinementOptions options;
+  options.loss = RobustLoss::kNone;
+  for (const LaserRefinementOptions& path : {options, PerInterval(options)}) {
+    LaserProblem problem({LaserDataset{&log.intervals, Eigen::Matrix3d::Identity() * 1e3}}, nominal,
+                         path);
+    ASSERT_TRUE(problem.Solve().ok());
+    const LaserParamVector error = problem.calibration().ToVector() - truth.ToVector();
+    EXPECT_LT(error.cwiseAbs().maxCoeff(), 1e-9) << error.transpose();
+  }
+}
+
+// A straight-line log does not determine the parameters: both paths say so from the covariance.
+TEST(FusedRefinementTest, UnobservableLogIsSingularOnBothPaths) {
+  LaserSimOptions sim;
+  sim.num_intervals = 300;
+  sim.speed_time_constant_s = 0.0;
+  LaserLog log = SimulateLaserLog(sim);
+  for (LaserInterval& interval : log.intervals) {
+    interval.right_speed = interval.left_speed;  // Straight ahead only.
+  }
+  // Equal radii: no interval turns the robot, and nothing fixes the sensor's x and y.
+  LaserCalibration straight{sim.odometry, sim.base_T_sensor};
+  straight.odometry.right_radius_m = straight.odometry.left_radius_m;
+  for (const LaserRefinementOptions& path : {LaserRefinementOptions{}, PerInterval()}) {
+    LaserProblem problem({LaserDataset{&log.intervals, Eigen::Matrix3d::Identity() * 1e2}},
+                         straight, path);
+    const StatusOr<CorrectedCovariance<LaserParamMatrix>> covariance = problem.Covariance();
+    EXPECT_FALSE(covariance.ok());
+    EXPECT_EQ(covariance.code(), StatusCode::kNotObservable) << covariance.message();
+  }
+}
+
+}  // namespace
+}  // namespace calib
