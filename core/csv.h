@@ -59,6 +59,8 @@ class CsvReader {
   std::string Where() const;
   // The required column names, "run,t,left,right".
   std::string RequiredNames() const;
+  // The first byte of the text not yet read (the fields of the current line lie before it).
+  const char* position() const { return text_.data() + pos_; }
 
  private:
   CsvReader() = default;

@@ -4,6 +4,7 @@
 #include <calib/core/status.h>
 
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <new>
 #include <stdexcept>
@@ -21,6 +22,13 @@ constexpr size_t kMaxLineBytes = size_t{1} << 20;
 constexpr size_t kMaxCsvColumns = 10000;
 // A NUL byte within this many leading bytes marks a binary file (checked before any parsing).
 constexpr size_t kTextCheckBytes = 64 * 1024;
+
+// A parser calls this with a pointer into its text when it will not read the bytes before it
+// again: a mapped file then drops their pages, so that a long log's parse keeps a window of the
+// file resident instead of all of it (a million intervals: 200 MB).
+using ReleaseText = std::function<void(const char* before)>;
+// Parsers call it at most this often.
+constexpr size_t kReleaseTextBytes = size_t{16} << 20;
 
 // A file's bytes, read-only and owned: a regular file is mapped (MAP_PRIVATE, PROT_READ), so that
 // no zero-filled copy is made and only the pages parsed are read; anything else (a pipe) is read
@@ -44,6 +52,13 @@ class MappedFile {
   const uint8_t* data() const { return reinterpret_cast<const uint8_t*>(data_); }
   uint64_t size() const { return size_; }
   const std::string& path() const { return path_; }
+  // Drops the resident pages wholly before `before` (a pointer into text()); they read back from
+  // the file if touched again. A pointer before the previous call's starts a new pass (from the
+  // text's start). No effect on a file read into memory.
+  void Release(const char* before) const;
+  ReleaseText Releaser() const {
+    return [this](const char* before) { Release(before); };
+  }
 
  private:
   static StatusOr<MappedFile> OpenImpl(const std::string& path, bool text);
@@ -54,7 +69,8 @@ class MappedFile {
   const char* data_ = nullptr;
   size_t size_ = 0;
   bool mapped_ = false;
-  std::string owned_;  // The bytes of a file that could not be mapped.
+  mutable size_t released_ = 0;  // Bytes dropped in this pass (a page multiple).
+  std::string owned_;            // The bytes of a file that could not be mapped.
 };
 
 // "FILE: not a text file: a NUL byte at byte N (binary data?)" when one appears in the first

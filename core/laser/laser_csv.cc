@@ -17,7 +17,8 @@ using laser_io_internal::LogBuilder;
 // The CSV format: a header naming T,phi_l,phi_r,sm_x,sm_y,sm_theta and optionally t.
 namespace {
 
-StatusOr<LaserLog> ParseCsv(std::string_view text, const std::string& source) {
+StatusOr<LaserLog> ParseCsv(std::string_view text, const std::string& source,
+                            const ReleaseText& release) {
   enum { kT, kPhiL, kPhiR, kSmX, kSmY, kSmTheta, kStart };
   CALIB_ASSIGN_OR_RETURN(CsvReader csv, CsvReader::Open(text, source,
                                                         {{"T"},
@@ -28,6 +29,7 @@ StatusOr<LaserLog> ParseCsv(std::string_view text, const std::string& source) {
                                                          {"sm_theta"},
                                                          {"t", /*required=*/false}}));
   LogBuilder builder(source);
+  size_t released = 0;
   while (true) {
     CALIB_ASSIGN_OR_RETURN(const bool more, csv.Next());
     if (!more) break;
@@ -44,14 +46,20 @@ StatusOr<LaserLog> ParseCsv(std::string_view text, const std::string& source) {
     interval.line = SaturatedInt(csv.line());
     interval.record = SaturatedInt(csv.record());
     CALIB_RETURN_IF_ERROR(builder.Add(std::move(interval), has_t));
+    const size_t read = static_cast<size_t>(csv.position() - text.data());
+    if (release && read >= released + kReleaseTextBytes) {
+      release(csv.position());
+      released = read;
+    }
   }
   return std::move(builder).Finish(" (only a header)");
 }
 
 }  // namespace
 
-StatusOr<LaserLog> ParseLaserCsv(std::string_view text, const std::string& source) {
-  return GuardAllocation(source, [&] { return ParseCsv(text, source); });
+StatusOr<LaserLog> ParseLaserCsv(std::string_view text, const std::string& source,
+                                 const ReleaseText& release) {
+  return GuardAllocation(source, [&] { return ParseCsv(text, source, release); });
 }
 
 Status WriteLaserCsv(const LaserLog& log, const std::string& path) {

@@ -41,11 +41,11 @@ StatusOr<LaserLog> ReadLaserLog(const std::string& path, LaserFormat format) {
     return ReadLaserStream(path);
   }
   CALIB_ASSIGN_OR_RETURN(const MappedFile file, MappedFile::OpenText(path));
-  return ParseLaserLog(file.text(), path, format);
+  return ParseLaserLog(file.text(), path, format, file.Releaser());
 }
 
 StatusOr<LaserLog> ParseLaserLog(std::string_view text, const std::string& source,
-                                 LaserFormat format) {
+                                 LaserFormat format, const ReleaseText& release) {
   if (format == LaserFormat::kStream) {
     return Status::InvalidInput(source + ": the stream format is a directory, not one file's text");
   }
@@ -56,8 +56,8 @@ StatusOr<LaserLog> ParseLaserLog(std::string_view text, const std::string& sourc
     format = i < body.size() && body[i] == '{' ? LaserFormat::kTuples : LaserFormat::kCsv;
   }
   CALIB_ASSIGN_OR_RETURN(LaserLog log, format == LaserFormat::kTuples
-                                           ? ParseLaserTuples(text, source)
-                                           : ParseLaserCsv(text, source));
+                                           ? ParseLaserTuples(text, source, release)
+                                           : ParseLaserCsv(text, source, release));
   return GuardAllocation(source, [&]() -> StatusOr<LaserLog> {
     const size_t read = log.intervals.size();
     DropImplausibleIntervals(&log);

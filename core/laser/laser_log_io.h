@@ -5,6 +5,7 @@
 #include <calib/core/laser/laser_log.h>
 #include <calib/core/se2.h>
 #include <calib/core/status.h>
+#include <calib/core/text_file.h>
 
 #include <string>
 #include <string_view>
@@ -28,13 +29,17 @@ StatusOr<LaserLog> ReadLaserLog(const std::string& path, LaserFormat format = La
 
 // Parsers over in-memory text; `source` is the name used in messages. Records (a CSV line, a
 // tuple) longer than kMaxLineBytes and headers of more than kMaxCsvColumns columns are errors;
-// an allocation failure is an error naming `source`.
-StatusOr<LaserLog> ParseLaserTuples(std::string_view text, const std::string& source);
-StatusOr<LaserLog> ParseLaserCsv(std::string_view text, const std::string& source);
+// an allocation failure is an error naming `source`. `release`, when given, is told as the parse
+// moves on which bytes it will not read again (MappedFile::Releaser).
+StatusOr<LaserLog> ParseLaserTuples(std::string_view text, const std::string& source,
+                                    const ReleaseText& release = {});
+StatusOr<LaserLog> ParseLaserCsv(std::string_view text, const std::string& source,
+                                 const ReleaseText& release = {});
 // What ReadLaserLog does with a file's text (tuples or CSV; kAuto detects, kStream is an error):
 // the parse, then intervals holding a value no unit explains dropped with a warning.
 StatusOr<LaserLog> ParseLaserLog(std::string_view text, const std::string& source,
-                                 LaserFormat format = LaserFormat::kAuto);
+                                 LaserFormat format = LaserFormat::kAuto,
+                                 const ReleaseText& release = {});
 
 // Raw streams: StampedPose and LaserStreams {odometry, sensor_poses} are in laser_log.h.
 

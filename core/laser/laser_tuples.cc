@@ -30,10 +30,15 @@ constexpr const char* kTupleKeyNames[kNumKeys] = {"T", "phi_l", "phi_r", "sm", "
 
 class TupleParser {
  public:
-  TupleParser(std::string_view text, const std::string& source)
-      : p_(text.data()), end_(text.data() + text.size()), builder_(source), source_(source) {
+  TupleParser(std::string_view text, const std::string& source, const ReleaseText& release)
+      : p_(text.data()),
+        end_(text.data() + text.size()),
+        builder_(source),
+        source_(source),
+        release_(release) {
     // A file of braces must not reserve more records than its bytes can hold.
     builder_.Reserve(std::min(CountBraces(), text.size() / kMinRecordBytes));
+    next_release_ = Ahead(p_);
   }
 
   StatusOr<LaserLog> Parse() {
@@ -51,6 +56,10 @@ class TupleParser {
       CALIB_RETURN_IF_ERROR(ParseBoundedRecord(&interval, &has_t));
       CALIB_RETURN_IF_ERROR(builder_.Add(std::move(interval), has_t));
       SkipSpace();
+      if (release_ && p_ >= next_release_) {
+        release_(p_);
+        next_release_ = Ahead(p_);
+      }
     }
     return std::move(builder_).Finish("");
   }
@@ -60,10 +69,16 @@ class TupleParser {
   // std::count here.
   size_t CountBraces() const {
     size_t count = 0;
+    const char* release_at = Ahead(p_);
     for (const char* q = p_; q < end_; ++count, ++q) {
       q = static_cast<const char*>(std::memchr(q, '{', static_cast<size_t>(end_ - q)));
       if (q == nullptr) break;
+      if (release_ && q >= release_at) {
+        release_(q);
+        release_at = Ahead(q);
+      }
     }
+    if (release_) release_(end_);
     return count;
   }
 
@@ -236,6 +251,13 @@ class TupleParser {
   const char* end_;
   LogBuilder builder_;
   const std::string& source_;
+  const ReleaseText& release_;
+  const char* next_release_ = nullptr;
+
+  // kReleaseTextBytes past q, or the end.
+  const char* Ahead(const char* q) const {
+    return static_cast<size_t>(end_ - q) > kReleaseTextBytes ? q + kReleaseTextBytes : end_;
+  }
   // 64 bits: a file may hold more than 2^31 newlines.
   int64_t line_ = 1;
   int64_t record_ = 0;
@@ -244,8 +266,10 @@ class TupleParser {
 
 }  // namespace
 
-StatusOr<LaserLog> ParseLaserTuples(std::string_view text, const std::string& source) {
-  return GuardAllocation(source, [&] { return TupleParser(WithoutBom(text), source).Parse(); });
+StatusOr<LaserLog> ParseLaserTuples(std::string_view text, const std::string& source,
+                                    const ReleaseText& release) {
+  return GuardAllocation(source,
+                         [&] { return TupleParser(WithoutBom(text), source, release).Parse(); });
 }
 
 Status WriteLaserTuples(const LaserLog& log, const std::string& path) {

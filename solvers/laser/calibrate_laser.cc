@@ -339,16 +339,20 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   result.covariance_scale = covariance.kappa;
   result.stddev = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
   result.covariance_seconds = SecondsSince(start);
+  report("covariance done in " + std::to_string(result.covariance_seconds) + " s");
   result.observability =
       AnalyzeLaserObservability(result.covariance, result.estimate, result.census);
   if (options.interval_jitter) {
     start = std::chrono::steady_clock::now();
     CALIB_RETURN_IF_ERROR(RefitWithIntervalJitter(logs, options, &result));
     result.refinement_seconds += SecondsSince(start);
+    report("interval jitter done in " + std::to_string(SecondsSince(start)) + " s");
   }
+  start = std::chrono::steady_clock::now();
   JudgeInliers(problem, joined, &result);
   result.consistency = CheckLaserConsistencyJoint(logs, result.estimate, result.covariance,
                                                   result.noise_sigma, result.is_inlier);
+  report("inlier and consistency checks done in " + std::to_string(SecondsSince(start)) + " s");
   result.warnings.insert(result.warnings.end(), result.consistency.warnings.begin(),
                          result.consistency.warnings.end());
   // The solver's warnings join the observability's, which the report prints.

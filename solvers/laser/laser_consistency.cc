@@ -266,7 +266,8 @@ LaserConsistency CheckLaserConsistencyJoint(
   for (size_t d = 0; d < logs.size(); ++d) {
     static const std::vector<bool> kAll;
     terms.push_back(ComputeTerms(*logs[d], estimate, noise_sigma[d],
-                                 is_inlier.empty() ? kAll : is_inlier[d], &hessian));
+                                 is_inlier.empty() ? kAll : is_inlier[d], &hessian,
+                                 options.num_threads));
   }
   // Parameters held fixed do not move with the data: their rows of H become the identity.
   for (int i = 0; i < kNumLaserParams; ++i) {
@@ -290,8 +291,9 @@ LaserConsistency CheckLaserConsistencyJoint(
   rotation.lag =
       AutomaticLag(terms, [](const IntervalTerms& t) { return t.rotation_difference(); });
   travel.lag = AutomaticLag(terms, [](const IntervalTerms& t) { return t.travel_difference(); });
-  const LaserParamMatrix rotation_long_run = InfluenceLongRun(terms, rotation.lag);
-  const LaserParamMatrix travel_long_run = InfluenceLongRun(terms, travel.lag);
+  const LaserParamMatrix rotation_long_run =
+      InfluenceLongRun(terms, rotation.lag, options.num_threads);
+  const LaserParamMatrix travel_long_run = InfluenceLongRun(terms, travel.lag, options.num_threads);
   rotation.influence_long_run = &rotation_long_run;
   travel.influence_long_run = &travel_long_run;
   out.rotation_lag = rotation.lag;

@@ -38,6 +38,8 @@ struct LaserConsistencyOptions {
   double end_timing_fraction = 0.29;
   // At most this many warnings (the most significant windows); the JSON lists every window.
   int max_warnings = 3;
+  // The per-interval passes run on this many threads (a million intervals: a second on one).
+  int num_threads = 2;
 };
 
 // One side-by-side total: predicted by the wheel model, measured by the sensor.

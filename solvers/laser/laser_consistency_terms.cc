@@ -1,4 +1,5 @@
 #include <calib/problems/laser/laser_residual.h>
+#include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/laser/laser_consistency_terms.h>
 #include <calib/solvers/laser/laser_motion.h>
 #include <ceres/jet.h>
@@ -8,6 +9,9 @@
 
 namespace calib::consistency_internal {
 namespace {
+
+// Below this many intervals per chunk a thread costs more than it saves.
+constexpr size_t kMinChunk = 5000;
 
 template <typename T>
 T Travel(const Pose2d& sensor_motion, const Pose2<T>& base_T_sensor) {
@@ -53,7 +57,7 @@ double ForwardTravel(const Pose2d& sensor_motion, const Pose2d& base_T_sensor,
 
 LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCalibration& c,
                       const Eigen::Vector3d& noise_sigma, const std::vector<bool>& is_inlier,
-                      LaserParamMatrix* hessian) {
+                      LaserParamMatrix* hessian, int num_threads) {
   using Jet6 = ceres::Jet<double, kNumLaserParams>;
   const OdometryParams& odo = c.odometry;
   const Eigen::Vector3d weight = noise_sigma.cwiseMax(1e-12).cwiseAbs2().cwiseInverse();
@@ -66,48 +70,61 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
     mounting[i] = Jet6(v(3 + i), 3 + i);
   }
   LogTerms log{&intervals, std::vector<IntervalTerms>(intervals.size())};
-  for (size_t k = 0; k < intervals.size(); ++k) {
-    const LaserInterval& in = intervals[k];
-    IntervalTerms& t = log.terms[k];
-    t.counted = is_inlier.empty() || is_inlier[k];
-    t.duration_s = in.duration_s;
-    t.wheel = IntervalWheelRotation(in);
-    // r·Δφ summed over the steps is r·(total Δφ): the totals need no integration.
-    t.rotation_predicted =
-        (odo.right_radius_m * t.wheel(1) - odo.left_radius_m * t.wheel(0)) / odo.wheelbase_m;
-    t.travel_predicted = (odo.left_radius_m * t.wheel(0) + odo.right_radius_m * t.wheel(1)) / 2.0;
-    t.rotation_measured = in.sensor_motion(2);
-    t.travel_measured = ForwardTravel(in.sensor_motion, c.base_T_sensor, &t.travel_gradient);
-    t.still = t.wheel.cwiseAbs().sum() < 1e-6 ||
-              (std::abs(t.rotation_predicted) <= 0.5 * noise_sigma(2) &&
-               std::abs(t.travel_predicted) <= still_travel_m);
-    if (!t.counted) continue;
-    Jet6 error[3];
-    LaserResidual(in, &identity)(odometry, mounting, error);
-    Eigen::Matrix<double, 3, kNumLaserParams> jacobian;
-    Eigen::Vector3d e;
-    for (int r = 0; r < 3; ++r) {
-      e(r) = error[r].a;
-      jacobian.row(r) = error[r].v.transpose();
-    }
-    t.influence = jacobian.transpose() * weight.asDiagonal() * e;
-    *hessian += jacobian.transpose() * weight.asDiagonal() * jacobian;
-  }
+  std::vector<LaserParamMatrix> hessians(ChunkCount(intervals.size(), num_threads, kMinChunk),
+                                         LaserParamMatrix::Zero());
+  ParallelChunks(
+      intervals.size(), num_threads, kMinChunk, [&](size_t chunk, size_t begin, size_t end) {
+        for (size_t k = begin; k < end; ++k) {
+          const LaserInterval& in = intervals[k];
+          IntervalTerms& t = log.terms[k];
+          t.counted = is_inlier.empty() || is_inlier[k];
+          t.duration_s = in.duration_s;
+          t.wheel = IntervalWheelRotation(in);
+          // r·Δφ summed over the steps is r·(total Δφ): the totals need no integration.
+          t.rotation_predicted =
+              (odo.right_radius_m * t.wheel(1) - odo.left_radius_m * t.wheel(0)) / odo.wheelbase_m;
+          t.travel_predicted =
+              (odo.left_radius_m * t.wheel(0) + odo.right_radius_m * t.wheel(1)) / 2.0;
+          t.rotation_measured = in.sensor_motion(2);
+          t.travel_measured = ForwardTravel(in.sensor_motion, c.base_T_sensor, &t.travel_gradient);
+          t.still = t.wheel.cwiseAbs().sum() < 1e-6 ||
+                    (std::abs(t.rotation_predicted) <= 0.5 * noise_sigma(2) &&
+                     std::abs(t.travel_predicted) <= still_travel_m);
+          if (!t.counted) continue;
+          Jet6 error[3];
+          LaserResidual(in, &identity)(odometry, mounting, error);
+          Eigen::Matrix<double, 3, kNumLaserParams> jacobian;
+          Eigen::Vector3d e;
+          for (int r = 0; r < 3; ++r) {
+            e(r) = error[r].a;
+            jacobian.row(r) = error[r].v.transpose();
+          }
+          t.influence = jacobian.transpose() * weight.asDiagonal() * e;
+          hessians[chunk] += jacobian.transpose() * weight.asDiagonal() * jacobian;
+        }
+      });
+  for (const LaserParamMatrix& h : hessians) *hessian += h;
   RescueTimingOutliers(intervals, noise_sigma, &log.terms);
   return log;
 }
 
-LaserParamMatrix InfluenceLongRun(const std::vector<LogTerms>& logs, int lag) {
+LaserParamMatrix InfluenceLongRun(const std::vector<LogTerms>& logs, int lag, int num_threads) {
   LaserParamMatrix s = LaserParamMatrix::Zero();
   for (const LogTerms& log : logs) {
     const std::vector<IntervalTerms>& t = log.terms;
-    for (size_t k = 0; k < t.size(); ++k) {
-      s += t[k].influence * t[k].influence.transpose();
-      for (int j = 1; j <= lag && k + j < t.size(); ++j) {
-        const LaserParamMatrix cross = t[k].influence * t[k + j].influence.transpose();
-        s += Bartlett(j, lag) * (cross + cross.transpose());
+    std::vector<LaserParamMatrix> sums(ChunkCount(t.size(), num_threads, kMinChunk),
+                                       LaserParamMatrix::Zero());
+    ParallelChunks(t.size(), num_threads, kMinChunk, [&](size_t chunk, size_t begin, size_t end) {
+      LaserParamMatrix& sum = sums[chunk];
+      for (size_t k = begin; k < end; ++k) {
+        sum.noalias() += t[k].influence * t[k].influence.transpose();
+        for (int j = 1; j <= lag && k + j < t.size(); ++j) {
+          const LaserParamMatrix cross = t[k].influence * t[k + j].influence.transpose();
+          sum += Bartlett(j, lag) * (cross + cross.transpose());
+        }
       }
-    }
+    });
+    for (const LaserParamMatrix& sum : sums) s += sum;
   }
   return s;
 }

@@ -51,7 +51,7 @@ struct LogTerms {
 // rotation of its boundaries in the totals.
 LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCalibration& c,
                       const Eigen::Vector3d& noise_sigma, const std::vector<bool>& is_inlier,
-                      LaserParamMatrix* hessian);
+                      LaserParamMatrix* hessian, int num_threads = 1);
 
 // Bartlett weight of lag j.
 inline double Bartlett(int j, int lag) { return 1.0 - static_cast<double>(j) / (lag + 1); }
@@ -64,7 +64,7 @@ int AutomaticLag(const std::vector<LogTerms>& logs, Series series);
 
 // The long-run (HAC) covariance of Σψ_k over every log: the estimate's sandwich with its serial
 // correlation.
-LaserParamMatrix InfluenceLongRun(const std::vector<LogTerms>& logs, int lag);
+LaserParamMatrix InfluenceLongRun(const std::vector<LogTerms>& logs, int lag, int num_threads = 1);
 
 template <typename Series>
 int AutomaticLag(const std::vector<LogTerms>& logs, Series series) {

@@ -173,18 +173,27 @@ std::vector<IntervalBoundarySpeeds> BoundaryWheelSpeeds(
 
 std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
     const std::vector<LaserInterval>& intervals, const LaserCalibration& calibration) {
+  std::vector<size_t> all(intervals.size());
+  for (size_t k = 0; k < all.size(); ++k) all[k] = k;
+  return IntervalTimeSensitivities(intervals, calibration, all);
+}
+
+std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
+    const std::vector<LaserInterval>& intervals, const LaserCalibration& calibration,
+    const std::vector<size_t>& indices) {
   using Jet = ceres::Jet<double, 2>;
   const std::vector<IntervalBoundarySpeeds> speeds = BoundaryWheelSpeeds(intervals);
   const OdometryParams& p = calibration.odometry;
-  std::vector<IntervalTimeSensitivity> sensitivities(intervals.size());
-  for (size_t k = 0; k < intervals.size(); ++k) {
+  std::vector<IntervalTimeSensitivity> sensitivities(indices.size());
+  for (size_t i = 0; i < indices.size(); ++i) {
+    const size_t k = indices[i];
     const Pose2d robot_motion =
         IntervalRobotMotion(p.left_radius_m, p.right_radius_m, p.wheelbase_m, intervals[k]);
     const Eigen::Matrix<Jet, 3, 1> motion =
         ShiftedSensorMotion(calibration, robot_motion, speeds[k], Jet(0.0, 0), Jet(0.0, 1));
-    for (int i = 0; i < 3; ++i) {
-      sensitivities[k].start(i) = motion(i).v(0);
-      sensitivities[k].end(i) = motion(i).v(1);
+    for (int j = 0; j < 3; ++j) {
+      sensitivities[i].start(j) = motion(j).v(0);
+      sensitivities[i].end(j) = motion(j).v(1);
     }
   }
   return sensitivities;
@@ -231,20 +240,28 @@ std::vector<Eigen::Matrix3d> JitterSqrtInformation(
   return roots;
 }
 
+std::vector<size_t> JitterSampleIndices(size_t n, const std::vector<bool>& is_inlier,
+                                        int max_intervals) {
+  size_t inliers = 0;
+  for (size_t k = 0; k < n; ++k) inliers += k >= is_inlier.size() || is_inlier[k];
+  const size_t limit = static_cast<size_t>(std::max(max_intervals, 100));
+  const size_t stride = std::max<size_t>((inliers + limit - 1) / limit, 1);
+  std::vector<size_t> indices;
+  size_t seen = 0;
+  for (size_t k = 0; k < n; ++k) {
+    if (k < is_inlier.size() && !is_inlier[k]) continue;
+    if (seen++ % stride == 0) indices.push_back(k);
+  }
+  return indices;
+}
+
 IntervalJitterEstimate EstimateIntervalJitter(
     const std::vector<Eigen::Vector3d>& errors,
     const std::vector<IntervalTimeSensitivity>& sensitivities, const Eigen::Vector3d& noise_sigma,
     const std::vector<bool>& is_inlier, const IntervalJitterOptions& options) {
   JitterData data;
   const size_t n = std::min(errors.size(), sensitivities.size());
-  size_t inliers = 0;
-  for (size_t k = 0; k < n; ++k) inliers += k >= is_inlier.size() || is_inlier[k];
-  const size_t limit = static_cast<size_t>(std::max(options.max_intervals, 100));
-  const size_t stride = (inliers + limit - 1) / limit;
-  size_t seen = 0;
-  for (size_t k = 0; k < n; ++k) {
-    if (k < is_inlier.size() && !is_inlier[k]) continue;
-    if (seen++ % std::max<size_t>(stride, 1) != 0) continue;
+  for (size_t k : JitterSampleIndices(n, is_inlier, options.max_intervals)) {
     const IntervalTimeSensitivity& g = sensitivities[k];
     data.errors.push_back(errors[k]);
     data.gram.push_back(g.start * g.start.transpose() + g.end * g.end.transpose());
@@ -305,14 +322,19 @@ IntervalJitterEstimate EstimateIntervalJitter(const std::vector<LaserInterval>& 
                                               const Eigen::Vector3d& noise_sigma,
                                               const std::vector<bool>& is_inlier,
                                               const IntervalJitterOptions& options) {
+  // Errors and sensitivities of the sampled intervals only (a million-interval log samples 2 %).
+  const std::vector<size_t> sample =
+      JitterSampleIndices(intervals.size(), is_inlier, options.max_intervals);
   const LaserParamVector p = calibration.ToVector();
   std::vector<Eigen::Vector3d> errors;
-  errors.reserve(intervals.size());
-  for (const LaserInterval& interval : intervals) {
-    errors.push_back(LaserResidual::Error(interval, p.data(), p.data() + 3));
+  errors.reserve(sample.size());
+  for (size_t k : sample) {
+    errors.push_back(LaserResidual::Error(intervals[k], p.data(), p.data() + 3));
   }
-  return EstimateIntervalJitter(errors, IntervalTimeSensitivities(intervals, calibration),
-                                noise_sigma, is_inlier, options);
+  IntervalJitterOptions all = options;
+  all.max_intervals = std::max<int>(options.max_intervals, static_cast<int>(sample.size()));
+  return EstimateIntervalJitter(errors, IntervalTimeSensitivities(intervals, calibration, sample),
+                                noise_sigma, {}, all);
 }
 
 std::string IntervalJitterStatement(const IntervalJitterEstimate& estimate) {

@@ -46,6 +46,10 @@ std::vector<IntervalBoundarySpeeds> BoundaryWheelSpeeds(
 // W the wheel-step displacement and o the interval's robot displacement.
 std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
     const std::vector<LaserInterval>& intervals, const LaserCalibration& calibration);
+// The same for the intervals at `indices` only (one sensitivity per index).
+std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
+    const std::vector<LaserInterval>& intervals, const LaserCalibration& calibration,
+    const std::vector<size_t>& indices);
 
 // σ_j²·(g_s g_sᵀ + g_e g_eᵀ): what the jitter adds to one interval's error covariance.
 Eigen::Matrix3d JitterCovariance(const IntervalTimeSensitivity& sensitivity, double jitter_s);
@@ -97,6 +101,11 @@ struct IntervalJitterEstimate {
 // −½Σ[log det Σ_k + e_kᵀΣ_k⁻¹e_k] on a grid, refined by golden section; the LR test against σ_j = 0
 // (on the boundary: ½χ²₀ + ½χ²₁); σ of σ_j from the profile's curvature. `noise_sigma` starts
 // the noise re-estimation (or is kept with estimate_noise = false).
+// The intervals the estimate uses: every stride-th inlier, so that at most about
+// `max_intervals` remain (the stride the smallest that does).
+std::vector<size_t> JitterSampleIndices(size_t n, const std::vector<bool>& is_inlier,
+                                        int max_intervals);
+
 IntervalJitterEstimate EstimateIntervalJitter(
     const std::vector<Eigen::Vector3d>& errors,
     const std::vector<IntervalTimeSensitivity>& sensitivities, const Eigen::Vector3d& noise_sigma,

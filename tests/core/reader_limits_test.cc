@@ -157,6 +157,53 @@ TEST(ReaderLimitsTest, MappedFileOwnsItsBytesAcrossMoves) {
   ExpectMessage(StatusOf(MappedFile::Open(dir / ".")), {"is a directory"});
 }
 
+// Resident file pages of this process, kB (RssFile in /proc/self/status; -1: unknown).
+long ResidentFileKb() {
+  const StatusOr<MappedFile> status = MappedFile::OpenText("/proc/self/status");
+  if (!status.ok()) return -1;
+  const size_t at = status->text().find("RssFile:");
+  return at == std::string_view::npos ? -1 : std::atol(status->text().data() + at + 8);
+}
+
+// A long log's parse keeps a window of its mapped file resident, not all of it, and reads the
+// same intervals as a parse that keeps everything.
+TEST(ReaderLimitsTest, ParsedBytesOfAMappedFileAreReleased) {
+  TempDir dir;
+  const std::string path = dir / "long.tuple";
+  std::string text;
+  for (int k = 0; k < 600000; ++k) {  // About 60 MB, more than three release windows.
+    text += "{\"T\": 0.5, \"phi_l\": " + std::to_string(1.0 + 1e-6 * k) +
+            ", \"phi_r\": 1.2, \"sm\": [0.05, 0.001, 0.01]}\n";
+  }
+  ASSERT_TRUE(WriteWholeFile(path, text).ok());
+  StatusOr<MappedFile> file = MappedFile::OpenText(path);
+  ASSERT_TRUE(file.ok()) << file.message();
+  std::vector<const char*> released;
+  long most_resident_kb = 0;
+  const ReleaseText release = [&](const char* before) {
+    released.push_back(before);
+    file->Release(before);
+    most_resident_kb = std::max(most_resident_kb, ResidentFileKb());
+  };
+  const StatusOr<LaserLog> windowed = ParseLaserTuples(file->text(), path, release);
+  const StatusOr<LaserLog> whole = ParseLaserTuples(text, path);
+  ASSERT_TRUE(windowed.ok() && whole.ok()) << windowed.message();
+  ASSERT_EQ(windowed->intervals.size(), 600000u);
+  ASSERT_EQ(windowed->intervals.size(), whole->intervals.size());
+  for (size_t k = 0; k < whole->intervals.size(); k += 997) {
+    EXPECT_EQ(windowed->intervals[k].left_speed, whole->intervals[k].left_speed);
+    EXPECT_EQ(windowed->intervals[k].line, whole->intervals[k].line);
+  }
+  EXPECT_GE(released.size(), 4u);  // Two passes (count, parse), each past two windows.
+  if (most_resident_kb >= 0) {
+    // The text's own copy is in anonymous memory; the mapped file keeps at most a window or two.
+    EXPECT_LT(most_resident_kb, static_cast<long>(2 * kReleaseTextBytes / 1024))
+        << most_resident_kb << " kB of file pages resident";
+  }
+  // Dropped pages read back from the file.
+  EXPECT_EQ(file->text().substr(0, 64), std::string_view(text).substr(0, 64));
+}
+
 TEST(ReaderLimitsTest, TupleRecordIsBoundedNotTheLine) {
   const std::string record = R"({"T":0.5,"phi_l":1,"phi_r":1.2,"sm":[0.05,0.001,0.01]} )";
   // Ten thousand records on one line (> 1 MiB together) are read: the bound is per record.
