@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -27,11 +28,27 @@ int64_t FileBytes(const std::string& path) {
   return error ? 0 : static_cast<int64_t>(size);
 }
 
+// Without terminal colour codes (ESC [ ... letter).
+std::string StripEscapes(const std::string& text) {
+  std::string out;
+  for (size_t i = 0; i < text.size(); ++i) {
+    if (text[i] == '\x1b' && i + 1 < text.size() && text[i + 1] == '[') {
+      i += 2;
+      while (i < text.size() && !std::isalpha(static_cast<unsigned char>(text[i]))) ++i;
+      continue;
+    }
+    if (text[i] != '\r') out += text[i];
+  }
+  return out;
+}
+
+// The last line of the file with anything visible on it.
 std::string LastLine(const std::string& path) {
   std::ifstream in(path);
   std::string line, last;
   while (std::getline(in, line)) {
-    if (!line.empty()) last = line;
+    line = StripEscapes(line);
+    if (line.find_first_not_of(" \t") != std::string::npos) last = line;
   }
   return last.size() > 200 ? last.substr(0, 200) + "…" : last;
 }

@@ -21,8 +21,10 @@ struct ProcessRun {
   long minflt = 0;
   long majflt = 0;
   int64_t output_bytes = 0;  // stdout plus the {output} file
-  long launcher_rss_kb = 0;  // The launcher's RSS at fork: ru_maxrss is never below it.
-  std::string stderr_tail;   // Last line of stderr, for a failure's message.
+  // The launcher's RSS at fork: the most ru_maxrss can inherit from it (fork copies only its
+  // anonymous pages, so a small program reads far less).
+  long launcher_rss_kb = 0;
+  std::string stderr_tail;  // Last line of stderr, for a failure's message.
   bool ok() const { return error.empty(); }
 };
 

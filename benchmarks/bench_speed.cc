@@ -174,7 +174,8 @@ nlohmann::json RunSpeed(const BenchConfig& config) {
   const int reps = config.speed_reps > 0 ? config.speed_reps : config.quick ? 3 : 7;
   std::printf(
       "Log: SimulateLaserLog seed 1 (rich trajectory, default noise, no outliers, "
-      "speed_time_constant_s=0), written with WriteLaserTuples to a temp dir.\n"
+      "speed_time_constant_s=0), written with WriteLaserTuples (without \"t\": the keys of the "
+      "published files) to a temp dir.\n"
       "Each N runs in a fresh child process (%s --speed_child=N): ReadLaserLog, then "
       "CalibrateLaser with defaults (Ceres 2 threads).\nStage times are "
       "CalibrateLaser's own; total = parse + CalibrateLaser wall time. Memory: "
@@ -212,7 +213,8 @@ nlohmann::json RunSpeed(const BenchConfig& config) {
     const Stopwatch sim_watch;
     const long rss_before_sim = SelfRssKb();
     {
-      const LaserLog log = SimulateLaserLog(sim);
+      LaserLog log = SimulateLaserLog(sim);
+      log.has_timestamps = false;  // The authors' keys only, as in their files: peers read it too.
       const Status written = WriteLaserTuples(log, file.string());
       if (!written.ok()) {
         std::printf("N=%lld: cannot write the log: %s\n", static_cast<long long>(n),
