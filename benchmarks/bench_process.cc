@@ -1,5 +1,6 @@
 #include "benchmarks/bench_process.h"
 
+#include <calib/core/text_format.h>
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/resource.h>
@@ -7,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <chrono>
@@ -72,8 +74,42 @@ std::vector<char*> CArgs(const std::vector<std::string>& args) {
 
 // In the forked child: cwd, stdout/stderr to files, then exec; errno goes back through
 // `error_fd` (closed on a successful exec).
+// The limits a measured program runs under. Stack: up to 4 GiB (the authors' solver keeps
+// 3N doubles in a stack array, 24 MB at N = 10⁶, beyond the usual 8 MB). Address space: 90 % of
+// MemAvailable, so that a program too large for the machine fails alone instead of waking the
+// OOM killer. Either limit is 0 when left as it was.
+struct ChildLimits {
+  rlim_t stack_bytes = 0;
+  rlim_t address_space_bytes = 0;
+};
+
+ChildLimits PlanLimits() {
+  ChildLimits limits;
+  rlimit stack{};
+  if (getrlimit(RLIMIT_STACK, &stack) == 0) {
+    limits.stack_bytes = std::min<rlim_t>(stack.rlim_max, rlim_t{4} << 30);
+  }
+  const long available_kb = StatusFieldKb("/proc/meminfo", "MemAvailable");
+  if (available_kb > 0)
+    limits.address_space_bytes = static_cast<rlim_t>(available_kb) * 1024 / 10 * 9;
+  return limits;
+}
+
+void ApplyLimits(const ChildLimits& limits) {
+  rlimit limit{};
+  if (limits.stack_bytes > 0 && getrlimit(RLIMIT_STACK, &limit) == 0) {
+    limit.rlim_cur = std::max(limit.rlim_cur, limits.stack_bytes);
+    setrlimit(RLIMIT_STACK, &limit);
+  }
+  if (limits.address_space_bytes > 0 && getrlimit(RLIMIT_AS, &limit) == 0) {
+    limit.rlim_cur = std::min(limit.rlim_max, limits.address_space_bytes);
+    setrlimit(RLIMIT_AS, &limit);
+  }
+}
+
 [[noreturn]] void ExecInChild(const std::vector<char*>& args, const std::string& dir,
-                              int error_fd) {
+                              const ChildLimits& limits, int error_fd) {
+  ApplyLimits(limits);
   int err = 0;
   if (chdir(dir.c_str()) != 0) err = errno;
   const int out = open((dir + "/stdout.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
@@ -102,7 +138,9 @@ nlohmann::json ToJson(const ProcessRun& run) {
                       {"minflt", run.minflt},
                       {"majflt", run.majflt},
                       {"output_bytes", run.output_bytes},
-                      {"launcher_rss_kb", run.launcher_rss_kb}};
+                      {"launcher_rss_kb", run.launcher_rss_kb},
+                      {"stack_limit_mb", run.stack_limit_mb},
+                      {"address_space_limit_mb", run.address_space_limit_mb}};
   if (!run.error.empty()) j["error"] = run.error;
   if (!run.stderr_tail.empty()) j["stderr_tail"] = run.stderr_tail;
   return j;
@@ -121,6 +159,8 @@ ProcessRun ProcessRunFromJson(const nlohmann::json& j) {
   run.output_bytes = j.value("output_bytes", int64_t{0});
   run.launcher_rss_kb = j.value("launcher_rss_kb", 0L);
   run.stderr_tail = j.value("stderr_tail", "");
+  run.stack_limit_mb = j.value("stack_limit_mb", 0.0);
+  run.address_space_limit_mb = j.value("address_space_limit_mb", 0.0);
   return run;
 }
 
@@ -152,6 +192,9 @@ ProcessRun RunAndMeasure(const std::vector<std::string>& argv, const std::string
   }
   if (!output_file.empty()) fs::remove(output_file);
   const std::vector<char*> args = CArgs(argv);
+  const ChildLimits limits = PlanLimits();
+  run.stack_limit_mb = static_cast<double>(limits.stack_bytes) / 1048576;
+  run.address_space_limit_mb = static_cast<double>(limits.address_space_bytes) / 1048576;
   int error_pipe[2];
   if (pipe2(error_pipe, O_CLOEXEC) != 0) {
     run.error = std::string("pipe: ") + std::strerror(errno);
@@ -159,7 +202,7 @@ ProcessRun RunAndMeasure(const std::vector<std::string>& argv, const std::string
   }
   const auto start = std::chrono::steady_clock::now();
   const pid_t pid = fork();
-  if (pid == 0) ExecInChild(args, dir, error_pipe[1]);
+  if (pid == 0) ExecInChild(args, dir, limits, error_pipe[1]);
   close(error_pipe[1]);
   if (pid < 0) {
     close(error_pipe[0]);
@@ -187,10 +230,12 @@ ProcessRun RunAndMeasure(const std::vector<std::string>& argv, const std::string
   if (exec_failed) {
     run.error = "cannot run " + argv[0] + ": " + std::strerror(exec_errno);
   } else if (run.signal != 0) {
-    run.error =
-        "killed by signal " + std::to_string(run.signal) + " (" + strsignal(run.signal) + ")";
+    run.error = "killed by signal " + std::to_string(run.signal) + " (" + strsignal(run.signal) +
+                Format("; limits: stack %.0f MB, address space %.0f MB)", run.stack_limit_mb,
+                       run.address_space_limit_mb);
   } else if (run.exit_code != 0) {
-    run.error = "exit code " + std::to_string(run.exit_code);
+    run.error = "exit code " + std::to_string(run.exit_code) +
+                Format(" (address space limited to %.0f MB)", run.address_space_limit_mb);
   } else if (run.output_bytes == 0) {
     run.error = "printed nothing (no stdout, no output file)";
   }
@@ -233,6 +278,26 @@ int RunLauncherMain(int argc, char** argv) {
   std::ofstream out(argv[2]);
   out << ToJson(run).dump() << "\n";
   return out.good() ? 0 : 1;
+}
+
+StatusOr<nlohmann::json> RunJsonChild(const std::string& command) {
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return Status::Io("cannot run " + command);
+  std::string last, line;
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof(buffer), pipe) != nullptr) {
+    line += buffer;
+    if (line.back() != '\n') continue;
+    if (line[0] == '{') last = line;
+    line.clear();
+  }
+  const int status = pclose(pipe);
+  if (status != 0 || last.empty()) {
+    return Status::Internal("child failed (status " + std::to_string(status) + "): " + command);
+  }
+  const nlohmann::json j = nlohmann::json::parse(last, nullptr, false);
+  if (j.is_discarded()) return Status::Internal("child printed bad JSON: " + last);
+  return j;
 }
 
 long MemAvailableKb() { return StatusFieldKb("/proc/meminfo", "MemAvailable"); }

@@ -1,6 +1,8 @@
 #ifndef CALIB_BENCHMARKS_BENCH_PROCESS_H_
 #define CALIB_BENCHMARKS_BENCH_PROCESS_H_
 
+#include <calib/core/status.h>
+
 #include <cstdint>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -24,6 +26,8 @@ struct ProcessRun {
   // The launcher's RSS at fork: the most ru_maxrss can inherit from it (fork copies only its
   // anonymous pages, so a small program reads far less).
   long launcher_rss_kb = 0;
+  double stack_limit_mb = 0;  // The limits it ran under (RunAndMeasure); 0: unchanged.
+  double address_space_limit_mb = 0;
   std::string stderr_tail;  // Last line of stderr, for a failure's message.
   bool ok() const { return error.empty(); }
 };
@@ -35,8 +39,9 @@ ProcessRun ProcessRunFromJson(const nlohmann::json& j);
 std::vector<std::string> ExpandArgs(const std::string& pattern,
                                     const std::map<std::string, std::string>& values);
 
-// Runs argv in `dir` (stdout and stderr to files there) and waits for it. `output_file`, when
-// not empty, counts as printed output too.
+// Runs argv in `dir` (stdout and stderr to files there) and waits for it, with the stack limit
+// raised to 4 GiB and the address space limited to 90 % of MemAvailable. `output_file`, when not
+// empty, counts as printed output too.
 ProcessRun RunAndMeasure(const std::vector<std::string>& argv, const std::string& dir,
                          const std::string& output_file);
 
@@ -49,6 +54,9 @@ ProcessRun RunThroughLauncher(const std::string& self, const std::vector<std::st
 // The launcher's side: argv = {self, "--measure_child", RESULT.json, DIR, OUTPUT_FILE, PROG,
 // ARGS...}; writes the ProcessRun as JSON and returns 0 (2 on bad arguments).
 int RunLauncherMain(int argc, char** argv);
+
+// Runs `command` through the shell and returns the last line of its stdout that starts with '{'.
+StatusOr<nlohmann::json> RunJsonChild(const std::string& command);
 
 // Memory the machine can give now (MemAvailable), in kB; -1 when unknown.
 long MemAvailableKb();
