@@ -40,7 +40,7 @@ std::vector<std::string> ExpandArgs(const std::string& pattern,
                                     const std::map<std::string, std::string>& values);
 
 // Runs argv in `dir` (stdout and stderr to files there) and waits for it, with the stack limit
-// raised to 4 GiB and the address space limited to 90 % of MemAvailable. `output_file`, when not
+// raised to 256 MiB and the address space limited to 90 % of MemAvailable. `output_file`, when not
 // empty, counts as printed output too.
 ProcessRun RunAndMeasure(const std::vector<std::string>& argv, const std::string& dir,
                          const std::string& output_file);

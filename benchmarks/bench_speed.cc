@@ -1,11 +1,9 @@
 #include <calib/core/laser/laser_log_io.h>
-#include <calib/core/laser/laser_simulator.h>
 #include <calib/solvers/laser/calibrate_laser.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
