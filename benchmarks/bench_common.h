@@ -22,6 +22,12 @@ struct BenchConfig {
   int threads = 2;
   std::string censi_dir;
   std::string self_path;  // This binary, re-executed for per-process memory peaks.
+  // Section speed: `calib calibrate` end to end, beside a peer solver when one is given.
+  std::string calib_cli;    // Empty: `calib` next to this binary.
+  std::string calib_args;   // Pattern with {input} and {output}.
+  std::string peer_solver;  // Empty: calib alone.
+  std::string peer_args;
+  int speed_reps = 0;  // Interleaved rounds; 0: 7 (3 with quick).
 };
 
 class Stopwatch {

@@ -1,15 +1,16 @@
 #include <calib/core/laser/laser_log_io.h>
-#include <calib/core/laser/laser_simulator.h>
 #include <calib/solvers/laser/calibrate_laser.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
-#include <cmath>
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 
+#include "benchmarks/bench_end_to_end.h"
 #include "benchmarks/bench_sections.h"
+#include "benchmarks/bench_speed_sizes.h"
 
 namespace calib::bench {
 namespace {
@@ -30,27 +31,6 @@ long VmHwmKb() {
     if (line.rfind("VmHWM:", 0) == 0) return std::stol(line.substr(6));
   }
   return -1;
-}
-
-// Runs `command` and returns the last line of its stdout that starts with '{'.
-StatusOr<nlohmann::json> RunChild(const std::string& command) {
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return Status::Io("cannot run " + command);
-  std::string last, line;
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof(buffer), pipe) != nullptr) {
-    line += buffer;
-    if (line.back() != '\n') continue;
-    if (line[0] == '{') last = line;
-    line.clear();
-  }
-  const int status = pclose(pipe);
-  if (status != 0 || last.empty()) {
-    return Status::Internal("child failed (status " + std::to_string(status) + "): " + command);
-  }
-  const nlohmann::json j = nlohmann::json::parse(last, nullptr, false);
-  if (j.is_discarded()) return Status::Internal("child printed bad JSON: " + last);
-  return j;
 }
 
 }  // namespace
@@ -87,73 +67,71 @@ int RunSpeedChild(const std::string& path, int64_t intervals) {
   return 0;
 }
 
+namespace {
+
+// The `calib` binary and argument patterns; calib_cli empty when it is not found.
+EndToEndOptions MakeEndToEndOptions(const BenchConfig& config, const fs::path& dir) {
+  EndToEndOptions options;
+  options.launcher = config.self_path;
+  options.calib_cli = config.calib_cli.empty()
+                          ? (fs::path(config.self_path).parent_path() / "calib").string()
+                          : config.calib_cli;
+  options.calib_args = config.calib_args;
+  options.peer_solver = config.peer_solver;
+  options.peer_args = config.peer_args;
+  options.work_dir = (dir / "end_to_end").string();
+  if (!fs::exists(options.calib_cli)) {
+    std::printf(
+        "End-to-end runs skipped: no calib CLI at %s (build the `calib` target or pass "
+        "--calib_cli).\n",
+        options.calib_cli.c_str());
+    options.calib_cli.clear();
+  }
+  return options;
+}
+
+}  // namespace
+
 nlohmann::json RunSpeed(const BenchConfig& config) {
   std::printf("\n=== Section speed: wall time and peak memory against N ===\n");
-  const std::vector<int64_t> sizes = config.quick
-                                         ? std::vector<int64_t>{1000, 10000, 100000}
-                                         : std::vector<int64_t>{1000, 10000, 100000, 1000000};
+  std::vector<int64_t> sizes = {1000, 10000, 100000};
+  if (!config.quick) sizes.insert(sizes.end(), {1000000, 10000000});
+  const int reps = config.speed_reps > 0 ? config.speed_reps : config.quick ? 3 : 7;
   std::printf(
       "Log: SimulateLaserLog seed 1 (rich trajectory, default noise, no outliers, "
-      "speed_time_constant_s=0), written with WriteLaserTuples to a temp dir.\n"
+      "speed_time_constant_s=0), written with WriteLaserTuples (without \"t\": the keys of the "
+      "published files) to a temp dir.\n"
       "Each N runs in a fresh child process (%s --speed_child=N): ReadLaserLog, then "
       "CalibrateLaser with defaults (Ceres 2 threads).\nStage times are "
       "CalibrateLaser's own; total = parse + CalibrateLaser wall time. Memory: "
-      "ru_maxrss before parsing and at the end, and VmHWM.\n",
+      "ru_maxrss before parsing and at the end, and VmHWM.\nFloor: read() through a 1 MiB "
+      "buffer, then the same with std::from_chars on every number (min of 3, in this process).\n",
       config.self_path.c_str());
   nlohmann::json out;
   const fs::path dir = fs::temp_directory_path() / ("calib_bench_" + std::to_string(getpid()));
   fs::create_directories(dir);
-  TextTable table({"N", "file MB", "parse s", "closed form s", "refine s", "covariance s",
-                   "total s", "iters", "RSS before MB", "RSS after MB", "VmHWM MB"});
-  std::vector<double> ns, totals;
-  for (int64_t n : sizes) {
-    LaserSimOptions sim;
-    sim.num_intervals = static_cast<int>(n);
-    sim.speed_time_constant_s = 0.0;
-    const fs::path file = dir / ("sim_" + std::to_string(n) + ".tuple");
-    const Stopwatch sim_watch;
-    {
-      const LaserLog log = SimulateLaserLog(sim);
-      const Status written = WriteLaserTuples(log, file.string());
-      if (!written.ok()) {
-        std::printf("N=%lld: cannot write the log: %s\n", static_cast<long long>(n),
-                    written.message().c_str());
-        continue;
-      }
-    }
-    const double sim_s = sim_watch.Seconds();
-    const double file_mb = static_cast<double>(fs::file_size(file)) / (1024 * 1024);
-    const StatusOr<nlohmann::json> child =
-        RunChild("'" + config.self_path + "' --speed_child=" + std::to_string(n) +
-                 " --speed_file='" + file.string() + "'");
-    fs::remove(file);
-    if (!child.ok()) {
-      std::printf("N=%lld: %s\n", static_cast<long long>(n), child.message().c_str());
-      out["runs"].push_back({{"intervals", n}, {"error", child.message()}});
-      continue;
-    }
-    nlohmann::json run = *child;
-    run["simulate_and_write_s"] = sim_s;
-    run["file_mb"] = file_mb;
-    const auto mb = [&](const char* key) { return Format("%.1f", run[key].get<double>() / 1024); };
-    table.AddRow(
-        {std::to_string(n), Format("%.1f", file_mb), Format("%.3f", run["parse_s"].get<double>()),
-         Format("%.3f", run["closed_form_s"].get<double>()),
-         Format("%.3f", run["refinement_s"].get<double>()),
-         Format("%.3f", run["covariance_s"].get<double>()),
-         Format("%.3f", run["total_s"].get<double>()), std::to_string(run["iterations"].get<int>()),
-         mb("maxrss_before_kb"), mb("maxrss_after_kb"), mb("vmhwm_kb")});
-    ns.push_back(static_cast<double>(n));
-    totals.push_back(run["total_s"].get<double>());
-    out["runs"].push_back(run);
-  }
+  const EndToEndOptions e2e = MakeEndToEndOptions(config, dir);
+  out["end_to_end_reps"] = reps;
+  out["calib_cli"] = e2e.calib_cli;
+  out["calib_args"] = e2e.calib_args;
+  out["peer_solver"] = e2e.peer_solver;
+  out["peer_args"] = e2e.peer_args;
+  EndToEndReport report;
+  out["real"] = RunSpeedRealSets(config, e2e, reps, &report);
+  SpeedSizes sizes_run(config, e2e, reps, dir, &report);
+  for (int64_t n : sizes) sizes_run.Run(n, &out);
   fs::remove_all(dir);
-  table.Print();
-  if (ns.size() >= 2) {
-    const double slope = LogLogSlope(ns, totals);
-    std::printf("Slope of log(total time) against log(N), least squares over %zu sizes: %.3f\n",
-                ns.size(), slope);
-    out["log_log_slope_total"] = slope;
+  sizes_run.PrintTable(&out);
+  if (!e2e.calib_cli.empty()) {
+    std::printf(
+        "\nEnd to end, each run a child process (fork/exec + wait4 from a fresh launcher), %d "
+        "rounds interleaved calib, peer, calib, ... (%d at 10^6, 1 at 10^7); min and median of "
+        "the successful runs.\ncalib: %s %s\npeer:  %s\n",
+        reps, std::min(reps, 3), e2e.calib_cli.c_str(), e2e.calib_args.c_str(),
+        e2e.peer_solver.empty() ? "(none: --peer_solver PATH)"
+                                : (e2e.peer_solver + " " + e2e.peer_args).c_str());
+    report.Print();
+    sizes_run.PrintEndToEndSlopes(&out);
   }
   if (!config.quick) {
     out["micro"] = RunMicroBenchmarks();

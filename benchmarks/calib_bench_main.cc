@@ -14,6 +14,7 @@
 #include "benchmarks/bench_diagnose.h"
 #include "benchmarks/bench_laser_monte_carlo.h"
 #include "benchmarks/bench_plot.h"
+#include "benchmarks/bench_process.h"
 #include "benchmarks/bench_sections.h"
 #include "benchmarks/bench_timing_study.h"
 
@@ -26,6 +27,16 @@ DEFINE_int32(
     "Seeds (logs) per Monte Carlo scenario (0: each section's default, fewer with --quick)");
 DEFINE_string(censi_dir, CALIB_CENSI_DATA_DIR, "Folder with the Censi et al. recordings");
 DEFINE_int32(threads, 2, "Monte Carlo seeds run in parallel on this many threads");
+DEFINE_string(peer_solver, "",
+              "speed: a peer solver binary run end to end beside `calib calibrate` (e.g. the "
+              "authors' solver2)");
+DEFINE_string(peer_args, "-input_file {input} -output_file {output} -mode 0 -outliers_iterations 4",
+              "speed: the peer's arguments; {input} is the log, {output} a file in its own "
+              "folder (default: the authors' solver2 as in their run_all.sh)");
+DEFINE_string(calib_cli, "", "speed: the calib binary (default: `calib` next to calib_bench)");
+DEFINE_string(calib_args, "calibrate --input {input} --output {output} --quiet",
+              "speed: calib's arguments, placeholders as in --peer_args");
+DEFINE_int32(speed_reps, 0, "speed: interleaved end-to-end rounds (0: 7, 3 with --quick)");
 // Internal: the speed section re-executes this binary once per N to measure its memory peak.
 DEFINE_int64(speed_child, 0, "(internal) parse and calibrate --speed_file of this many intervals");
 DEFINE_string(speed_file, "", "(internal) the log for --speed_child");
@@ -36,7 +47,7 @@ namespace {
 constexpr const char* kUsage =
     "calib_bench [--quick] [--json OUT.json] [--sections "
     "laser_mc,laser_real,bearing,diagnose,timing,scans,robust_scale,speed] [--seeds N] "
-    "[--censi_dir DIR]";
+    "[--censi_dir DIR] [--peer_solver PATH [--peer_args ARGS]] [--calib_cli PATH] [--speed_reps R]";
 
 std::set<std::string> ParseSections(const std::string& text, bool* ok) {
   const std::set<std::string> known = {"laser_mc", "laser_real", "bearing",      "diagnose",
@@ -104,6 +115,8 @@ bool WritePlot(const std::vector<McScenarioResult>& results, const std::string& 
 }
 
 int Main(int argc, char** argv) {
+  // Internal, before the flags: the speed section's launcher passes the command through as is.
+  if (argc > 1 && std::string(argv[1]) == "--measure_child") return RunLauncherMain(argc, argv);
   gflags::SetUsageMessage(kUsage);
   gflags::ParseCommandLineFlags(&argc, &argv, true);
   if (FLAGS_speed_child > 0) return RunSpeedChild(FLAGS_speed_file, FLAGS_speed_child);
@@ -116,6 +129,11 @@ int Main(int argc, char** argv) {
   config.seeds = FLAGS_seeds;
   config.threads = std::max(1, FLAGS_threads);
   config.censi_dir = FLAGS_censi_dir;
+  config.calib_cli = FLAGS_calib_cli;
+  config.calib_args = FLAGS_calib_args;
+  config.peer_solver = FLAGS_peer_solver;
+  config.peer_args = FLAGS_peer_args;
+  config.speed_reps = FLAGS_speed_reps;
   std::error_code error;
   config.self_path = std::filesystem::read_symlink("/proc/self/exe", error).string();
   if (error) config.self_path = argv[0];
