@@ -89,9 +89,10 @@ double LogLikelihood(const JitterData& data, const Eigen::Vector3d& theta, doubl
 // Floor of the noise variances: σ = 1e-12 m or rad, as RobustNoiseSigma.
 constexpr double kMinVariance = 1e-24;
 
-// max over θ of the log-likelihood at σ_j² (Fisher scoring from *theta, which it updates).
+// max over θ of the log-likelihood at σ_j² (Fisher scoring from *theta, which it updates, until
+// θ moves by less than `tolerance`, relative).
 double ProfileLogLikelihood(const JitterData& data, double jitter_s, bool estimate_noise,
-                            Eigen::Vector3d* theta) {
+                            Eigen::Vector3d* theta, double tolerance = 1e-10) {
   const double jitter2 = jitter_s * jitter_s;
   if (!estimate_noise) return LogLikelihood(data, *theta, jitter2);
   for (int iteration = 0; iteration < 100; ++iteration) {
@@ -102,9 +103,71 @@ double ProfileLogLikelihood(const JitterData& data, double jitter_s, bool estima
     const Eigen::Vector3d next = (*theta + step).cwiseMax(*theta / 10.0).cwiseMax(kMinVariance);
     const double change = ((next - *theta).cwiseQuotient(*theta)).cwiseAbs().maxCoeff();
     *theta = next;
-    if (!(change > 1e-10)) break;
+    if (!(change > tolerance)) break;
   }
   return LogLikelihood(data, *theta, jitter2);
+}
+
+// A grid point's profile only ranks it among the others: θ to 1e-6 leaves its value within
+// N·1e-12 of the maximum (the error is quadratic), far below the grid's differences.
+constexpr double kGridTolerance = 1e-6;
+
+// The score and Fisher information of the log-likelihood in φ = (θ, s = σ_j²):
+// u_a = ½Σ[wᵀA_a w − tr(Σ⁻¹A_a)], I_ab = ½Σ tr(Σ⁻¹A_a Σ⁻¹A_b), w = Σ⁻¹e, A_θi = E_ii, A_s = G_k.
+bool JointScore(const JitterData& data, const Eigen::Vector4d& phi, Eigen::Vector4d* score,
+                Eigen::Matrix4d* fisher) {
+  score->setZero();
+  fisher->setZero();
+  for (size_t k = 0; k < data.errors.size(); ++k) {
+    const Eigen::Matrix3d& g = data.gram[k];
+    const Eigen::Matrix3d sigma = Eigen::Matrix3d(phi.head<3>().asDiagonal()) + phi(3) * g;
+    Eigen::Matrix3d inverse;
+    double det = 0.0;
+    bool invertible = false;
+    sigma.computeInverseAndDetWithCheck(inverse, det, invertible, 0.0);
+    if (!invertible || !(det > 0.0)) return false;
+    const Eigen::Vector3d w = inverse * data.errors[k];
+    const Eigen::Matrix3d m = inverse * g;  // Σ⁻¹G.
+    score->head<3>() += 0.5 * (w.cwiseAbs2() - inverse.diagonal());
+    (*score)(3) += 0.5 * (w.dot(g * w) - m.trace());
+    fisher->topLeftCorner<3, 3>() += 0.5 * inverse.cwiseAbs2();
+    const Eigen::Vector3d cross = 0.5 * (m * inverse).diagonal();
+    fisher->block<3, 1>(0, 3) += cross;
+    fisher->block<1, 3>(3, 0) += cross.transpose();
+    (*fisher)(3, 3) += 0.5 * (m * m).trace();
+  }
+  return true;
+}
+
+// Fisher scoring jointly in (θ, σ_j²) from (*theta, *jitter_s): the profile's maximum in a few
+// passes instead of a search along σ_j with a scoring at every point. False, leaving the outputs,
+// when it does not settle at a σ_j strictly within (lo, hi) (a maximum on the boundary σ_j = 0 or
+// beyond the bracket: the search decides then).
+bool JointMaximum(const JitterData& data, double lo, double hi, Eigen::Vector3d* theta,
+                  double* jitter_s) {
+  Eigen::Vector4d phi;
+  phi << *theta, *jitter_s * *jitter_s;
+  for (int iteration = 0; iteration < 50; ++iteration) {
+    Eigen::Vector4d score;
+    Eigen::Matrix4d fisher;
+    if (!JointScore(data, phi, &score, &fisher)) return false;
+    const Eigen::LDLT<Eigen::Matrix4d> ldlt(fisher);
+    if (ldlt.info() != Eigen::Success) return false;
+    // As the profile's scoring: no variance falls by more than 10× in a step.
+    const Eigen::Vector4d next =
+        (phi + ldlt.solve(score)).cwiseMax(phi / 10.0).cwiseMax(kMinVariance);
+    if (!next.allFinite()) return false;
+    const double change = ((next - phi).cwiseQuotient(phi)).cwiseAbs().maxCoeff();
+    phi = next;
+    const double jitter = std::sqrt(phi(3));
+    if (jitter < lo / 10.0 || jitter > 10.0 * hi) return false;
+    if (change > 1e-10) continue;
+    if (!(jitter > lo && jitter < hi)) return false;
+    *theta = phi.head<3>();
+    *jitter_s = jitter;
+    return true;
+  }
+  return false;
 }
 
 // Golden-section maximum of f on [lo, hi].
@@ -123,30 +186,37 @@ double GoldenMaximum(const F& f, double lo, double hi, double tolerance = 1e-6) 
   return fa > fb ? a : b;
 }
 
-// The maximum of the profile on a grid 0, scale·10^(−2.5 … 1.5) (`value_at_zero` at 0), refined
-// by golden section between the best point's neighbours.
-template <typename F>
-void SearchFromGrid(const F& profile, double scale, int grid_points, double value_at_zero,
-                    double* jitter_s, double* value) {
+// The maximum of the profile on a grid 0, scale·10^(−2.5 … 1.5) (`value_at_zero` at 0; `rank`
+// scores a grid point), refined between the best point's neighbours: by `joint` (see
+// JointMaximum) when the best is not 0, else or when that fails by golden section.
+template <typename F, typename R, typename J>
+void SearchFromGrid(const F& profile, const R& rank, const J& joint, double scale, int grid_points,
+                    double value_at_zero, double* jitter_s, double* value) {
   const int points = std::max(grid_points, 5);
   std::vector<double> grid = {0.0}, values = {value_at_zero};
   for (int i = 0; i + 1 < points; ++i) {
     grid.push_back(scale * std::pow(10.0, -2.5 + 4.0 * i / (points - 2)));
-    values.push_back(profile(grid.back()));
+    values.push_back(rank(grid.back()));
   }
   const size_t best = std::max_element(values.begin(), values.end()) - values.begin();
   const double lo = best == 0 ? 0.0 : grid[best - 1];
   const double hi = best + 1 < grid.size() ? grid[best + 1] : grid[best] * 10.0;
-  *jitter_s = GoldenMaximum(profile, lo, hi);
+  if (!(best > 0 && joint(lo, hi, grid[best], jitter_s)))
+    *jitter_s = GoldenMaximum(profile, lo, hi);
   *value = profile(*jitter_s);
   if (*value < values[best]) *jitter_s = grid[best], *value = values[best];
 }
 
-// The maximum within a factor of 3 of `previous`; false when it lies on the bracket's edge (the
-// grid must then look further).
-template <typename F>
-bool NearPrevious(const F& profile, double previous, double* jitter_s, double* value) {
+// The maximum within a factor of 3 of `previous` (by `joint`, else golden section); false when it
+// lies on the bracket's edge (the grid must then look further).
+template <typename F, typename J>
+bool NearPrevious(const F& profile, const J& joint, double previous, double* jitter_s,
+                  double* value) {
   const double lo = previous / 3.0, hi = previous * 3.0;
+  if (joint(lo, hi, previous, jitter_s)) {
+    *value = profile(*jitter_s);
+    return true;
+  }
   // 10⁻⁴ of σ_j, far below its σ (a few per cent), as the refit's rounds need.
   *jitter_s = GoldenMaximum(profile, lo, hi, 1e-4);
   *value = profile(*jitter_s);
@@ -289,12 +359,27 @@ IntervalJitterEstimate EstimateIntervalJitter(
   const auto profile = [&](double jitter_s) {
     return ProfileLogLikelihood(data, jitter_s, options.estimate_noise, &warm);
   };
+  const auto rank = [&](double jitter_s) {
+    return ProfileLogLikelihood(data, jitter_s, options.estimate_noise, &warm, kGridTolerance);
+  };
+  // Joint scoring from σ_j = start, with θ profiled there first (the grid's warm θ belongs to
+  // its last point).
+  const auto joint = [&](double lo, double hi, double start, double* jitter_s) {
+    if (!options.estimate_noise || !options.joint_scoring) return false;
+    Eigen::Vector3d start_theta = warm;
+    ProfileLogLikelihood(data, start, true, &start_theta, kGridTolerance);
+    double found = start;
+    if (!JointMaximum(data, lo, hi, &start_theta, &found)) return false;
+    warm = start_theta;
+    *jitter_s = found;
+    return true;
+  };
   double jitter_s = 0.0, value = 0.0;
   if (!(options.previous_jitter_s > 0.0) ||
-      !NearPrevious(profile, options.previous_jitter_s, &jitter_s, &value)) {
+      !NearPrevious(profile, joint, options.previous_jitter_s, &jitter_s, &value)) {
     warm = theta;
-    SearchFromGrid(profile, scale, options.grid_points, estimate.log_likelihood_without_jitter,
-                   &jitter_s, &value);
+    SearchFromGrid(profile, rank, joint, scale, options.grid_points,
+                   estimate.log_likelihood_without_jitter, &jitter_s, &value);
   }
   Eigen::Vector3d theta_best = warm;
   ProfileLogLikelihood(data, jitter_s, options.estimate_noise, &theta_best);

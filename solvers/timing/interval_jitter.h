@@ -84,6 +84,10 @@ struct IntervalJitterOptions {
   // within a factor of 3 of it, without the grid; the grid runs when it lies on that bracket's
   // edge.
   double previous_jitter_s = 0.0;
+  // Refine the search's best σ_j by Fisher scoring jointly in (θ, σ_j²) (a few passes), falling
+  // back to a golden-section search of the profile when that does not settle inside the bracket;
+  // false: the golden section always (the reference the tests compare with).
+  bool joint_scoring = true;
 };
 
 struct IntervalJitterEstimate {

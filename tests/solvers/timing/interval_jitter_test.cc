@@ -109,6 +109,32 @@ TEST(IntervalJitterTest, PreviousEstimateGivesTheGridsAnswer) {
   }
 }
 
+// Joint scoring in (θ, σ_j²) lands where the golden-section search of the profile does, from the
+// grid and from a previous round's estimate.
+TEST(IntervalJitterTest, JointScoringGivesTheProfileSearchsAnswer) {
+  LaserSimOptions sim;
+  sim.num_intervals = 2000;
+  sim.seed = 8;
+  const LaserLog log = JitteredTupleLog(sim, 0.02);
+  const std::vector<bool> all(log.intervals.size(), true);
+  for (double previous : {0.0, 0.015}) {
+    IntervalJitterOptions golden, joint;
+    golden.joint_scoring = false;
+    golden.previous_jitter_s = joint.previous_jitter_s = previous;
+    const IntervalJitterEstimate a =
+        EstimateIntervalJitter(log.intervals, Truth(sim), sim.scan_noise_sigma, all, golden);
+    const IntervalJitterEstimate b =
+        EstimateIntervalJitter(log.intervals, Truth(sim), sim.scan_noise_sigma, all, joint);
+    ASSERT_TRUE(a.significant && b.significant);
+    EXPECT_NEAR(b.jitter_s, a.jitter_s, 1e-3 * a.jitter_stddev_s) << previous;
+    EXPECT_NEAR(b.jitter_stddev_s, a.jitter_stddev_s, 1e-3 * a.jitter_stddev_s);
+    EXPECT_LT((b.noise_sigma - a.noise_sigma).cwiseQuotient(a.noise_sigma).cwiseAbs().maxCoeff(),
+              1e-4);
+    // The joint maximum is the profile's: no lower than the search's.
+    EXPECT_GE(b.log_likelihood, a.log_likelihood - 1e-7);
+  }
+}
+
 // At the fitted parameters of clean logs the test rejects σ_j = 0 at about its level.
 TEST(IntervalJitterTest, FewFalseAlarmsOnCleanLogs) {
   int alarms = 0;
