@@ -64,7 +64,9 @@ class FusedNormalCost : public ceres::CostFunction {
       return true;
     }
     if (!sums.hessian.allFinite() || !sums.gradient.allFinite()) return false;
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eigen(sums.hessian);
+    const Eigen::Matrix<double, N, N> hessian =
+        sums.hessian.template selfadjointView<Eigen::Upper>();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eigen(hessian);
     const Eigen::Matrix<double, N, 1> lambda = eigen.eigenvalues();
     // Directions the data do not reach get no row (as a rank-deficient Jacobian would give none).
     const double floor = std::max(lambda.maxCoeff(), 0.0) * 1e-30;
@@ -123,7 +125,8 @@ class FusedNormalCost : public ceres::CostFunction {
           j -= (alpha / s) * r * (r.transpose() * j);
         }
         const Jacobian corrected = sqrt_rho1 * j;
-        sums.hessian.noalias() += corrected.transpose() * corrected;
+        // The upper triangle only (H is symmetric; Evaluate fills the rest).
+        sums.hessian.template selfadjointView<Eigen::Upper>().rankUpdate(corrected.transpose());
         sums.gradient.noalias() += corrected.transpose() * (scaling * r);
       }
     });

@@ -25,6 +25,23 @@ double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// Whether Median of value(0 … n−1) is below `bound`, i.e. at least n/2 + 1 values are: a count
+// that stops as soon as it is decided, where most candidates of a consensus search lose (the
+// same answer as Median(…) < bound without the selection).
+template <typename F>
+bool MedianBelow(size_t n, double bound, const F& value) {
+  const size_t needed = n / 2 + 1;
+  size_t below = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (value(i) < bound) {
+      if (++below == needed) return true;
+    } else if (below + (n - i - 1) < needed) {
+      return false;
+    }
+  }
+  return false;
+}
+
 // Up to `count` indices evenly spread over `from`.
 std::vector<size_t> Spread(const std::vector<size_t>& from, int count) {
   if (from.size() <= static_cast<size_t>(count)) return from;
@@ -74,9 +91,13 @@ std::optional<Eigen::Vector2d> RotationConsensus(const std::vector<LaserInterval
     const std::vector<size_t> pair = {moving[random.Index(moving.size())],
                                       moving[random.Index(moving.size())]};
     const std::optional<Eigen::Vector2d> j = FitRotation(intervals, pair);
-    if (!j) continue;
-    const double s = score(*j);
-    if (s < best_score) best_score = s, best = j;
+    if (!j || !MedianBelow(scored.size(), best_score, [&](size_t i) {
+          return std::abs(RotationResidual(intervals[scored[i]], *j));
+        })) {
+      continue;
+    }
+    best_score = score(*j);
+    best = j;
   }
   if (!best) return std::nullopt;
   const double cut = options.cut * kMadToSigma * best_score + 1e-12;
@@ -128,9 +149,12 @@ void TranslationConsensus(const std::vector<LaserInterval>& intervals, const Eig
     std::vector<size_t> subset(4);
     for (size_t& i : subset) i = random.Index(rows.size());
     const std::optional<Vector5d> x = SolveRows(rows, subset, options);
-    if (!x) continue;
-    const double s = score(*x);
-    if (s < best_score) best_score = s, best = x;
+    if (!x ||
+        !MedianBelow(rows.size(), best_score, [&](size_t i) { return (rows[i] * *x).norm(); })) {
+      continue;
+    }
+    best_score = score(*x);
+    best = x;
   }
   if (!best) return;
   const double cut = options.cut * kMadToSigma * best_score + 1e-12;
