@@ -110,11 +110,16 @@ std::vector<LaserInterval> IntervalsFromArrays(const DoubleArray& T, const Doubl
   return Unwrap(std::move(builder).Finish("")).intervals;
 }
 
-LaserCalibrationOptions CalibrationOptions(const std::string& loss, double loss_scale) {
+LaserCalibrationOptions CalibrationOptions(const std::string& loss, double loss_scale,
+                                           double redescending_scale = 6.0) {
   LaserCalibrationOptions options;
   options.refinement.loss = Unwrap(ParseRobustLoss(loss));
   if (!(loss_scale > 0.0)) throw py::value_error("loss_scale must be positive");
   options.refinement.loss_scale = loss_scale;
+  if (!(redescending_scale >= 0.0)) {
+    throw py::value_error("redescending_scale must be 0 (none) or positive");
+  }
+  options.refinement.redescending_scale = redescending_scale;
   return options;
 }
 
@@ -277,8 +282,8 @@ py::dict ReadLaser(const std::string& path, const std::string& format, const py:
 
 py::dict CalibrateLaserPath(const std::string& path, const std::string& format,
                             const std::string& loss, double loss_scale, const std::string& timing,
-                            const py::kwargs& bag) {
-  const LaserCalibrationOptions options = CalibrationOptions(loss, loss_scale);
+                            double redescending_scale, const py::kwargs& bag) {
+  const LaserCalibrationOptions options = CalibrationOptions(loss, loss_scale, redescending_scale);
   const LaserTimingOptions timing_options = TimingOptions(options, timing);
   if (IsRobotInput(path)) {
     CheckBagTiming(path, timing);
@@ -303,9 +308,9 @@ py::dict CalibrateLaserPath(const std::string& path, const std::string& format,
 py::dict CalibrateLaserArrays(const DoubleArray& T, const DoubleArray& phi_l,
                               const DoubleArray& phi_r, const DoubleArray& sm,
                               const std::optional<DoubleArray>& t, const std::string& loss,
-                              double loss_scale, bool interval_jitter) {
+                              double loss_scale, bool interval_jitter, double redescending_scale) {
   return IntervalResult(kArraysSource, loss, IntervalsFromArrays(T, phi_l, phi_r, sm, t),
-                        CalibrationOptions(loss, loss_scale), interval_jitter);
+                        CalibrationOptions(loss, loss_scale, redescending_scale), interval_jitter);
 }
 
 LaserDiagnosisOptions DiagnosisOptions(const std::string& loss, double loss_scale, double alpha,
@@ -414,14 +419,17 @@ void BindLaser(py::module_& m) {
         "(t, left, right) and sensor_poses (t, x, y, theta).");
   m.def("calibrate_laser", &CalibrateLaserPath, py::arg("path"), py::arg("format") = "auto",
         py::arg("loss") = "cauchy", py::arg("loss_scale") = 3.0, py::arg("timing") = "auto",
+        py::arg("redescending_scale") = 6.0,
         "Calibrates a laser-odometry log as `calib calibrate` does (raw streams and bags with "
-        "their timing; bag options as for read_laser_log, plus scan_points=True). Returns a dict: "
+        "their timing; bag options as for read_laser_log, plus scan_points=True; "
+        "redescending_scale as --redescending_scale, 0 to end under `loss`). Returns a dict: "
         "params, estimate, stddev, covariance (6×6), closed_form, samples, inliers, converged, "
         "noise_sigma, is_inlier, verdict, verdict_reason, warnings, and report (the JSON of "
         "`calib calibrate`).");
   m.def("calibrate_laser_arrays", &CalibrateLaserArrays, py::arg("T"), py::arg("phi_l"),
         py::arg("phi_r"), py::arg("sm"), py::kw_only(), py::arg("t") = py::none(),
         py::arg("loss") = "cauchy", py::arg("loss_scale") = 3.0, py::arg("interval_jitter") = true,
+        py::arg("redescending_scale") = 6.0,
         "Calibrates intervals given as arrays: T (s), phi_l, phi_r (rad/s), sm (N×3: x, y, theta "
         "of the sensor displacement in the sensor frame at the start), optional t (interval "
         "starts; a jump marks a gap). Returns the dict of calibrate_laser.");

@@ -39,6 +39,20 @@ class CalibrateLaserTest(unittest.TestCase):
         np.testing.assert_allclose(result["closed_form"], truth, rtol=1e-9, atol=1e-12)
         self.assertEqual(result["samples"], len(T))
 
+    def test_redescending_scale_names_the_last_loss_and_is_checked(self):
+        path = os.path.join(DATA, "sample_laser.tuple")
+        tukey = calib.calibrate_laser(path)
+        cauchy = calib.calibrate_laser(path, redescending_scale=0.0)
+        self.assertEqual(tukey["report"]["loss_stages"], "cauchy, then tukey (6)")
+        self.assertEqual(cauchy["report"]["loss_stages"], "cauchy")
+        for name, a, b, sigma in zip(tukey["params"], tukey["estimate"], cauchy["estimate"],
+                                     tukey["stddev"]):
+            self.assertLess(abs(a - b), sigma, name)  # Few slips: the two losses agree.
+        log = calib.read_laser_log(path)
+        with self.assertRaisesRegex(ValueError, "redescending_scale must be 0"):
+            calib.calibrate_laser_arrays(log["T"], log["phi_l"], log["phi_r"], log["sm"],
+                                         redescending_scale=-1.0)
+
     def test_read_laser_log_round_trip_through_arrays(self):
         log = calib.read_laser_log(os.path.join(DATA, "sample_laser.tuple"))
         self.assertEqual(log["sm"].shape, (2000, 3))
