@@ -27,17 +27,19 @@ double Median(std::vector<double> v) {
 
 // Whether Median of value(0 … n−1) is below `bound`, i.e. at least n/2 + 1 values are: a count
 // that stops as soon as it is decided, where most candidates of a consensus search lose (the
-// same answer as Median(…) < bound without the selection).
+// same answer as Median(…) < bound without the selection). It counts in blocks, each a tight
+// loop the compiler vectorizes, and decides between blocks: a loser is still only known after
+// about n/2 values, so the count's speed is what matters.
 template <typename F>
 bool MedianBelow(size_t n, double bound, const F& value) {
+  constexpr size_t kBlock = 128;
   const size_t needed = n / 2 + 1;
   size_t below = 0;
-  for (size_t i = 0; i < n; ++i) {
-    if (value(i) < bound) {
-      if (++below == needed) return true;
-    } else if (below + (n - i - 1) < needed) {
-      return false;
-    }
+  for (size_t start = 0; start < n; start += kBlock) {
+    const size_t end = std::min(n, start + kBlock);
+    for (size_t i = start; i < end; ++i) below += value(i) < bound;
+    if (below >= needed) return true;
+    if (below + (n - end) < needed) return false;
   }
   return false;
 }
@@ -53,6 +55,21 @@ std::vector<size_t> Spread(const std::vector<size_t>& from, int count) {
 double RotationResidual(const LaserInterval& interval, const Eigen::Vector2d& j) {
   return interval.sensor_motion(2) - IntervalWheelRotation(interval).dot(j);
 }
+
+// The scored intervals' rotation equations, one array per term: |θ_k − a_kᵀJ| in a tight loop.
+struct RotationColumns {
+  explicit RotationColumns(const std::vector<LaserInterval>& intervals,
+                           const std::vector<size_t>& which) {
+    for (size_t k : which) {
+      const Eigen::Vector2d a = IntervalWheelRotation(intervals[k]);
+      left.push_back(a(0)), right.push_back(a(1)), theta.push_back(intervals[k].sensor_motion(2));
+    }
+  }
+  double Residual(size_t i, const Eigen::Vector2d& j) const {
+    return std::abs(theta[i] - (left[i] * j(0) + right[i] * j(1)));
+  }
+  std::vector<double> left, right, theta;
+};
 
 // J by least squares over `indices`, or nothing when they do not determine it.
 std::optional<Eigen::Vector2d> FitRotation(const std::vector<LaserInterval>& intervals,
@@ -77,11 +94,11 @@ std::optional<Eigen::Vector2d> RotationConsensus(const std::vector<LaserInterval
                                                  const std::vector<size_t>& moving,
                                                  const ConsensusScreenOptions& options,
                                                  ConsensusScreen* screen) {
-  const std::vector<size_t> scored = Spread(moving, options.evaluated);
+  const RotationColumns scored(intervals, Spread(moving, options.evaluated));
+  const size_t n = scored.theta.size();
   const auto score = [&](const Eigen::Vector2d& j) {
-    std::vector<double> r;
-    r.reserve(scored.size());
-    for (size_t k : scored) r.push_back(std::abs(RotationResidual(intervals[k], j)));
+    std::vector<double> r(n);
+    for (size_t i = 0; i < n; ++i) r[i] = scored.Residual(i, j);
     return Median(std::move(r));
   };
   std::optional<Eigen::Vector2d> best = FitRotation(intervals, moving);
@@ -91,9 +108,7 @@ std::optional<Eigen::Vector2d> RotationConsensus(const std::vector<LaserInterval
     const std::vector<size_t> pair = {moving[random.Index(moving.size())],
                                       moving[random.Index(moving.size())]};
     const std::optional<Eigen::Vector2d> j = FitRotation(intervals, pair);
-    if (!j || !MedianBelow(scored.size(), best_score, [&](size_t i) {
-          return std::abs(RotationResidual(intervals[scored[i]], *j));
-        })) {
+    if (!j || !MedianBelow(n, best_score, [&](size_t i) { return scored.Residual(i, *j); })) {
       continue;
     }
     best_score = score(*j);
@@ -120,6 +135,22 @@ std::optional<Vector5d> SolveRows(const std::vector<TranslationRows>& rows,
   return *x;
 }
 
+// Eq. 16's rows, one array per entry: |L_k x| in a tight loop.
+struct TranslationColumns {
+  explicit TranslationColumns(const std::vector<TranslationRows>& rows) {
+    for (int e = 0; e < 10; ++e) entry[e].resize(rows.size());
+    for (size_t i = 0; i < rows.size(); ++i) {
+      for (int e = 0; e < 10; ++e) entry[e][i] = rows[i](e / 5, e % 5);
+    }
+  }
+  double Misfit(size_t i, const Vector5d& x) const {
+    double u = 0.0, v = 0.0;
+    for (int c = 0; c < 5; ++c) u += entry[c][i] * x(c), v += entry[5 + c][i] * x(c);
+    return std::sqrt(u * u + v * v);
+  }
+  std::vector<double> entry[10];
+};
+
 // Stage 2: eq. 16's x that the median kept interval agrees with best, and the gross intervals.
 void TranslationConsensus(const std::vector<LaserInterval>& intervals, const Eigen::Vector2d& j,
                           const ConsensusScreenOptions& options, ConsensusScreen* screen) {
@@ -134,10 +165,10 @@ void TranslationConsensus(const std::vector<LaserInterval>& intervals, const Eig
   std::vector<TranslationRows> rows;
   for (size_t k : scored)
     rows.push_back(censi_internal::TranslationEquations(intervals[k], j(0), j(1)));
+  const TranslationColumns columns(rows);
   const auto score = [&](const Vector5d& x) {
-    std::vector<double> e;
-    e.reserve(rows.size());
-    for (const TranslationRows& l : rows) e.push_back((l * x).norm());
+    std::vector<double> e(rows.size());
+    for (size_t i = 0; i < rows.size(); ++i) e[i] = columns.Misfit(i, x);
     return Median(std::move(e));
   };
   std::vector<size_t> all(rows.size());
@@ -150,7 +181,7 @@ void TranslationConsensus(const std::vector<LaserInterval>& intervals, const Eig
     for (size_t& i : subset) i = random.Index(rows.size());
     const std::optional<Vector5d> x = SolveRows(rows, subset, options);
     if (!x ||
-        !MedianBelow(rows.size(), best_score, [&](size_t i) { return (rows[i] * *x).norm(); })) {
+        !MedianBelow(rows.size(), best_score, [&](size_t i) { return columns.Misfit(i, *x); })) {
       continue;
     }
     best_score = score(*x);
