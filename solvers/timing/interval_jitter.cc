@@ -7,7 +7,9 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 
 namespace calib {
@@ -56,34 +58,105 @@ Eigen::Matrix<T, 3, 1> ShiftedSensorMotion(const LaserCalibration& c, const Pose
   return SensorMotionFromRobotMotion(c.base_T_sensor.cast<T>().eval(), robot);
 }
 
-// Σ_k = diag(θ) + σ_j²·G_k over the inliers, and the profile likelihood's pieces.
+// Σ_k = diag(θ) + σ_j²·G_k over the inliers, and the profile likelihood's pieces. Symmetric
+// 3×3 matrices are packed as (00, 01, 02, 11, 12, 22).
+struct JitterTerm {
+  double error[3];
+  double gram[6];  // G_k = g_s g_sᵀ + g_e g_eᵀ.
+};
 struct JitterData {
-  std::vector<Eigen::Vector3d> errors;
-  std::vector<Eigen::Matrix3d> gram;  // G_k = g_s g_sᵀ + g_e g_eᵀ.
+  std::vector<JitterTerm> terms;
+};
+
+// Σ = diag(θ) + s·G, packed.
+inline void Covariance(const Eigen::Vector3d& theta, double s, const double g[6], double m[6]) {
+  m[0] = theta(0) + s * g[0], m[1] = s * g[1], m[2] = s * g[2];
+  m[3] = theta(1) + s * g[3], m[4] = s * g[4], m[5] = theta(2) + s * g[5];
+}
+
+// The inverse of a packed symmetric 3×3 matrix by cofactors; returns the determinant (the
+// inverse is meaningless unless it is > 0).
+inline double InverseOfSymmetric(const double m[6], double inverse[6]) {
+  const double c00 = m[3] * m[5] - m[4] * m[4], c01 = m[2] * m[4] - m[1] * m[5],
+               c02 = m[1] * m[4] - m[2] * m[3];
+  const double det = m[0] * c00 + m[1] * c01 + m[2] * c02;
+  const double r = 1.0 / det;
+  inverse[0] = c00 * r, inverse[1] = c01 * r, inverse[2] = c02 * r;
+  inverse[3] = (m[0] * m[5] - m[2] * m[2]) * r;
+  inverse[4] = (m[1] * m[2] - m[0] * m[4]) * r;
+  inverse[5] = (m[0] * m[3] - m[1] * m[1]) * r;
+  return det;
+}
+
+// y = M·x for a packed symmetric M.
+inline void MultiplySymmetric(const double m[6], const double x[3], double y[3]) {
+  y[0] = m[0] * x[0] + m[1] * x[1] + m[2] * x[2];
+  y[1] = m[1] * x[0] + m[3] * x[1] + m[4] * x[2];
+  y[2] = m[2] * x[0] + m[4] * x[1] + m[5] * x[2];
+}
+
+// Σ log x_k over positive x without a logarithm per term: binary exponents summed as integers,
+// mantissas (in [1, 2)) multiplied and folded back every 32 terms.
+class LogSum {
+ public:
+  void Add(double x) {
+    if (!(x >= std::numeric_limits<double>::min()) || !(x < kInfinity)) {
+      plain_ += std::log(x);
+      return;
+    }
+    uint64_t bits;
+    std::memcpy(&bits, &x, sizeof bits);
+    exponent_ += static_cast<int64_t>(bits >> 52) - 1023;
+    bits = (bits & kMantissaBits) | kExponentOfOne;
+    std::memcpy(&x, &bits, sizeof bits);
+    mantissa_ *= x;
+    if (++count_ == 32) Fold();
+  }
+  double Value() const { return plain_ + std::log(mantissa_) + exponent_ * std::log(2.0); }
+
+ private:
+  static constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  static constexpr uint64_t kMantissaBits = (uint64_t{1} << 52) - 1;
+  static constexpr uint64_t kExponentOfOne = uint64_t{1023} << 52;
+  void Fold() {
+    int e = 0;
+    mantissa_ = std::frexp(mantissa_, &e);
+    exponent_ += e;
+    count_ = 0;
+  }
+  double plain_ = 0.0, mantissa_ = 1.0;
+  int64_t exponent_ = 0;
+  int count_ = 0;
 };
 
 // −½Σ[log det Σ_k + e_kᵀΣ_k⁻¹e_k] at variances θ; fills the score and Fisher information in θ.
+// Packed cofactors and one logarithm per 32 intervals: this loop runs for every interval at
+// every step of the searches (it was most of a calibration's time on real logs).
 double LogLikelihood(const JitterData& data, const Eigen::Vector3d& theta, double jitter2,
                      Eigen::Vector3d* score = nullptr, Eigen::Matrix3d* fisher = nullptr) {
-  double value = 0.0;
-  if (score) score->setZero();
-  if (fisher) fisher->setZero();
-  for (size_t k = 0; k < data.errors.size(); ++k) {
-    const Eigen::Matrix3d sigma = Eigen::Matrix3d(theta.asDiagonal()) + jitter2 * data.gram[k];
-    // Cofactors, not a Cholesky factor and triangular solves: this loop runs for every interval
-    // at every step of two nested searches (it was most of a calibration's time on real logs).
+  double quadratic = 0.0;
+  LogSum log_det;
+  double u[3] = {0.0, 0.0, 0.0}, f[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  for (const JitterTerm& term : data.terms) {
+    double sigma[6], inverse[6], w[3];
+    Covariance(theta, jitter2, term.gram, sigma);
+    const double det = InverseOfSymmetric(sigma, inverse);
     // Σ is a positive diagonal plus a positive semi-definite term, so det Σ > 0.
-    Eigen::Matrix3d inverse;
-    double det = 0.0;
-    bool invertible = false;
-    sigma.computeInverseAndDetWithCheck(inverse, det, invertible, 0.0);
-    if (!invertible || !(det > 0.0)) return -std::numeric_limits<double>::infinity();
-    const Eigen::Vector3d w = inverse * data.errors[k];
-    value -= 0.5 * (std::log(det) + data.errors[k].dot(w));
-    if (score) *score += 0.5 * (w.cwiseAbs2() - inverse.diagonal());
-    if (fisher) *fisher += 0.5 * inverse.cwiseAbs2();
+    if (!(det > 0.0)) return -std::numeric_limits<double>::infinity();
+    MultiplySymmetric(inverse, term.error, w);
+    log_det.Add(det);
+    quadratic += term.error[0] * w[0] + term.error[1] * w[1] + term.error[2] * w[2];
+    if (score == nullptr) continue;
+    u[0] += w[0] * w[0] - inverse[0], u[1] += w[1] * w[1] - inverse[3];
+    u[2] += w[2] * w[2] - inverse[5];
+    for (int i = 0; i < 6; ++i) f[i] += inverse[i] * inverse[i];
   }
-  return value;
+  if (score) *score = 0.5 * Eigen::Vector3d(u[0], u[1], u[2]);
+  if (fisher) {
+    *fisher << f[0], f[1], f[2], f[1], f[3], f[4], f[2], f[4], f[5];
+    *fisher *= 0.5;
+  }
+  return -0.5 * (log_det.Value() + quadratic);
 }
 
 // Floor of the noise variances: σ = 1e-12 m or rad, as RobustNoiseSigma.
@@ -118,15 +191,16 @@ bool JointScore(const JitterData& data, const Eigen::Vector4d& phi, Eigen::Vecto
                 Eigen::Matrix4d* fisher) {
   score->setZero();
   fisher->setZero();
-  for (size_t k = 0; k < data.errors.size(); ++k) {
-    const Eigen::Matrix3d& g = data.gram[k];
-    const Eigen::Matrix3d sigma = Eigen::Matrix3d(phi.head<3>().asDiagonal()) + phi(3) * g;
-    Eigen::Matrix3d inverse;
-    double det = 0.0;
-    bool invertible = false;
-    sigma.computeInverseAndDetWithCheck(inverse, det, invertible, 0.0);
-    if (!invertible || !(det > 0.0)) return false;
-    const Eigen::Vector3d w = inverse * data.errors[k];
+  for (const JitterTerm& term : data.terms) {
+    double sigma[6], packed[6];
+    Covariance(phi.head<3>(), phi(3), term.gram, sigma);
+    if (!(InverseOfSymmetric(sigma, packed) > 0.0)) return false;
+    const auto unpack = [](const double p[6]) {
+      return (Eigen::Matrix3d() << p[0], p[1], p[2], p[1], p[3], p[4], p[2], p[4], p[5]).finished();
+    };
+    const Eigen::Matrix3d inverse = unpack(packed), g = unpack(term.gram);
+    const Eigen::Vector3d w =
+        inverse * Eigen::Vector3d(term.error[0], term.error[1], term.error[2]);
     const Eigen::Matrix3d m = inverse * g;  // Σ⁻¹G.
     score->head<3>() += 0.5 * (w.cwiseAbs2() - inverse.diagonal());
     (*score)(3) += 0.5 * (w.dot(g * w) - m.trace());
@@ -333,11 +407,13 @@ IntervalJitterEstimate EstimateIntervalJitter(
   const size_t n = std::min(errors.size(), sensitivities.size());
   for (size_t k : JitterSampleIndices(n, is_inlier, options.max_intervals)) {
     const IntervalTimeSensitivity& g = sensitivities[k];
-    data.errors.push_back(errors[k]);
-    data.gram.push_back(g.start * g.start.transpose() + g.end * g.end.transpose());
+    const Eigen::Matrix3d gram = g.start * g.start.transpose() + g.end * g.end.transpose();
+    data.terms.push_back(
+        {{errors[k](0), errors[k](1), errors[k](2)},
+         {gram(0, 0), gram(0, 1), gram(0, 2), gram(1, 1), gram(1, 2), gram(2, 2)}});
   }
   IntervalJitterEstimate estimate;
-  estimate.intervals_used = static_cast<int>(data.errors.size());
+  estimate.intervals_used = static_cast<int>(data.terms.size());
   Eigen::Vector3d theta = noise_sigma.cwiseAbs2().cwiseMax(kMinVariance);
   estimate.log_likelihood_without_jitter =
       ProfileLogLikelihood(data, 0.0, options.estimate_noise, &theta);
@@ -345,8 +421,8 @@ IntervalJitterEstimate EstimateIntervalJitter(
   estimate.log_likelihood = estimate.log_likelihood_without_jitter;
   // The jitter that doubles a typical interval's variance sets the grid's scale.
   std::vector<double> relative;
-  for (const Eigen::Matrix3d& g : data.gram) {
-    relative.push_back((theta.cwiseInverse().asDiagonal() * g).trace());
+  for (const JitterTerm& term : data.terms) {
+    relative.push_back(term.gram[0] / theta(0) + term.gram[3] / theta(1) + term.gram[5] / theta(2));
   }
   if (relative.size() < 2) return estimate;
   std::nth_element(relative.begin(), relative.begin() + relative.size() / 2, relative.end());
