@@ -56,11 +56,16 @@ class LaserResidual {
   }
 
   // Whitened residual r and its Jacobian J = ∂r/∂(r_l, r_r, b, x, y, θ) (3×6) at the given
-  // parameters, by forward-mode differentiation without a cost-function object: the fused
-  // passes and the covariances call it once per interval.
+  // parameters, without a cost-function object: the fused passes and the covariances call it
+  // once per interval. A constant-speed interval has it in closed form (below); a stepped one
+  // by forward-mode differentiation.
   static void Linearize(const LaserInterval& interval, const Eigen::Matrix3d& sqrt_information,
                         const double* odometry, const double* base_T_sensor, Eigen::Vector3d* r,
                         Eigen::Matrix<double, 3, 6>* jacobian) {
+    if (interval.steps.empty()) {
+      LinearizeConstantSpeed(interval, sqrt_information, odometry, base_T_sensor, r, jacobian);
+      return;
+    }
     using Jet = ceres::Jet<double, 6>;
     Jet odometry_jet[3], sensor_jet[3], residual[3];
     for (int i = 0; i < 3; ++i) {
@@ -81,6 +86,52 @@ class LaserResidual {
   }
 
  private:
+  // The wheels turn by φ = (φ_l, φ_r); the arc has length d = (r_l·φ_l + r_r·φ_r)/2 and angle
+  // a = (r_r·φ_r − r_l·φ_l)/b, o = (S·d, C·d, a) (S, C as in Exp), and with ℓ = (ℓ_p, ℓ_θ)
+  //   s_p = R(−ℓ_θ)·[o_p + (R(a) − I)·ℓ_p],  s_θ = a,  e = ŝ − s (θ wrapped),  r = L·e, J = −L·∂s.
+  //   ∂s_p/∂d = R(−ℓ_θ)·(S, C),  ∂s_p/∂a = R(−ℓ_θ)·[(S', C')·d + R'(a)·ℓ_p],  ∂s_θ/∂a = 1,
+  //   ∂s_p/∂ℓ_p = R(−ℓ_θ)·(R(a) − I),  ∂s_p/∂ℓ_θ = (s_y, −s_x),
+  //   ∂(d, a)/∂(r_l, r_r, b) = [[φ_l/2, φ_r/2, 0], [−φ_l/b, φ_r/b, −a/b]].
+  static void LinearizeConstantSpeed(const LaserInterval& interval,
+                                     const Eigen::Matrix3d& sqrt_information,
+                                     const double* odometry, const double* base_T_sensor,
+                                     Eigen::Vector3d* r, Eigen::Matrix<double, 3, 6>* jacobian) {
+    const double left = interval.left_speed * interval.duration_s;
+    const double right = interval.right_speed * interval.duration_s;
+    const double rl = odometry[0], rr = odometry[1], b = odometry[2];
+    const double d = (rl * left + rr * right) / 2.0;
+    const double a = (rr * right - rl * left) / b;
+    double s, c, ds, dc;
+    ArcCoefficients(a, &s, &c);
+    ArcCoefficientDerivatives(a, &ds, &dc);
+    const double ca = std::cos(a), sa = std::sin(a);
+    const double cl = std::cos(base_T_sensor[2]), sl = std::sin(base_T_sensor[2]);
+    const Eigen::Matrix2d to_sensor = (Eigen::Matrix2d() << cl, sl, -sl, cl).finished();
+    const Eigen::Vector2d mount(base_T_sensor[0], base_T_sensor[1]);
+    const Eigen::Matrix2d turn = (Eigen::Matrix2d() << ca, -sa, sa, ca).finished();
+    const Eigen::Vector2d sensor_xy =
+        to_sensor * (Eigen::Vector2d(s * d, c * d) + turn * mount - mount);
+    const Pose2d& measured = interval.sensor_motion;
+    // s_θ as the composition rounds it, (a + ℓ_θ) − ℓ_θ, so that r equals operator()'s.
+    const double sensor_theta = (a + base_T_sensor[2]) - base_T_sensor[2];
+    const Eigen::Vector3d error(measured(0) - sensor_xy(0), measured(1) - sensor_xy(1),
+                                WrapAngle(measured(2) - sensor_theta));
+    Eigen::Vector3d by_d, by_a;
+    by_d << to_sensor * Eigen::Vector2d(s, c), 0.0;
+    by_a << to_sensor * (Eigen::Vector2d(ds, dc) * d + Eigen::Vector2d(-sa, ca) * mount(0) +
+                         Eigen::Vector2d(-ca, -sa) * mount(1)),
+        1.0;
+    Eigen::Matrix<double, 3, 6> ds_dp;
+    ds_dp.col(0) = by_d * (left / 2.0) - by_a * (left / b);
+    ds_dp.col(1) = by_d * (right / 2.0) + by_a * (right / b);
+    ds_dp.col(2) = -by_a * (a / b);
+    ds_dp.block<2, 2>(0, 3) = to_sensor * (turn - Eigen::Matrix2d::Identity());
+    ds_dp.block<1, 2>(2, 3).setZero();
+    ds_dp.col(5) << sensor_xy(1), -sensor_xy(0), 0.0;
+    *r = sqrt_information * error;
+    *jacobian = -sqrt_information * ds_dp;
+  }
+
   const LaserInterval* interval_;
   const Eigen::Matrix3d* sqrt_information_;
 };

@@ -89,6 +89,22 @@ std::vector<CandidateState> MakeCandidates(const LaserDiagnosisOptions& options)
   return candidates;
 }
 
+// A radius change that is not modelled yet is evaluated with every interval after it (its
+// Jacobian columns then hold the sensitivity R_k of a change before interval k). At γ = 0 this
+// changes nothing else: the residuals and the other columns are the model's own.
+LaserEffectModel StepEvaluationModel(const LaserEffectModel& model) {
+  LaserEffectModel evaluation_model = model;
+  if (!model.Has(LaserEffect::kWheelRadiusChange)) evaluation_model.change_time_s = -kInfinity;
+  return evaluation_model;
+}
+
+// Whether the search still stands at the base fit in the base fit's whitening.
+bool AtBase(const LaserEffectData& data, const LaserEffectFit& current,
+            const LaserCalibration& base_calibration) {
+  return !data.has_interval_sqrt_information() && current.model.effects.empty() &&
+         current.calibration.ToVector() == base_calibration.ToVector();
+}
+
 // The score test of one candidate at the current fit; false when it cannot be tested
 // (confounded or not excited), which ends its search.
 bool ScoreCandidate(const Context& context, const ScoreTester& tester,
@@ -128,14 +144,15 @@ bool ScoreCandidate(const Context& context, const ScoreTester& tester,
 // testable ones, then the refit and confirmation of those that pass, strongest first, until one
 // is adopted. Returns whether one was.
 StatusOr<bool> ForwardStep(const Context& context, int step, bool may_adopt,
+                           const LaserEffectEvaluation* at_current,
                            std::vector<CandidateState>* candidates, Search* search) {
-  // A radius change that is not modelled yet is evaluated with every interval after it (its
-  // Jacobian columns then hold the sensitivity R_k of a change before interval k).
   const LaserEffectModel& model = search->current.model;
-  LaserEffectModel evaluation_model = model;
-  if (!model.Has(LaserEffect::kWheelRadiusChange)) evaluation_model.change_time_s = -kInfinity;
-  const LaserEffectEvaluation evaluation =
-      EvaluateLaserEffects(context.data, evaluation_model, search->current.calibration);
+  LaserEffectEvaluation own;
+  if (at_current == nullptr) {
+    own =
+        EvaluateLaserEffects(context.data, StepEvaluationModel(model), search->current.calibration);
+  }
+  const LaserEffectEvaluation& evaluation = at_current != nullptr ? *at_current : own;
   const ScoreTester tester(Blocks(evaluation, model.FreeColumns()), context.options.hac_lag);
   if (!tester.ok()) return Status::NotObservable("the fit's information matrix is singular");
   std::vector<CandidateState*> testable;
@@ -288,8 +305,10 @@ StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& interva
                        : BoundarySpeedModel::kSmooth;
   Search search;
   CALIB_ASSIGN_OR_RETURN(search.current, FitLaserEffects(data, model, base.estimate));
-  const LaserEffectEvaluation base_evaluation =
-      EvaluateLaserEffects(data, search.current.model, search.current.calibration);
+  // One evaluation of the base fit serves its report, the first step's score tests and, when
+  // nothing is adopted, the final report (reports read the residuals and the fit's columns only).
+  const LaserEffectEvaluation base_evaluation = EvaluateLaserEffects(
+      data, StepEvaluationModel(search.current.model), search.current.calibration);
   LaserDiagnosis diagnosis;
   diagnosis.samples = static_cast<int>(intervals.size());
   diagnosis.baseline = MakeReport(context, search.current, base_evaluation, 0.0);
@@ -306,17 +325,21 @@ StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& interva
   // reached the candidates are still tested (step 1 always), not refitted.
   if (options.timing_candidates) CALIB_RETURN_IF_ERROR(TimingStep(context, &search, &diagnosis));
   // The baseline's residuals in the (possibly) jitter-whitened metric of the later fits.
-  const LaserEffectEvaluation base_evaluation_now =
-      data.has_interval_sqrt_information()
-          ? EvaluateLaserEffects(data, diagnosis_base_model, diagnosis_base_calibration)
-          : base_evaluation;
+  LaserEffectEvaluation rewhitened;
+  if (data.has_interval_sqrt_information()) {
+    rewhitened = EvaluateLaserEffects(data, diagnosis_base_model, diagnosis_base_calibration);
+  }
+  const LaserEffectEvaluation& base_evaluation_now =
+      data.has_interval_sqrt_information() ? rewhitened : base_evaluation;
   std::vector<CandidateState> candidates = MakeCandidates(options);
   for (int step = 1; step <= kNumLaserEffects + 1; ++step) {
     const bool may_adopt = static_cast<int>(search.adoptions.size()) < options.max_effects;
     if (!may_adopt && step > 1) break;
     diagnosis.steps = step;
+    const bool at_base = AtBase(data, search.current, diagnosis_base_calibration);
     CALIB_ASSIGN_OR_RETURN(const bool adopted,
-                           ForwardStep(context, step, may_adopt, &candidates, &search));
+                           ForwardStep(context, step, may_adopt,
+                                       at_base ? &base_evaluation : nullptr, &candidates, &search));
     if (!adopted) break;
     diagnosis.adopted.push_back(search.adoptions.back().effect);
   }
@@ -325,8 +348,12 @@ StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& interva
   }
 
   // 4. The final fit, location and residual structure, then each finding's value and sentence.
-  const LaserEffectEvaluation final_evaluation =
-      EvaluateLaserEffects(data, search.current.model, search.current.calibration);
+  LaserEffectEvaluation refitted;
+  const bool final_at_base = AtBase(data, search.current, diagnosis_base_calibration);
+  if (!final_at_base) {
+    refitted = EvaluateLaserEffects(data, search.current.model, search.current.calibration);
+  }
+  const LaserEffectEvaluation& final_evaluation = final_at_base ? base_evaluation : refitted;
   diagnosis.final_fit =
       MakeReport(context, search.current, final_evaluation, search.change_stddev_s);
   diagnosis.final_fit.stamp_jitter_s = search.jitter_s;

@@ -201,7 +201,10 @@ void DescribeResiduals(const Context& context, const LaserEffectEvaluation& base
         base_evaluation.rho1, after_errors, final_evaluation.rho1, context.options.covariate_bins));
   }
   diagnosis->structure_before = Structure(context, covariates, base_evaluation);
-  diagnosis->structure_after = Structure(context, covariates, final_evaluation);
+  // The same fit (nothing adopted) has the same structure.
+  diagnosis->structure_after = &final_evaluation == &base_evaluation
+                                   ? diagnosis->structure_before
+                                   : Structure(context, covariates, final_evaluation);
   for (CandidateState& c : *candidates) {
     if (!c.finding.significant) continue;
     for (const Adoption& a : search.adoptions) {

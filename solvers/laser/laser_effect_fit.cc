@@ -1,4 +1,6 @@
+#include <calib/problems/laser/laser_residual.h>
 #include <calib/problems/positive_manifold.h>
+#include <calib/solvers/common/fused_normal_cost.h>
 #include <calib/solvers/common/robust_covariance.h>
 #include <calib/solvers/common/solver_options.h>
 #include <calib/solvers/laser/laser_effect_fit.h>
@@ -51,6 +53,51 @@ std::vector<LaserEffectContext> LaserEffectData::Contexts(const LaserEffectModel
   return contexts;
 }
 
+namespace {
+
+// The fits run as one fused block over the fitted intervals (see FusedNormalCost). Without
+// effects the residual is LaserResidual's (γ = 0 changes nothing in it), linearized in closed
+// form; the block then spans (r_l, r_r, b) and the mounting only.
+FusedNormalCost<3, kNumLaserParams>::Linearize BaseLinearization(
+    const LaserEffectData& data, const std::vector<size_t>& fitted) {
+  using Cost = FusedNormalCost<3, kNumLaserParams>;
+  return [&data, fitted](size_t i, const double* const* parameters, Cost::Residual* r,
+                         Cost::Jacobian* j) {
+    const size_t k = fitted[i];
+    const LaserInterval& interval = data.intervals()[k];
+    if (j != nullptr) {
+      LaserResidual::Linearize(interval, data.sqrt_information(k), parameters[0], parameters[1], r,
+                               j);
+      return true;
+    }
+    return LaserResidual(interval, &data.sqrt_information(k))(parameters[0], parameters[1],
+                                                              r->data());
+  };
+}
+
+// With effects: LaserEffectResidual by automatic differentiation, the three blocks side by side.
+FusedNormalCost<3, kNumLaserFullParams>::Linearize EffectLinearization(
+    const LaserEffectData& data, const std::vector<LaserEffectContext>& contexts,
+    const std::vector<size_t>& fitted) {
+  using Cost = FusedNormalCost<3, kNumLaserFullParams>;
+  return [&data, contexts, fitted](size_t i, const double* const* parameters, Cost::Residual* r,
+                                   Cost::Jacobian* j) {
+    const size_t k = fitted[i];
+    LaserEffectResidual functor(contexts[k], &data.sqrt_information(k));
+    if (j == nullptr) return functor(parameters[0], parameters[1], parameters[2], r->data());
+    const ceres::AutoDiffCostFunction<LaserEffectResidual, 3, 3, 3, kNumLaserEffectParams> cost(
+        &functor, ceres::DO_NOT_TAKE_OWNERSHIP);
+    Eigen::Matrix<double, 3, 3, Eigen::RowMajor> j_odometry, j_mounting;
+    Eigen::Matrix<double, 3, kNumLaserEffectParams, Eigen::RowMajor> j_effects;
+    double* jacobians[3] = {j_odometry.data(), j_mounting.data(), j_effects.data()};
+    if (!cost.Evaluate(parameters, r->data(), jacobians)) return false;
+    *j << j_odometry, j_mounting, j_effects;
+    return true;
+  };
+}
+
+}  // namespace
+
 StatusOr<LaserEffectFit> FitLaserEffects(const LaserEffectData& data, const LaserEffectModel& model,
                                          const LaserCalibration& initial,
                                          const std::vector<bool>* fit_mask) {
@@ -85,20 +132,28 @@ StatusOr<LaserEffectFit> FitLaserEffects(const LaserEffectData& data, const Lase
   } else if (!constant.empty()) {
     problem.SetManifold(gamma.data(), new ceres::SubsetManifold(kNumLaserEffectParams, constant));
   }
-  ceres::LossFunction* loss = const_cast<ceres::LossFunction*>(data.loss());
-  size_t residuals = 0;
+  std::vector<size_t> fitted;
   for (size_t k = 0; k < contexts.size(); ++k) {
-    if (fit_mask != nullptr && !(*fit_mask)[k]) continue;
-    problem.AddResidualBlock(LaserEffectResidual::Create(contexts[k], &data.sqrt_information(k)),
-                             loss, odometry, mounting, gamma.data());
-    ++residuals;
+    if (fit_mask == nullptr || (*fit_mask)[k]) fitted.push_back(k);
   }
-  if (residuals == 0) return Status::InvalidInput("no intervals to fit");
+  if (fitted.empty()) return Status::InvalidInput("no intervals to fit");
+  const size_t residuals = fitted.size();
+  const int threads = data.options().num_threads;
+  if (model.effects.empty()) {
+    problem.AddResidualBlock(
+        new FusedNormalCost<3, kNumLaserParams>(
+            {3, 3}, fitted.size(), BaseLinearization(data, fitted), data.loss(), threads),
+        nullptr, odometry, mounting);
+  } else {
+    problem.AddResidualBlock(new FusedNormalCost<3, kNumLaserFullParams>(
+                                 {3, 3, kNumLaserEffectParams}, fitted.size(),
+                                 EffectLinearization(data, contexts, fitted), data.loss(), threads),
+                             nullptr, odometry, mounting, gamma.data());
+  }
 
   ceres::Solver::Summary summary;
-  CALIB_RETURN_IF_ERROR(Solve(
-      LaserEffectFitSettings(residuals, data.options().max_iterations, data.options().num_threads),
-      "the refit with effects", &problem, &summary));
+  CALIB_RETURN_IF_ERROR(Solve(LaserEffectFitSettings(residuals, data.options().max_iterations, 1),
+                              "the refit with effects", &problem, &summary));
   if (!(odometry[0] > 0.0 && odometry[1] > 0.0 && odometry[2] > 0.0)) {
     return Status::NotConverged(
         "the refit with effects drove a radius or the wheelbase non-positive");

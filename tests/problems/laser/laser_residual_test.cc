@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <random>
 
 namespace calib {
@@ -96,6 +97,41 @@ TEST(LaserResidualTest, JacobiansMatchCentralDifferences) {
         }
       }
     }
+  }
+}
+
+// The closed-form linearization of a constant-speed interval equals the automatic
+// differentiation of operator() (Ceres' cost function), also at a straight run (turn angle 0),
+// below the series cut-off, near a half turn, and with a full whitening matrix.
+TEST(LaserResidualTest, ConstantSpeedLinearizationEqualsAutomaticDifferentiation) {
+  Eigen::Matrix3d sqrt_information;
+  sqrt_information << 1e3, 2e2, -1e2, 0.0, 1.5e3, 3e1, 0.0, 0.0, 4e2;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> speed(-3.0, 3.0);
+  std::vector<Eigen::Vector2d> speeds = {
+      {0.5, 0.5}, {0.5, 0.5 + 1e-4}, {-2.0, 2.0}, {0.0, 0.0}, {-4.2, 4.4}};
+  for (int i = 0; i < 40; ++i) speeds.emplace_back(speed(rng), speed(rng));
+  for (size_t trial = 0; trial < speeds.size(); ++trial) {
+    LaserInterval interval = ExactInterval(speeds[trial](0), speeds[trial](1), 0.8);
+    interval.sensor_motion += Eigen::Vector3d(1e-3, -2e-3, 3e-3);
+    const double odometry[3] = {0.021, 0.020, 0.09};
+    const double mounting[3] = {0.01, -0.02, -3.0 + 0.15 * trial};
+    std::unique_ptr<ceres::CostFunction> cost(LaserResidual::Create(interval, &sqrt_information));
+    const double* parameters[2] = {odometry, mounting};
+    Eigen::Vector3d expected_residual;
+    Eigen::Matrix<double, 3, 3, Eigen::RowMajor> by_odometry, by_mounting;
+    double* jacobians[2] = {by_odometry.data(), by_mounting.data()};
+    ASSERT_TRUE(cost->Evaluate(parameters, expected_residual.data(), jacobians));
+    Eigen::Vector3d residual = Eigen::Vector3d::Constant(std::nan(""));
+    Eigen::Matrix<double, 3, 6> jacobian = Eigen::Matrix<double, 3, 6>::Constant(std::nan(""));
+    LaserResidual::Linearize(interval, sqrt_information, odometry, mounting, &residual, &jacobian);
+    const double scale = jacobian.cwiseAbs().maxCoeff();
+    EXPECT_LT((residual - expected_residual).norm(), 1e-12 * (1.0 + expected_residual.norm()))
+        << "trial " << trial;
+    EXPECT_LT((jacobian.leftCols<3>() - by_odometry).cwiseAbs().maxCoeff(), 1e-11 * scale + 1e-300)
+        << "trial " << trial;
+    EXPECT_LT((jacobian.rightCols<3>() - by_mounting).cwiseAbs().maxCoeff(), 1e-11 * scale + 1e-300)
+        << "trial " << trial;
   }
 }
 
