@@ -14,24 +14,6 @@ namespace {
 // leaves ~1e-12 after the subtraction, a weakly identified effect orders of magnitude more.
 constexpr double kConfoundedInformation = 1e-6;
 
-// Sample k of a robust fit against a sensitivity S: its blocks and the products that every cross
-// product of θ and γ needs.
-struct SampleTerms {
-  Eigen::MatrixXd::ConstRowsBlockXpr j, s;  // J_k, S_k (d rows each).
-  Eigen::VectorXd r, jr, sr;                // r_k, J_kᵀr_k, S_kᵀr_k.
-  double w, w2;                             // ρ'_k, 2ρ''_k.
-};
-
-SampleTerms TermsAt(const RobustFitBlocks& blocks, const Eigen::MatrixXd& sensitivity, size_t k) {
-  const Eigen::Index d = blocks.dimension();
-  const auto j = blocks.jacobian.middleRows(d * k, d);
-  const auto s = sensitivity.middleRows(d * k, d);
-  Eigen::VectorXd r = blocks.residual.row(k).transpose();
-  Eigen::VectorXd jr = j.transpose() * r;
-  Eigen::VectorXd sr = s.transpose() * r;
-  return {j, s, std::move(r), std::move(jr), std::move(sr), blocks.rho1(k), 2.0 * blocks.rho2(k)};
-}
-
 // Full-bread (M_k) and IRLS (ρ'_k·I in place of M_k) cross products over all samples.
 struct CrossProducts {
   Eigen::MatrixXd a_tg, a_gg;        // A_θγ, A_γγ.
@@ -39,29 +21,36 @@ struct CrossProducts {
   Eigen::MatrixXd raw_scores;        // N × m: ρ'_k·S_kᵀr_k.
 };
 
-CrossProducts AccumulateCrossProducts(const RobustFitBlocks& blocks,
-                                      const Eigen::MatrixXd& sensitivity) {
-  const size_t n = blocks.size();
-  const Eigen::Index p = blocks.jacobian.cols();
-  const Eigen::Index m = sensitivity.cols();
-  CrossProducts c;
-  c.a_tg = Eigen::MatrixXd::Zero(p, m);
-  c.a_gg = Eigen::MatrixXd::Zero(m, m);
-  c.w_tt = Eigen::MatrixXd::Zero(p, p);
-  c.w_tg = Eigen::MatrixXd::Zero(p, m);
-  c.w_gg = Eigen::MatrixXd::Zero(m, m);
-  c.raw_scores.resize(n, m);
-  for (size_t k = 0; k < n; ++k) {
-    const SampleTerms t = TermsAt(blocks, sensitivity, k);
-    const Eigen::MatrixXd js = t.j.transpose() * t.s;
-    const Eigen::MatrixXd ss = t.s.transpose() * t.s;
-    c.a_tg += t.w * js + t.w2 * t.jr * t.sr.transpose();
-    c.a_gg += t.w * ss + t.w2 * t.sr * t.sr.transpose();
-    c.w_tt += t.w * t.j.transpose() * t.j;
-    c.w_tg += t.w * js;
-    c.w_gg += t.w * ss;
-    c.raw_scores.row(k) = t.w * t.sr.transpose();
+// Row k = r_kᵀM_k, M_k sample k's d rows of `m`.
+Eigen::MatrixXd ResidualProducts(const RobustFitBlocks& blocks, const Eigen::MatrixXd& m) {
+  const Eigen::Index d = blocks.dimension();
+  Eigen::MatrixXd out(blocks.size(), m.cols());
+  for (size_t k = 0; k < blocks.size(); ++k) {
+    out.row(k).noalias() = blocks.residual.row(k) * m.middleRows(d * k, d);
   }
+  return out;
+}
+
+// The sums as products of the stacked matrices (no per-sample temporaries): with W the row
+// weights ρ'_k and C = diag(2ρ''_k), W_θγ = JᵀWS, W_γγ = SᵀWS, A_θγ = W_θγ + (Jr)ᵀC(Sr),
+// A_γγ = W_γγ + (Sr)ᵀC(Sr), where row k of Jr and Sr is r_kᵀJ_k and r_kᵀS_k.
+CrossProducts AccumulateCrossProducts(const RobustFitBlocks& blocks,
+                                      const Eigen::MatrixXd& residual_jacobian,
+                                      const Eigen::VectorXd& row_weights,
+                                      const Eigen::MatrixXd& irls_nuisance,
+                                      const Eigen::MatrixXd& sensitivity) {
+  CrossProducts c;
+  const Eigen::MatrixXd sr = ResidualProducts(blocks, sensitivity);
+  const Eigen::MatrixXd weighted = row_weights.asDiagonal() * sensitivity;
+  c.w_tt = irls_nuisance;
+  c.w_tg.noalias() = blocks.jacobian.transpose() * weighted;
+  c.w_gg.noalias() = sensitivity.transpose() * weighted;
+  const Eigen::MatrixXd curved = (2.0 * blocks.rho2).asDiagonal() * sr;
+  c.a_tg = c.w_tg;
+  c.a_tg.noalias() += residual_jacobian.transpose() * curved;
+  c.a_gg = c.w_gg;
+  c.a_gg.noalias() += sr.transpose() * curved;
+  c.raw_scores = blocks.rho1.asDiagonal() * sr;
   return c;
 }
 
@@ -152,6 +141,10 @@ ScoreTester::ScoreTester(RobustFitBlocks blocks_in, int hac_lag)
     gradients_.row(k) = blocks.rho1(k) * jr.transpose();
   }
   const Eigen::MatrixXd& a = sums.bread;
+  residual_jacobian_ = ResidualProducts(blocks, blocks.jacobian);
+  row_weights_ = blocks.rho1.replicate(1, d).transpose().reshaped();
+  irls_nuisance_.noalias() =
+      blocks.jacobian.transpose() * (row_weights_.asDiagonal() * blocks.jacobian);
   gradient_sum_ = gradients_.colwise().sum().transpose();
   gradient_outer_ = gradients_.transpose() * gradients_;
   a_nuisance_.compute(a);
@@ -174,7 +167,8 @@ ScoreTestResult ScoreTester::Test(const Eigen::MatrixXd& sensitivity) const {
   result.contributions = Eigen::VectorXd::Zero(n);
   if (!ok_ || m == 0) return result;
 
-  const CrossProducts c = AccumulateCrossProducts(blocks_, sensitivity);
+  const CrossProducts c = AccumulateCrossProducts(blocks_, residual_jacobian_, row_weights_,
+                                                  irls_nuisance_, sensitivity);
   const Eigen::MatrixXd w_eff = IrlsConcealment(c, &result);
   const Eigen::MatrixXd b = a_nuisance_.solve(c.a_tg);
   result.absorption = b;
@@ -215,28 +209,39 @@ ScoreTester::ChangeScan ScoreTester::ScanChange(const Eigen::MatrixXd& sensitivi
   const size_t lo = std::max<size_t>(1, static_cast<size_t>(std::ceil(trim * n)));
   const size_t hi = std::min(n - 1, static_cast<size_t>(std::floor((1.0 - trim) * n)));
 
-  // Suffix sums over k ≥ j, accumulated from the end.
-  Eigen::VectorXd sum_a = Eigen::VectorXd::Zero(m);
+  // Suffix sums over k ≥ j, accumulated from the end (each sample's terms as in
+  // AccumulateCrossProducts; the work buffers are sized once).
+  const Eigen::MatrixXd sr = ResidualProducts(blocks_, sensitivity);
+  Eigen::VectorXd sum_a = Eigen::VectorXd::Zero(m), a(m), score(m);
   Eigen::MatrixXd sum_jmr = Eigen::MatrixXd::Zero(p, m), sum_rmr = Eigen::MatrixXd::Zero(m, m);
   Eigen::MatrixXd sum_aa = Eigen::MatrixXd::Zero(m, m), sum_ag = Eigen::MatrixXd::Zero(m, p);
+  Eigen::MatrixXd b(p, m), cross(m, m), v(m, m), info(m, m);
+  Eigen::LDLT<Eigen::MatrixXd> v_ldlt(m), info_ldlt(m);
   double best = -1.0, best_located = -1.0;
   for (size_t j = n; j-- > lo;) {
-    const SampleTerms t = TermsAt(blocks_, sensitivity, j);
-    const Eigen::VectorXd a = t.w * t.sr;
+    const auto jacobian = blocks_.jacobian.middleRows(d * j, d);
+    const auto s = sensitivity.middleRows(d * j, d);
+    const double w = blocks_.rho1(j), w2 = 2.0 * blocks_.rho2(j);
+    a = w * sr.row(j).transpose();
     sum_a += a;
-    sum_jmr += t.w * t.j.transpose() * t.s + t.w2 * t.jr * t.sr.transpose();
-    sum_rmr += t.w * t.s.transpose() * t.s + t.w2 * t.sr * t.sr.transpose();
-    sum_aa += a * a.transpose();
-    sum_ag += a * gradients_.row(j);
+    sum_jmr.noalias() += w * (jacobian.transpose() * s);
+    sum_jmr.noalias() += w2 * residual_jacobian_.row(j).transpose() * sr.row(j);
+    sum_rmr.noalias() += w * (s.transpose() * s);
+    sum_rmr.noalias() += w2 * sr.row(j).transpose() * sr.row(j);
+    sum_aa.noalias() += a * a.transpose();
+    sum_ag.noalias() += a * gradients_.row(j);
     if (j > hi) continue;
-    const Eigen::MatrixXd b = a_nuisance_.solve(sum_jmr);
-    const Eigen::VectorXd score = sum_a - b.transpose() * gradient_sum_;
-    const Eigen::MatrixXd cross = sum_ag * b;
-    const Eigen::MatrixXd v =
-        (sum_aa - cross - cross.transpose() + b.transpose() * gradient_outer_ * b) * small_sample_;
-    const Eigen::MatrixXd info = sum_rmr - sum_jmr.transpose() * b;
-    const Eigen::LDLT<Eigen::MatrixXd> v_ldlt(v);
-    const Eigen::LDLT<Eigen::MatrixXd> info_ldlt(info);
+    b = a_nuisance_.solve(sum_jmr);
+    score = sum_a;
+    score.noalias() -= b.transpose() * gradient_sum_;
+    cross.noalias() = sum_ag * b;
+    v = sum_aa - cross - cross.transpose();
+    v.noalias() += b.transpose() * gradient_outer_ * b;
+    v *= small_sample_;
+    info = sum_rmr;
+    info.noalias() -= sum_jmr.transpose() * b;
+    v_ldlt.compute(v);
+    info_ldlt.compute(info);
     if (v_ldlt.info() != Eigen::Success || !(v_ldlt.vectorD().array() > 0.0).all()) continue;
     const double statistic = score.dot(v_ldlt.solve(score));
     scan.statistic[j] = statistic;

@@ -92,6 +92,9 @@ class ScoreTester {
   Eigen::MatrixXd gradients_;                // N × p: g_k = ρ'_k·J_kᵀr_k.
   Eigen::VectorXd gradient_sum_;             // Σ g_k (≈ 0 at the optimum).
   Eigen::MatrixXd gradient_outer_;           // Σ g_k g_kᵀ.
+  Eigen::MatrixXd residual_jacobian_;        // N × p: (J_kᵀr_k)ᵀ.
+  Eigen::VectorXd row_weights_;              // dN: ρ'_k on each of sample k's rows.
+  Eigen::MatrixXd irls_nuisance_;            // Σ ρ'_k·J_kᵀJ_k.
   double small_sample_ = 1.0;                // n/(n − p), n = d·N.
 };
 
