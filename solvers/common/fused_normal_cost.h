@@ -125,8 +125,9 @@ class FusedNormalCost : public ceres::CostFunction {
           j -= (alpha / s) * r * (r.transpose() * j);
         }
         const Jacobian corrected = sqrt_rho1 * j;
-        // The upper triangle only (H is symmetric; Evaluate fills the rest).
-        sums.hessian.template selfadjointView<Eigen::Upper>().rankUpdate(corrected.transpose());
+        // A fixed-size product the compiler unrolls (Eigen's rank update of the upper triangle
+        // goes through its general kernel, several times slower at these sizes).
+        sums.hessian.noalias() += corrected.transpose() * corrected;
         sums.gradient.noalias() += corrected.transpose() * (scaling * r);
       }
     });
