@@ -94,8 +94,8 @@ std::vector<std::vector<LaserInterval>> EvenSubsets(
 // near-zero radii. When the trimming fails (it can remove the few turns a log has) the plain one
 // is used, and a warning says so.
 void SeedFromTrimmedClosedForm(const std::vector<LaserInterval>& intervals,
-                               LaserCalibrationResult* result) {
-  const StatusOr<TrimmedClosedFormResult> trimmed = CensiClosedFormTrimmed(intervals);
+                               const ConsensusScreen* screen, LaserCalibrationResult* result) {
+  const StatusOr<TrimmedClosedFormResult> trimmed = CensiClosedFormTrimmed(intervals, {}, screen);
   result->seed_trimmed = trimmed.ok();
   if (trimmed.ok()) {
     result->closed_form_trimmed = trimmed->estimate;
@@ -108,9 +108,10 @@ void SeedFromTrimmedClosedForm(const std::vector<LaserInterval>& intervals,
 
 // The closed form without the intervals that disagree grossly with the consensus, named in a
 // warning; on all intervals when the screen leaves too little motion (then its error, if any).
+// The screen goes to *screen (the trimmed closed form's starts from it).
 Status ClosedFormWithoutGross(const std::vector<LaserInterval>& intervals,
-                              LaserCalibrationResult* result) {
-  ConsensusScreen screen;
+                              ConsensusScreen* screen_out, LaserCalibrationResult* result) {
+  ConsensusScreen& screen = *screen_out;
   const StatusOr<CensiClosedFormResult> screened = CensiClosedFormScreened(intervals, &screen);
   if (!screened.ok() || screen.outliers() == 0) {
     CALIB_ASSIGN_OR_RETURN(result->closed_form, CensiClosedForm(intervals));
@@ -287,14 +288,15 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   CALIB_RETURN_IF_ERROR(CheckEnoughIntervals(result.census));
 
   auto start = std::chrono::steady_clock::now();
-  CALIB_RETURN_IF_ERROR(ClosedFormWithoutGross(joined, &result));
+  ConsensusScreen screen;
+  CALIB_RETURN_IF_ERROR(ClosedFormWithoutGross(joined, &screen, &result));
   // On huge logs an evenly spread subset suffices for a seed.
   const size_t total = joined.size();
   const size_t stride = (total + kWarmStartSubset - 1) / kWarmStartSubset;
   if (total > kWarmStartAbove) {
-    SeedFromTrimmedClosedForm(EvenSubsets({&joined}, stride).front(), &result);
+    SeedFromTrimmedClosedForm(EvenSubsets({&joined}, stride).front(), nullptr, &result);
   } else {
-    SeedFromTrimmedClosedForm(joined, &result);
+    SeedFromTrimmedClosedForm(joined, &screen, &result);
   }
   result.closed_form_seconds = SecondsSince(start);
   report("closed form done in " + std::to_string(result.closed_form_seconds) + " s");

@@ -123,13 +123,15 @@ StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>
 }
 
 StatusOr<TrimmedClosedFormResult> CensiClosedFormTrimmed(
-    const std::vector<LaserInterval>& intervals, const TrimmedClosedFormOptions& options) {
+    const std::vector<LaserInterval>& intervals, const TrimmedClosedFormOptions& options,
+    const ConsensusScreen* given_screen) {
   TrimmedClosedFormResult result;
   result.kept.assign(intervals.size(), true);
   if (options.screen_gross) {
     ConsensusScreenOptions screen_options;
     screen_options.closed_form = options.closed_form;
-    ConsensusScreen screen = ScreenGrossIntervals(intervals, screen_options);
+    ConsensusScreen screen =
+        given_screen != nullptr ? *given_screen : ScreenGrossIntervals(intervals, screen_options);
     // A screen that leaves too little motion for the closed form is not used.
     if (screen.outliers() > 0 &&
         CensiClosedForm(intervals, &screen.kept, options.closed_form).ok()) {

@@ -48,8 +48,12 @@ struct TrimmedClosedFormResult {
   int gross = 0;  // Intervals the consensus screen left out before the rounds.
   int first_gross = -1;
 };
+// `screen`, when not null, is these intervals' consensus screen under options.closed_form,
+// already computed (ScreenGrossIntervals): it is used instead of screening again.
+struct ConsensusScreen;
 StatusOr<TrimmedClosedFormResult> CensiClosedFormTrimmed(
-    const std::vector<LaserInterval>& intervals, const TrimmedClosedFormOptions& options = {});
+    const std::vector<LaserInterval>& intervals, const TrimmedClosedFormOptions& options = {},
+    const ConsensusScreen* screen = nullptr);
 
 }  // namespace calib
 
