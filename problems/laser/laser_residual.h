@@ -49,10 +49,27 @@ class LaserResidual {
   // Unwhitened error e for given parameters, for noise estimation and diagnostics.
   static Eigen::Vector3d Error(const LaserInterval& interval, const double* odometry,
                                const double* base_T_sensor) {
-    const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
     Eigen::Vector3d error;
-    LaserResidual(interval, &identity)(odometry, base_T_sensor, error.data());
+    if (interval.steps.empty()) {
+      ConstantSpeedError(interval, odometry, base_T_sensor, &error, nullptr);
+    } else {
+      const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+      LaserResidual(interval, &identity)(odometry, base_T_sensor, error.data());
+    }
     return error;
+  }
+
+  // Whitened residual r = L·e at the given parameters (as operator(); a constant-speed interval
+  // by the closed form below).
+  static void Evaluate(const LaserInterval& interval, const Eigen::Matrix3d& sqrt_information,
+                       const double* odometry, const double* base_T_sensor, Eigen::Vector3d* r) {
+    if (interval.steps.empty()) {
+      Eigen::Vector3d error;
+      ConstantSpeedError(interval, odometry, base_T_sensor, &error, nullptr);
+      *r = sqrt_information * error;
+    } else {
+      LaserResidual(interval, &sqrt_information)(odometry, base_T_sensor, r->data());
+    }
   }
 
   // Whitened residual r and its Jacobian J = ∂r/∂(r_l, r_r, b, x, y, θ) (3×6) at the given
@@ -63,7 +80,11 @@ class LaserResidual {
                         const double* odometry, const double* base_T_sensor, Eigen::Vector3d* r,
                         Eigen::Matrix<double, 3, 6>* jacobian) {
     if (interval.steps.empty()) {
-      LinearizeConstantSpeed(interval, sqrt_information, odometry, base_T_sensor, r, jacobian);
+      Eigen::Vector3d error;
+      Eigen::Matrix<double, 3, 6> sensor_motion_jacobian;
+      ConstantSpeedError(interval, odometry, base_T_sensor, &error, &sensor_motion_jacobian);
+      *r = sqrt_information * error;
+      *jacobian = -sqrt_information * sensor_motion_jacobian;
       return;
     }
     using Jet = ceres::Jet<double, 6>;
@@ -92,18 +113,17 @@ class LaserResidual {
   //   ∂s_p/∂d = R(−ℓ_θ)·(S, C),  ∂s_p/∂a = R(−ℓ_θ)·[(S', C')·d + R'(a)·ℓ_p],  ∂s_θ/∂a = 1,
   //   ∂s_p/∂ℓ_p = R(−ℓ_θ)·(R(a) − I),  ∂s_p/∂ℓ_θ = (s_y, −s_x),
   //   ∂(d, a)/∂(r_l, r_r, b) = [[φ_l/2, φ_r/2, 0], [−φ_l/b, φ_r/b, −a/b]].
-  static void LinearizeConstantSpeed(const LaserInterval& interval,
-                                     const Eigen::Matrix3d& sqrt_information,
-                                     const double* odometry, const double* base_T_sensor,
-                                     Eigen::Vector3d* r, Eigen::Matrix<double, 3, 6>* jacobian) {
+  // Fills e and, when `ds_dp` is not null, ∂s/∂(r_l, r_r, b, x, y, θ).
+  static void ConstantSpeedError(const LaserInterval& interval, const double* odometry,
+                                 const double* base_T_sensor, Eigen::Vector3d* error,
+                                 Eigen::Matrix<double, 3, 6>* ds_dp) {
     const double left = interval.left_speed * interval.duration_s;
     const double right = interval.right_speed * interval.duration_s;
     const double rl = odometry[0], rr = odometry[1], b = odometry[2];
     const double d = (rl * left + rr * right) / 2.0;
     const double a = (rr * right - rl * left) / b;
-    double s, c, ds, dc;
+    double s, c;
     ArcCoefficients(a, &s, &c);
-    ArcCoefficientDerivatives(a, &ds, &dc);
     const double ca = std::cos(a), sa = std::sin(a);
     const double cl = std::cos(base_T_sensor[2]), sl = std::sin(base_T_sensor[2]);
     const Eigen::Matrix2d to_sensor = (Eigen::Matrix2d() << cl, sl, -sl, cl).finished();
@@ -112,24 +132,24 @@ class LaserResidual {
     const Eigen::Vector2d sensor_xy =
         to_sensor * (Eigen::Vector2d(s * d, c * d) + turn * mount - mount);
     const Pose2d& measured = interval.sensor_motion;
-    // s_θ as the composition rounds it, (a + ℓ_θ) − ℓ_θ, so that r equals operator()'s.
+    // s_θ as the composition rounds it, (a + ℓ_θ) − ℓ_θ, so that e equals operator()'s.
     const double sensor_theta = (a + base_T_sensor[2]) - base_T_sensor[2];
-    const Eigen::Vector3d error(measured(0) - sensor_xy(0), measured(1) - sensor_xy(1),
-                                WrapAngle(measured(2) - sensor_theta));
+    *error = Eigen::Vector3d(measured(0) - sensor_xy(0), measured(1) - sensor_xy(1),
+                             WrapAngle(measured(2) - sensor_theta));
+    if (ds_dp == nullptr) return;
+    double ds, dc;
+    ArcCoefficientDerivatives(a, &ds, &dc);
     Eigen::Vector3d by_d, by_a;
     by_d << to_sensor * Eigen::Vector2d(s, c), 0.0;
     by_a << to_sensor * (Eigen::Vector2d(ds, dc) * d + Eigen::Vector2d(-sa, ca) * mount(0) +
                          Eigen::Vector2d(-ca, -sa) * mount(1)),
         1.0;
-    Eigen::Matrix<double, 3, 6> ds_dp;
-    ds_dp.col(0) = by_d * (left / 2.0) - by_a * (left / b);
-    ds_dp.col(1) = by_d * (right / 2.0) + by_a * (right / b);
-    ds_dp.col(2) = -by_a * (a / b);
-    ds_dp.block<2, 2>(0, 3) = to_sensor * (turn - Eigen::Matrix2d::Identity());
-    ds_dp.block<1, 2>(2, 3).setZero();
-    ds_dp.col(5) << sensor_xy(1), -sensor_xy(0), 0.0;
-    *r = sqrt_information * error;
-    *jacobian = -sqrt_information * ds_dp;
+    ds_dp->col(0) = by_d * (left / 2.0) - by_a * (left / b);
+    ds_dp->col(1) = by_d * (right / 2.0) + by_a * (right / b);
+    ds_dp->col(2) = -by_a * (a / b);
+    ds_dp->block<2, 2>(0, 3) = to_sensor * (turn - Eigen::Matrix2d::Identity());
+    ds_dp->block<1, 2>(2, 3).setZero();
+    ds_dp->col(5) << sensor_xy(1), -sensor_xy(0), 0.0;
   }
 
   const LaserInterval* interval_;

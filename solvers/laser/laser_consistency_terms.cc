@@ -58,17 +58,11 @@ double ForwardTravel(const Pose2d& sensor_motion, const Pose2d& base_T_sensor,
 LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCalibration& c,
                       const Eigen::Vector3d& noise_sigma, const std::vector<bool>& is_inlier,
                       LaserParamMatrix* hessian, int num_threads) {
-  using Jet6 = ceres::Jet<double, kNumLaserParams>;
   const OdometryParams& odo = c.odometry;
   const Eigen::Vector3d weight = noise_sigma.cwiseMax(1e-12).cwiseAbs2().cwiseInverse();
   const double still_travel_m = 0.5 * std::min(noise_sigma(0), noise_sigma(1));
   const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
-  Jet6 odometry[3], mounting[3];
   const LaserParamVector v = c.ToVector();
-  for (int i = 0; i < 3; ++i) {
-    odometry[i] = Jet6(v(i), i);
-    mounting[i] = Jet6(v(3 + i), 3 + i);
-  }
   LogTerms log{&intervals, std::vector<IntervalTerms>(intervals.size())};
   std::vector<LaserParamMatrix> hessians(ChunkCount(intervals.size(), num_threads, kMinChunk),
                                          LaserParamMatrix::Zero());
@@ -91,14 +85,9 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
                     (std::abs(t.rotation_predicted) <= 0.5 * noise_sigma(2) &&
                      std::abs(t.travel_predicted) <= still_travel_m);
           if (!t.counted) continue;
-          Jet6 error[3];
-          LaserResidual(in, &identity)(odometry, mounting, error);
           Eigen::Matrix<double, 3, kNumLaserParams> jacobian;
           Eigen::Vector3d e;
-          for (int r = 0; r < 3; ++r) {
-            e(r) = error[r].a;
-            jacobian.row(r) = error[r].v.transpose();
-          }
+          LaserResidual::Linearize(in, identity, v.data(), v.data() + 3, &e, &jacobian);
           t.influence = jacobian.transpose() * weight.asDiagonal() * e;
           hessians[chunk] += jacobian.transpose() * weight.asDiagonal() * jacobian;
         }
@@ -115,14 +104,19 @@ LaserParamMatrix InfluenceLongRun(const std::vector<LogTerms>& logs, int lag, in
     std::vector<LaserParamMatrix> sums(ChunkCount(t.size(), num_threads, kMinChunk),
                                        LaserParamMatrix::Zero());
     ParallelChunks(t.size(), num_threads, kMinChunk, [&](size_t chunk, size_t begin, size_t end) {
+      // Σ_k ψ_kψ_kᵀ + C + Cᵀ with C = Σ_k ψ_k·(Σ_j w_j ψ_{k+j})ᵀ: one outer product per
+      // interval, the lags summed as vectors first.
+      LaserParamMatrix cross = LaserParamMatrix::Zero();
       LaserParamMatrix& sum = sums[chunk];
       for (size_t k = begin; k < end; ++k) {
         sum.noalias() += t[k].influence * t[k].influence.transpose();
+        Vector6 ahead = Vector6::Zero();
         for (int j = 1; j <= lag && k + j < t.size(); ++j) {
-          const LaserParamMatrix cross = t[k].influence * t[k + j].influence.transpose();
-          sum += Bartlett(j, lag) * (cross + cross.transpose());
+          ahead += Bartlett(j, lag) * t[k + j].influence;
         }
+        cross.noalias() += t[k].influence * ahead.transpose();
       }
+      sum += cross + cross.transpose();
     });
     for (const LaserParamMatrix& sum : sums) s += sum;
   }

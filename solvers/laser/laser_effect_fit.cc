@@ -71,8 +71,8 @@ FusedNormalCost<3, kNumLaserParams>::Linearize BaseLinearization(
                                j);
       return true;
     }
-    return LaserResidual(interval, &data.sqrt_information(k))(parameters[0], parameters[1],
-                                                              r->data());
+    LaserResidual::Evaluate(interval, data.sqrt_information(k), parameters[0], parameters[1], r);
+    return true;
   };
 }
 

@@ -84,7 +84,7 @@ void LaserProblem::AddFusedBlock(ceres::LossFunction* block_loss) {
     if (j != nullptr) {
       LaserResidual::Linearize(interval, root, parameters[0], parameters[1], r, j);
     } else {
-      LaserResidual(interval, &root)(parameters[0], parameters[1], r->data());
+      LaserResidual::Evaluate(interval, root, parameters[0], parameters[1], r);
     }
     return true;
   };

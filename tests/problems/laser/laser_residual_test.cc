@@ -132,6 +132,15 @@ TEST(LaserResidualTest, ConstantSpeedLinearizationEqualsAutomaticDifferentiation
         << "trial " << trial;
     EXPECT_LT((jacobian.rightCols<3>() - by_mounting).cwiseAbs().maxCoeff(), 1e-11 * scale + 1e-300)
         << "trial " << trial;
+    // The value-only closed form, whitened and not.
+    Eigen::Vector3d evaluated = Eigen::Vector3d::Constant(std::nan(""));
+    LaserResidual::Evaluate(interval, sqrt_information, odometry, mounting, &evaluated);
+    EXPECT_LT((evaluated - expected_residual).norm(), 1e-12 * (1.0 + expected_residual.norm()));
+    const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d plain;
+    LaserResidual(interval, &identity)(odometry, mounting, plain.data());
+    EXPECT_LT((LaserResidual::Error(interval, odometry, mounting) - plain).norm(),
+              1e-12 * (1.0 + plain.norm()));
   }
 }
 
