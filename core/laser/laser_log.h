@@ -7,6 +7,7 @@
 #include <calib/core/timing/stamp_timing.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -71,6 +72,16 @@ Pose2<T> IntervalRobotMotion(const T& left_radius, const T& right_radius, const 
                                  T(interval.right_speed * interval.duration_s));
   }
   return IntegrateWheelSteps(left_radius, right_radius, wheelbase, interval.steps);
+}
+
+// Every `stride`-th interval from the first: an evenly spread subset (stride 0 counts as 1).
+inline std::vector<LaserInterval> EveryNthInterval(const std::vector<LaserInterval>& intervals,
+                                                   size_t stride) {
+  stride = std::max<size_t>(stride, 1);
+  std::vector<LaserInterval> subset;
+  subset.reserve((intervals.size() + stride - 1) / stride);
+  for (size_t k = 0; k < intervals.size(); k += stride) subset.push_back(intervals[k]);
+  return subset;
 }
 
 }  // namespace calib

@@ -83,9 +83,7 @@ StatusOr<SolveOutcome> RefineWithNoise(const LaserCalibrationOptions& options,
 std::vector<std::vector<LaserInterval>> EvenSubsets(
     const std::vector<const std::vector<LaserInterval>*>& logs, size_t stride) {
   std::vector<std::vector<LaserInterval>> subsets(logs.size());
-  for (size_t d = 0; d < logs.size(); ++d) {
-    for (size_t k = 0; k < logs[d]->size(); k += stride) subsets[d].push_back((*logs[d])[k]);
-  }
+  for (size_t d = 0; d < logs.size(); ++d) subsets[d] = EveryNthInterval(*logs[d], stride);
   return subsets;
 }
 
