@@ -59,8 +59,7 @@ namespace {
 // The fits run as one fused block over the fitted intervals (see FusedNormalCost). Without
 // effects the residual is LaserResidual's (γ = 0 changes nothing in it), linearized in closed
 // form; the block then spans (r_l, r_r, b) and the mounting only.
-FusedNormalCost<3, kNumLaserParams>::Linearize BaseLinearization(
-    const LaserEffectData& data, const std::vector<size_t>& fitted) {
+auto BaseLinearization(const LaserEffectData& data, const std::vector<size_t>& fitted) {
   using Cost = FusedNormalCost<3, kNumLaserParams>;
   return [&data, fitted](size_t i, const double* const* parameters, Cost::Residual* r,
                          Cost::Jacobian* j) {
@@ -77,9 +76,9 @@ FusedNormalCost<3, kNumLaserParams>::Linearize BaseLinearization(
 }
 
 // With effects: LaserEffectResidual by automatic differentiation, the three blocks side by side.
-FusedNormalCost<3, kNumLaserFullParams>::Linearize EffectLinearization(
-    const LaserEffectData& data, const std::vector<LaserEffectContext>& contexts,
-    const std::vector<size_t>& fitted) {
+auto EffectLinearization(const LaserEffectData& data,
+                         const std::vector<LaserEffectContext>& contexts,
+                         const std::vector<size_t>& fitted) {
   using Cost = FusedNormalCost<3, kNumLaserFullParams>;
   return [&data, contexts, fitted](size_t i, const double* const* parameters, Cost::Residual* r,
                                    Cost::Jacobian* j) {
@@ -142,11 +141,11 @@ StatusOr<LaserEffectFit> FitLaserEffects(const LaserEffectData& data, const Lase
   const int threads = data.options().num_threads;
   if (model.effects.empty()) {
     problem.AddResidualBlock(
-        new FusedNormalCost<3, kNumLaserParams>(
+        NewFusedNormalCost<3, kNumLaserParams>(
             {3, 3}, fitted.size(), BaseLinearization(data, fitted), data.loss(), threads),
         nullptr, odometry, mounting);
   } else {
-    problem.AddResidualBlock(new FusedNormalCost<3, kNumLaserFullParams>(
+    problem.AddResidualBlock(NewFusedNormalCost<3, kNumLaserFullParams>(
                                  {3, 3, kNumLaserEffectParams}, fitted.size(),
                                  EffectLinearization(data, contexts, fitted), data.loss(), threads),
                              nullptr, odometry, mounting, gamma.data());

@@ -75,8 +75,8 @@ void LaserProblem::AddResidualBlocks(ceres::LossFunction* block_loss) {
 
 void LaserProblem::AddFusedBlock(ceres::LossFunction* block_loss) {
   using Cost = FusedNormalCost<3, kNumLaserParams>;
-  Cost::Linearize linearize = [this](size_t i, const double* const* parameters, Cost::Residual* r,
-                                     Cost::Jacobian* j) {
+  const auto linearize = [this](size_t i, const double* const* parameters, Cost::Residual* r,
+                                Cost::Jacobian* j) {
     const size_t d = DatasetOf(i);
     const size_t k = i - dataset_begin_[d];
     const LaserInterval& interval = (*datasets_[d].intervals)[k];
@@ -89,7 +89,8 @@ void LaserProblem::AddFusedBlock(ceres::LossFunction* block_loss) {
     return true;
   };
   problem_->AddResidualBlock(
-      new Cost({3, 3}, num_intervals(), std::move(linearize), block_loss, options_.num_threads),
+      NewFusedNormalCost<3, kNumLaserParams>({3, 3}, num_intervals(), linearize, block_loss,
+                                             options_.num_threads),
       nullptr, odometry_, base_T_sensor_);
 }
 
