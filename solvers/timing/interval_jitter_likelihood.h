@@ -1,0 +1,46 @@
+#ifndef CALIB_SOLVERS_TIMING_INTERVAL_JITTER_LIKELIHOOD_H_
+#define CALIB_SOLVERS_TIMING_INTERVAL_JITTER_LIKELIHOOD_H_
+
+#include <Eigen/Core>
+#include <vector>
+
+// The likelihood of the interval-jitter model (interval_jitter.h) and its maximization in the
+// noise variances θ and σ_j²: the inner loops of EstimateIntervalJitter.
+namespace calib::jitter_internal {
+
+// Σ_k = diag(θ) + σ_j²·G_k over the inliers, and the profile likelihood's pieces. Symmetric
+// 3×3 matrices are packed as (00, 01, 02, 11, 12, 22).
+struct JitterTerm {
+  double error[3];
+  double gram[6];  // G_k = g_s g_sᵀ + g_e g_eᵀ.
+};
+struct JitterData {
+  std::vector<JitterTerm> terms;
+};
+
+// Floor of the noise variances: σ = 1e-12 m or rad, as RobustNoiseSigma.
+constexpr double kMinVariance = 1e-24;
+
+// A grid point's profile only ranks it among the others: θ to 1e-6 leaves its value within
+// N·1e-12 of the maximum (the error is quadratic), far below the grid's differences.
+constexpr double kGridTolerance = 1e-6;
+
+// −½Σ[log det Σ_k + e_kᵀΣ_k⁻¹e_k] at variances θ; fills the score and Fisher information in θ.
+double LogLikelihood(const JitterData& data, const Eigen::Vector3d& theta, double jitter2,
+                     Eigen::Vector3d* score = nullptr, Eigen::Matrix3d* fisher = nullptr);
+
+// max over θ of the log-likelihood at σ_j² (Fisher scoring from *theta, which it updates, until
+// θ moves by less than `tolerance`, relative).
+double ProfileLogLikelihood(const JitterData& data, double jitter_s, bool estimate_noise,
+                            Eigen::Vector3d* theta, double tolerance = 1e-10);
+
+// Fisher scoring jointly in (θ, σ_j²) from (*theta, *jitter_s): the profile's maximum in a few
+// passes instead of a search along σ_j with a scoring at every point. False, leaving the outputs,
+// when it does not settle at a σ_j strictly within (lo, hi) (a maximum on the boundary σ_j = 0 or
+// beyond the bracket: the search decides then).
+bool JointMaximum(const JitterData& data, double lo, double hi, Eigen::Vector3d* theta,
+                  double* jitter_s);
+
+}  // namespace calib::jitter_internal
+
+#endif  // CALIB_SOLVERS_TIMING_INTERVAL_JITTER_LIKELIHOOD_H_
