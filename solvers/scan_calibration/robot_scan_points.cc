@@ -11,9 +11,14 @@ StatusOr<ScanPointCalibration> RefineRobotOnScanPoints(const RobotMessages& bag,
   const RobotBagLog& log = two_stage.log;
   const LaserTimingResult& timing = two_stage.result;
   const std::vector<LaserScan>& scans = bag.scans.at(log.topics.scan_topic);
-  // The timing's samples are named by their line, the scan's record + 1.
+  // The timing's samples are named by their line, the scan's record + 1. A timing whose offset
+  // the intervals hardly determine (σ over a quarter of the scan period: few intervals, e.g. a
+  // corridor's degenerate matches) would place the beams anywhere; then the stamps are the start
+  // and the refinement's own offset δ takes the timing up.
   std::unordered_map<int64_t, double> time_of_line;
-  for (size_t k = 0; k < timing.sample_line.size() && k < timing.sample_time_s.size(); ++k) {
+  const bool timed = !(timing.time_offset_stddev_s > 0.25 * timing.sensor_period_s);
+  for (size_t k = 0; timed && k < timing.sample_line.size() && k < timing.sample_time_s.size();
+       ++k) {
     time_of_line[timing.sample_line[k]] = timing.sample_time_s[k];
   }
   std::vector<double> corrections;
@@ -51,7 +56,14 @@ StatusOr<ScanPointCalibration> RefineRobotOnScanPoints(const RobotMessages& bag,
     input.scans.push_back(&mirrored.back());
     input.first_beam_time_s.push_back(t + sweep_s);
   }
-  return CalibrateOnScanPoints(input, timing.calibration.estimate, options);
+  StatusOr<ScanPointCalibration> out =
+      CalibrateOnScanPoints(input, timing.calibration.estimate, options);
+  if (out.ok() && !timed) {
+    out->warnings.push_back("the scan timing of the two-stage route is undetermined (offset σ " +
+                            std::to_string(1e3 * timing.time_offset_stddev_s) +
+                            " ms): the scan points started from the stamps");
+  }
+  return out;
 }
 
 }  // namespace calib

@@ -114,8 +114,23 @@ Status FindPairLines(const ScanPointInput& input, const LaserCalibration& c, dou
   };
   ScanPointsOptions deskew;
   const double ref_sweep_s = SweepSeconds(ref);
-  if (ref_sweep_s != 0.0)
-    deskew.sensor_velocity = Log(from_stamp(t_ref + ref_sweep_s)) / ref_sweep_s;
+  if (ref_sweep_s > 0.0) {  // One piece per encoder step, as the matcher de-skews.
+    const double min_step_s = 1e-6 * ref_sweep_s, end_s = t_ref + ref_sweep_s;
+    std::vector<double> knots{t_ref};
+    for (const double t : pair->timeline.knot_time_s) {
+      if (t > knots.back() + min_step_s && t < end_s - min_step_s) knots.push_back(t);
+    }
+    knots.push_back(end_s);
+    SweepMotion sweep{{}, {}};
+    for (size_t k = 0; k + 1 < knots.size(); ++k) {
+      sweep.start_s.push_back(knots[k] - t_ref);
+      sweep.velocity.push_back(Log(Between(from_stamp(knots[k]), from_stamp(knots[k + 1]))) /
+                               (knots[k + 1] - knots[k]));
+    }
+    deskew.sweep = sweep;
+  } else if (ref_sweep_s < 0.0) {  // A mirrored scan's beams run back in time from its stamp.
+    deskew.sweep = SweepMotion::Constant(Log(from_stamp(t_ref + ref_sweep_s)) / ref_sweep_s);
+  }
   CALIB_ASSIGN_OR_RETURN(const ScanPoints ref_points, MakeScanPoints(ref, deskew));
   CALIB_ASSIGN_OR_RETURN(const ScanPoints ref_raw, MakeScanPoints(ref));
   CALIB_ASSIGN_OR_RETURN(const ScanPoints cur_raw, MakeScanPoints(cur));

@@ -30,6 +30,38 @@ bool HasNominal(const ScanLogOptions& o) {
   return p.left_radius_m > 0.0 && p.right_radius_m > 0.0 && p.wheelbase_m > 0.0;
 }
 
+// The sensor's motion over [from, from + sweep] through the nominal wheels: one piece per encoder
+// step (the wheel angles are linear between samples), so that the robot's accelerations within the
+// sweep are followed. Beyond the encoders' span the nearest step's velocity goes on (a sweep that
+// outlasts the log's last sample is not taken as a stop).
+SweepMotion NominalSweep(const std::vector<EncoderSample>& encoders, double from_s, double sweep_s,
+                         const ScanLogOptions& o) {
+  const double first = encoders.front().t_s, last = encoders.back().t_s;
+  const double min_step_s = 1e-6 * sweep_s;
+  std::vector<double> knots{std::clamp(from_s, first, last)};
+  const double to_s = std::clamp(from_s + sweep_s, first, last);
+  auto it = std::upper_bound(encoders.begin(), encoders.end(), knots[0],
+                             [](double t, const EncoderSample& e) { return t < e.t_s; });
+  for (; it != encoders.end() && it->t_s < to_s; ++it) {
+    if (it->t_s - knots.back() > min_step_s) knots.push_back(it->t_s);
+  }
+  if (to_s - knots.back() > min_step_s) knots.push_back(to_s);
+  if (knots.size() < 2) {  // The whole sweep outside the span: its nearest encoder step.
+    const size_t n = encoders.size();
+    knots = knots[0] >= last ? std::vector<double>{encoders[n - 2].t_s, last}
+                             : std::vector<double>{first, encoders[1].t_s};
+  }
+  SweepMotion sweep{{}, {}};
+  for (size_t k = 0; k + 1 < knots.size(); ++k) {
+    sweep.start_s.push_back(k == 0 ? 0.0 : knots[k] - from_s);
+    sweep.velocity.push_back(Log(NominalSensorMotion(encoders, knots[k], knots[k + 1], o)) /
+                             (knots[k + 1] - knots[k]));
+    // Repeated encoder stamps at the span's end: no velocity to go on with, none is assumed.
+    if (!sweep.velocity.back().allFinite()) return SweepMotion::Constant(Twist2d::Zero());
+  }
+  return sweep;
+}
+
 // "12 of 1800 scan matches failed (degenerate 10, too few correspondences 2)".
 std::string FailureSummary(const ScanOdometryResult& r) {
   std::map<std::string, int> by_quality;
@@ -88,11 +120,10 @@ StatusOr<ScanOdometryResult> MatchRun(const std::vector<const LaserScan*>& scans
     if (i > begin && nominal) {
       guess = NominalSensorMotion(encoders, scans[i - 1]->stamp_s, scan.stamp_s, options);
     }
-    std::optional<Twist2d> sweep;
+    std::optional<SweepMotion> sweep;
     const double sweep_s = scan.time_increment_s * static_cast<double>(scan.ranges_m.size());
     if (options.deskew && nominal && sweep_s > 0.0) {
-      sweep = Log(NominalSensorMotion(encoders, scan.stamp_s, scan.stamp_s + sweep_s, options)) /
-              sweep_s;
+      sweep = NominalSweep(encoders, scan.stamp_s, sweep_s, options);
     }
     CALIB_RETURN_IF_ERROR(odometry.AddScan(scan, guess, sweep));
   }

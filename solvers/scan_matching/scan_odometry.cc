@@ -34,7 +34,7 @@ Eigen::Matrix3d ScanOdometry::Propagate(const Pose2d& keyframe_T_current,
 }
 
 Status ScanOdometry::AddScan(const LaserScan& scan, const Pose2d& previous_T_current_guess,
-                             const std::optional<Twist2d>& sweep_velocity) {
+                             const std::optional<SweepMotion>& sweep) {
   const bool first = result_.poses.empty();
   if (!first && !previous_T_current_guess.allFinite()) {
     return Status::InvalidInput("scan odometry: the guess for scan " +
@@ -53,7 +53,7 @@ Status ScanOdometry::AddScan(const LaserScan& scan, const Pose2d& previous_T_cur
   const int i = result_.size() - 1;
 
   ScanPointsOptions points_options;
-  points_options.sensor_velocity = sweep_velocity;
+  points_options.sweep = sweep;
   StatusOr<ScanPoints> points = MakeScanPoints(scan, points_options);
   if (first) {
     StartChain(points.ok() ? std::move(points).value() : ScanPoints(), world_T_predicted);
@@ -101,21 +101,21 @@ Status ScanOdometry::AddScan(const LaserScan& scan, const Pose2d& previous_T_cur
 StatusOr<ScanOdometryResult> RunScanOdometry(const std::vector<LaserScan>& scans,
                                              const std::vector<Pose2d>& guesses,
                                              const ScanOdometryOptions& options,
-                                             const std::vector<Twist2d>* sweep_velocities) {
+                                             const std::vector<SweepMotion>* sweeps) {
   if (!scans.empty() && guesses.size() + 1 != scans.size()) {
     return Status::InvalidInput("scan odometry: " + std::to_string(scans.size()) + " scans need " +
                                 std::to_string(scans.size() - 1) + " guesses, got " +
                                 std::to_string(guesses.size()));
   }
-  if (sweep_velocities != nullptr && sweep_velocities->size() != scans.size()) {
-    return Status::InvalidInput("scan odometry: one sweep velocity per scan is needed");
+  if (sweeps != nullptr && sweeps->size() != scans.size()) {
+    return Status::InvalidInput("scan odometry: one sweep motion per scan is needed");
   }
   ScanOdometry odometry(options);
   for (size_t i = 0; i < scans.size(); ++i) {
-    std::optional<Twist2d> velocity;
-    if (sweep_velocities != nullptr) velocity = (*sweep_velocities)[i];
+    std::optional<SweepMotion> sweep;
+    if (sweeps != nullptr) sweep = (*sweeps)[i];
     CALIB_RETURN_IF_ERROR(
-        odometry.AddScan(scans[i], i == 0 ? Pose2d::Zero() : guesses[i - 1], velocity));
+        odometry.AddScan(scans[i], i == 0 ? Pose2d::Zero() : guesses[i - 1], sweep));
   }
   return odometry.result();
 }

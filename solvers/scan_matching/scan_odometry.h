@@ -54,11 +54,11 @@ class ScanOdometry {
   explicit ScanOdometry(ScanOdometryOptions options = {}) : options_(options) {}
 
   // Adds the next scan with the predicted sensor displacement previous_T_current since the
-  // previous scan (ignored for the first) and, optionally, the sensor's twist during its sweep
+  // previous scan (ignored for the first) and, optionally, the sensor's motion during its sweep
   // for de-skewing. Fails only on a non-finite guess or bad options; a malformed or unmatched
   // scan becomes a gap.
   Status AddScan(const LaserScan& scan, const Pose2d& previous_T_current_guess,
-                 const std::optional<Twist2d>& sweep_velocity = std::nullopt);
+                 const std::optional<SweepMotion>& sweep = std::nullopt);
 
   const ScanOdometryResult& result() const { return result_; }
 
@@ -76,11 +76,11 @@ class ScanOdometry {
 };
 
 // Runs ScanOdometry over `scans` with previous_T_current guesses (one per consecutive pair:
-// guesses[i] leads from scan i to scan i + 1) and optional per-scan sweep twists.
-StatusOr<ScanOdometryResult> RunScanOdometry(
-    const std::vector<LaserScan>& scans, const std::vector<Pose2d>& guesses,
-    const ScanOdometryOptions& options = {},
-    const std::vector<Twist2d>* sweep_velocities = nullptr);
+// guesses[i] leads from scan i to scan i + 1) and optional per-scan sweep motions.
+StatusOr<ScanOdometryResult> RunScanOdometry(const std::vector<LaserScan>& scans,
+                                             const std::vector<Pose2d>& guesses,
+                                             const ScanOdometryOptions& options = {},
+                                             const std::vector<SweepMotion>* sweeps = nullptr);
 
 }  // namespace calib
 

@@ -6,7 +6,17 @@
 namespace calib {
 namespace {
 
-bool IsFinite(const Eigen::Vector3d& v) { return v.allFinite(); }
+bool IsValid(const SweepMotion& sweep) {
+  if (sweep.start_s.empty() || sweep.start_s.size() != sweep.velocity.size() ||
+      sweep.start_s[0] != 0.0) {
+    return false;
+  }
+  for (size_t k = 0; k < sweep.start_s.size(); ++k) {
+    if (!sweep.velocity[k].allFinite() || !std::isfinite(sweep.start_s[k])) return false;
+    if (k > 0 && !(sweep.start_s[k] > sweep.start_s[k - 1])) return false;
+  }
+  return true;
+}
 
 Status CheckScan(const LaserScan& scan, const ScanPointsOptions& options) {
   const std::string where = "scan (record " + std::to_string(scan.record) + "): ";
@@ -20,9 +30,11 @@ Status CheckScan(const LaserScan& scan, const ScanPointsOptions& options) {
       2.0 * M_PI + 1e-6) {
     return Status::InvalidInput(where + "the beams span more than a whole turn");
   }
-  if (options.sensor_velocity.has_value()) {
-    if (!IsFinite(*options.sensor_velocity)) {
-      return Status::InvalidInput(where + "the de-skewing velocity is not finite");
+  if (options.sweep.has_value()) {
+    if (!IsValid(*options.sweep)) {
+      return Status::InvalidInput(where +
+                                  "the de-skewing motion is not finite or its pieces are not in "
+                                  "time order from 0");
     }
     if (!std::isfinite(scan.time_increment_s)) {
       return Status::InvalidInput(where + "time_increment is not finite");
@@ -32,6 +44,23 @@ Status CheckScan(const LaserScan& scan, const ScanPointsOptions& options) {
 }
 
 }  // namespace
+
+std::vector<Pose2d> SweepMotion::StampTSensor(const std::vector<double>& dt_s) const {
+  std::vector<Pose2d> knots{Pose2d::Zero()};  // stamp_T_sensor at start_s[k].
+  for (size_t k = 1; k < start_s.size(); ++k) {
+    knots.push_back(
+        Compose(knots.back(), Exp<double>(velocity[k - 1] * (start_s[k] - start_s[k - 1]))));
+  }
+  std::vector<Pose2d> out;
+  out.reserve(dt_s.size());
+  size_t k = 0;
+  for (const double t : dt_s) {
+    if (k >= start_s.size() || t < start_s[k]) k = 0;  // Out of order: search again.
+    while (k + 1 < start_s.size() && t >= start_s[k + 1]) ++k;
+    out.push_back(Compose(knots[k], Exp<double>(velocity[k] * (t - start_s[k]))));
+  }
+  return out;
+}
 
 StatusOr<ScanPoints> MakeScanPoints(const LaserScan& scan, const ScanPointsOptions& options) {
   CALIB_RETURN_IF_ERROR(CheckScan(scan, options));
@@ -48,6 +77,12 @@ StatusOr<ScanPoints> MakeScanPoints(const LaserScan& scan, const ScanPointsOptio
   out.points_m.reserve(num_beams);
   out.directions.reserve(num_beams);
   out.beams.reserve(num_beams);
+  std::vector<Pose2d> stamp_T_beam;
+  if (options.sweep.has_value()) {
+    std::vector<double> dt_s(num_beams);
+    for (int i = 0; i < num_beams; ++i) dt_s[i] = i * scan.time_increment_s;
+    stamp_T_beam = options.sweep->StampTSensor(dt_s);
+  }
   for (int i = 0; i < num_beams; ++i) {
     const double angle_rad = scan.BeamAngle(i);
     Eigen::Vector2d direction(std::cos(angle_rad), std::sin(angle_rad));
@@ -56,14 +91,13 @@ StatusOr<ScanPoints> MakeScanPoints(const LaserScan& scan, const ScanPointsOptio
     if (!scan.IsReturn(i)) continue;
     const double range_m = scan.ranges_m[i];
     Eigen::Vector2d point_m = range_m * direction;
-    if (options.sensor_velocity.has_value()) {
-      // stamp_T_beam = Exp(ξ·dt); the point seen from the stamp's frame is stamp_T_beam ⊕ point.
-      const double dt_s = i * scan.time_increment_s;
-      const Pose2d stamp_T_beam = Exp<double>(*options.sensor_velocity * dt_s);
+    if (options.sweep.has_value()) {
+      // The point seen from the stamp's frame is stamp_T_beam ⊕ point.
+      const Pose2d& motion = stamp_T_beam[i];
       const Eigen::Vector2d p = point_m;
-      point_m = Compose(stamp_T_beam, Pose2d(p.x(), p.y(), 0.0)).head<2>();
-      const double c = std::cos(stamp_T_beam(2));
-      const double s = std::sin(stamp_T_beam(2));
+      point_m = Compose(motion, Pose2d(p.x(), p.y(), 0.0)).head<2>();
+      const double c = std::cos(motion(2));
+      const double s = std::sin(motion(2));
       direction = Eigen::Vector2d(c * direction.x() - s * direction.y(),
                                   s * direction.x() + c * direction.y());
       out.beam_angle_rad[i] =

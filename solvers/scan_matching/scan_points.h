@@ -32,11 +32,24 @@ struct ScanPoints {
   int NumPoints() const { return static_cast<int>(points_m.size()); }
 };
 
+// The sensor's motion during a sweep as a piecewise-constant body velocity (vx, vy, ω per second,
+// in its own frame): velocity[k] from start_s[k] after the stamp on (start_s[0] = 0, increasing;
+// velocity[0] also before the stamp). A constant velocity is one piece; a robot that speeds up or
+// turns harder within the sweep needs several (e.g. one per encoder sample), because a single
+// average velocity bends the de-skewed scan by α·T²/8 (5 mrad at 4 rad/s² over 0.1 s).
+struct SweepMotion {
+  std::vector<double> start_s{0.0};
+  std::vector<Twist2d> velocity{Twist2d::Zero()};
+
+  static SweepMotion Constant(const Twist2d& sensor_velocity) { return {{0.0}, {sensor_velocity}}; }
+  // stamp_T_sensor at dt_s after the stamp, for a run of times (any order; fastest ascending).
+  std::vector<Pose2d> StampTSensor(const std::vector<double>& dt_s) const;
+};
+
 struct ScanPointsOptions {
-  // The sensor's constant body velocity (vx, vy, ω) in its own frame during the sweep, per second.
   // When set, each beam's point is moved to the sensor frame at stamp_s (de-skewing): the beam
-  // measured at t = stamp_s + i·time_increment_s sees from stamp_T_t = Exp(ξ·(t − stamp_s)).
-  std::optional<Twist2d> sensor_velocity;
+  // measured at t = stamp_s + i·time_increment_s sees from stamp_T_sensor(t − stamp_s).
+  std::optional<SweepMotion> sweep;
 };
 
 // Fails on a malformed scan (non-finite or zero angle increment, non-finite de-skew inputs); a

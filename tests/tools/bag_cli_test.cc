@@ -163,8 +163,16 @@ TEST_F(BagCliTest, DiagnoseFindsARadiusChangeInRawScans) {
   EXPECT_EQ(changed["adopted"], nlohmann::json::array({"wheel_radius_change"}))
       << changed["adopted"];
   EXPECT_EQ(changed["timing"]["treatment"], "latent_times");
+  // The clean bag's scanner is stamped 20 ms late (data/bags/README.md). The latent times place
+  // it at about −17 ms; a residual time offset of about −2 ms on top is a true finding (since the
+  // sweeps are de-skewed through every encoder step it is significant), nothing else is.
   const nlohmann::json clean = diagnose(kBags / "sim_robot_zstd.mcap");
-  EXPECT_EQ(clean["adopted"], nlohmann::json::array()) << clean["adopted"];
+  for (const auto& effect : clean["adopted"]) EXPECT_EQ(effect, "time_offset") << clean["adopted"];
+  if (!clean["adopted"].empty()) {
+    const double latent_s = clean["timing"]["latent_times"]["time_offset_s"];
+    const double residual_s = clean["final"]["effect_values"]["time_offset"]["value"];
+    EXPECT_LT(std::abs(latent_s + residual_s + 0.020), std::abs(latent_s + 0.020));
+  }
 }
 
 TEST_F(BagCliTest, BadBagsAndTopicsAreNamed) {

@@ -170,8 +170,8 @@ TEST(PlIcpTest, DeskewingRestoresExactRecovery) {
   PlIcpOptions options;
   const StatusOr<ScanMatch> skewed = MatchScans(reference, current, truth, options);
   ASSERT_TRUE(skewed.ok());
-  options.reference_points.sensor_velocity = spec.velocity;
-  options.current_points.sensor_velocity = spec.velocity;
+  options.reference_points.sweep = SweepMotion::Constant(spec.velocity);
+  options.current_points.sweep = SweepMotion::Constant(spec.velocity);
   const StatusOr<ScanMatch> deskewed = MatchScans(reference, current, truth, options);
   ASSERT_TRUE(deskewed.ok());
   EXPECT_TRUE(deskewed->ok()) << deskewed->reason;
@@ -179,6 +179,60 @@ TEST(PlIcpTest, DeskewingRestoresExactRecovery) {
   std::printf("error without de-skewing %.2e, with %.2e\n",
               PoseError(skewed->reference_T_current, truth),
               PoseError(deskewed->reference_T_current, truth));
+}
+
+// A robot that turns harder halfway through the sweep: one average velocity leaves the scans
+// bent (a few mm), the two pieces make the match exact.
+TEST(PlIcpTest, PiecewiseDeskewingFollowsAnAcceleratingSweep) {
+  const auto room = test_scans::RoomWithBoxes();
+  ScanSpec spec;
+  spec.sweep_time_s = 0.1;
+  spec.motion = SweepMotion{{0.0, 0.05}, {Twist2d(0.4, 0.0, 0.2), Twist2d(0.9, 0.05, 1.6)}};
+  const Pose2d truth = spec.motion->StampTSensor({0.1})[0];  // One sweep later.
+  const LaserScan reference = CastScan(room, kReferencePose, spec);
+  const LaserScan current = CastScan(room, Compose(kReferencePose, truth), spec);
+  PlIcpOptions options;
+  options.reference_points.sweep = options.current_points.sweep =
+      SweepMotion::Constant(Log(truth) / 0.1);
+  const StatusOr<ScanMatch> average = MatchScans(reference, current, truth, options);
+  options.reference_points.sweep = options.current_points.sweep = spec.motion;
+  const StatusOr<ScanMatch> pieces = MatchScans(reference, current, truth, options);
+  ASSERT_TRUE(average.ok() && pieces.ok());
+  EXPECT_TRUE(pieces->ok()) << pieces->reason;
+  EXPECT_GT(PoseError(average->reference_T_current, truth), 1e-4);
+  EXPECT_LT(PoseError(pieces->reference_T_current, truth), 1e-6);
+  std::printf("error with the average velocity %.2e, with the pieces %.2e\n",
+              PoseError(average->reference_T_current, truth),
+              PoseError(pieces->reference_T_current, truth));
+}
+
+// The pieces compose: a constant velocity is Exp(ξ·t) at any time (also beyond half a turn and
+// before the stamp), a piecewise motion is continuous at its knots, and times may come in any
+// order; a motion out of time order or not finite is refused.
+TEST(SweepMotionTest, PiecesComposeAndBadMotionsAreRefused) {
+  const Twist2d xi(0.7, -0.1, 4.0);
+  const std::vector<double> times{0.3, -0.05, 0.0, 1.0, 0.2};
+  const std::vector<Pose2d> constant = SweepMotion::Constant(xi).StampTSensor(times);
+  for (size_t k = 0; k < times.size(); ++k) {
+    EXPECT_LT(PoseError(constant[k], Exp<double>(xi * times[k])), 1e-12) << times[k];
+  }
+  const SweepMotion two{{0.0, 0.04}, {xi, Twist2d(0.2, 0.0, -1.0)}};
+  const std::vector<Pose2d> at = two.StampTSensor({0.04 - 1e-9, 0.04, 0.07, 0.01});
+  EXPECT_LT(PoseError(at[0], at[1]), 1e-8);
+  EXPECT_LT(PoseError(at[2], Compose(Exp<double>(xi * 0.04), Exp<double>(two.velocity[1] * 0.03))),
+            1e-12);
+  EXPECT_LT(PoseError(at[3], Exp<double>(xi * 0.01)), 1e-12);
+  LaserScan scan = CastScan(test_scans::RoomWithBoxes(), kReferencePose, ScanSpec());
+  scan.time_increment_s = 1e-4;
+  ScanPointsOptions options;
+  options.sweep = SweepMotion{{0.0, 0.04, 0.02}, {xi, xi, xi}};
+  EXPECT_FALSE(MakeScanPoints(scan, options).ok());
+  options.sweep = SweepMotion{{0.01}, {xi}};
+  EXPECT_FALSE(MakeScanPoints(scan, options).ok());
+  options.sweep = SweepMotion::Constant(Twist2d(0.1, std::nan(""), 0.0));
+  EXPECT_FALSE(MakeScanPoints(scan, options).ok());
+  options.sweep = two;
+  EXPECT_TRUE(MakeScanPoints(scan, options).ok());
 }
 
 // The trig-free search finds the same nearest point as brute force, the repeated search the same

@@ -3,10 +3,12 @@
 
 #include <calib/core/scan/laser_scan.h>
 #include <calib/core/se2.h>
+#include <calib/solvers/scan_matching/scan_points.h>
 
 #include <Eigen/Core>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -63,6 +65,7 @@ struct ScanSpec {
   double range_sigma_m = 0.0;
   double sweep_time_s = 0.0;           // time_increment = sweep_time / beams.
   Twist2d velocity = Twist2d::Zero();  // Body velocity of the sensor during the sweep.
+  std::optional<SweepMotion> motion;   // When set, used instead of `velocity`.
 };
 
 // The scan seen from world_T_sensor (the pose at the first beam); each later beam from
@@ -77,9 +80,12 @@ inline LaserScan CastScan(const std::vector<Wall>& walls, const Pose2d& world_T_
   scan.range_min_m = 0.05;
   scan.range_max_m = spec.range_max_m;
   std::normal_distribution<double> noise(0.0, 1.0);
+  std::vector<double> beam_dt_s(spec.beams);
+  for (int i = 0; i < spec.beams; ++i) beam_dt_s[i] = i * scan.time_increment_s;
+  const std::vector<Pose2d> stamp_T_beam =
+      spec.motion.value_or(SweepMotion::Constant(spec.velocity)).StampTSensor(beam_dt_s);
   for (int i = 0; i < spec.beams; ++i) {
-    const Pose2d pose =
-        Compose(world_T_sensor, Exp<double>(spec.velocity * (i * scan.time_increment_s)));
+    const Pose2d pose = Compose(world_T_sensor, stamp_T_beam[i]);
     const double angle = pose(2) + scan.BeamAngle(i);
     double range =
         CastRay(walls, pose.head<2>(), Eigen::Vector2d(std::cos(angle), std::sin(angle)));
