@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <unordered_map>
+#include <vector>
 
 namespace calib {
 
@@ -58,6 +59,23 @@ StatusOr<ScanPointCalibration> RefineRobotOnScanPoints(const RobotMessages& bag,
   }
   StatusOr<ScanPointCalibration> out =
       CalibrateOnScanPoints(input, timing.calibration.estimate, options);
+  if (out.ok() && !out->converged) {
+    // Still moving and far from the walls (σ̂ well above the matcher's): not an estimate.
+    std::vector<double> sigmas;
+    for (const ScanMatch& m : log.scans.matching.matches) {
+      if (m.ok()) sigmas.push_back(m.range_sigma_m);
+    }
+    if (!sigmas.empty()) {
+      std::nth_element(sigmas.begin(), sigmas.begin() + sigmas.size() / 2, sigmas.end());
+      const double matcher_sigma_m = sigmas[sigmas.size() / 2];
+      if (out->range_sigma_m > 3.0 * matcher_sigma_m) {
+        return Status::NotConverged("it did not settle: its points lie " +
+                                    std::to_string(1e3 * out->range_sigma_m) +
+                                    " mm (robust σ) from their lines, the scan matcher's " +
+                                    std::to_string(1e3 * matcher_sigma_m) + " mm");
+      }
+    }
+  }
   if (out.ok() && !timed) {
     out->warnings.push_back("the scan timing of the two-stage route is undetermined (offset σ " +
                             std::to_string(1e3 * timing.time_offset_stddev_s) +

@@ -278,6 +278,8 @@ StatusOr<ScanPointCalibration> Refine(const ScanPointInput& input, const LaserCa
   }
   out.rounds = std::min(out.rounds, options.max_rounds);
   out.estimate = LaserCalibration::FromVector(p.head<kNumLaserParams>());
+  // The mounting angle may have run a whole turn from a poor start: report it in (−π, π].
+  out.estimate.base_T_sensor(2) = WrapAngle(out.estimate.base_T_sensor(2));
   out.time_offset_s = p(kTimeOffset);
   if (!out.converged) {
     out.warnings.push_back("the scan-point refinement was still moving after " +

@@ -79,6 +79,13 @@ TEST(ScanPointCalibration, NoiseFreeScansGiveTheTruth) {
   EXPECT_LT(e.head<5>().cwiseAbs().maxCoeff(), 1e-4);
   EXPECT_LT(std::abs(e(5)), 1e-4);
   EXPECT_TRUE(r->converged);
+  // A start a whole turn off in the mounting angle (a tf with yaw 2π + θ): the same mounting,
+  // reported in (−π, π].
+  LaserCalibration turned = Perturbed(truth);
+  turned.base_T_sensor(2) += 2.0 * M_PI;
+  const StatusOr<ScanPointCalibration> wrapped = CalibrateOnScanPoints(Input(*sim), turned);
+  ASSERT_TRUE(wrapped.ok()) << wrapped.message();
+  EXPECT_LT(std::abs(wrapped->estimate.base_T_sensor(2) - truth.base_T_sensor(2)), 1e-4);
 }
 
 // Range noise of 1 cm with sweeps of the whole period: every parameter within 3σ.
