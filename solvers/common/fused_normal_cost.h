@@ -44,14 +44,20 @@ class FusedNormalCost : public ceres::CostFunction {
   using Jacobian = Eigen::Matrix<double, D, N>;
   using Linearize = F;
 
+  // Below this many items per chunk a thread costs more than it saves (a closed-form
+  // linearization); heavier ones (automatic derivatives) pay with smaller chunks.
+  static constexpr size_t kDefaultMinChunk = 5000;
+
   // `loss` (null: plain least squares) is read at each evaluation, so a ceres::LossFunctionWrapper
   // swapped after construction applies; it must outlive the cost.
   FusedNormalCost(std::vector<int> block_sizes, size_t num_items, Linearize linearize,
-                  const ceres::LossFunction* loss, int num_threads)
+                  const ceres::LossFunction* loss, int num_threads,
+                  size_t min_chunk = kDefaultMinChunk)
       : num_items_(num_items),
         linearize_(std::move(linearize)),
         loss_(loss),
-        num_threads_(num_threads) {
+        num_threads_(num_threads),
+        min_chunk_(min_chunk) {
     set_num_residuals(N + 1);
     *mutable_parameter_block_sizes() = std::move(block_sizes);
   }
@@ -99,9 +105,6 @@ class FusedNormalCost : public ceres::CostFunction {
   }
 
  private:
-  // Below this many items per chunk a thread costs more than it saves.
-  static constexpr size_t kMinChunk = 5000;
-
   struct Sums {
     Eigen::Matrix<double, N, N> hessian = Eigen::Matrix<double, N, N>::Zero();
     Eigen::Matrix<double, N, 1> gradient = Eigen::Matrix<double, N, 1>::Zero();
@@ -110,8 +113,8 @@ class FusedNormalCost : public ceres::CostFunction {
   };
 
   Sums Accumulate(const double* const* parameters, bool want_jacobian) const {
-    std::vector<Sums> partial(ChunkCount(num_items_, num_threads_, kMinChunk));
-    ParallelChunks(num_items_, num_threads_, kMinChunk, [&](size_t c, size_t begin, size_t end) {
+    std::vector<Sums> partial(ChunkCount(num_items_, num_threads_, min_chunk_));
+    ParallelChunks(num_items_, num_threads_, min_chunk_, [&](size_t c, size_t begin, size_t end) {
       Sums& sums = partial[c];
       Residual r;
       Jacobian j;
@@ -151,15 +154,16 @@ class FusedNormalCost : public ceres::CostFunction {
   Linearize linearize_;
   const ceres::LossFunction* loss_;
   int num_threads_;
+  size_t min_chunk_;
 };
 
 // new FusedNormalCost<D, N, F> with F deduced from `linearize` (a lambda).
 template <int D, int N, typename F>
-FusedNormalCost<D, N, F>* NewFusedNormalCost(std::vector<int> block_sizes, size_t num_items,
-                                             F linearize, const ceres::LossFunction* loss,
-                                             int num_threads) {
+FusedNormalCost<D, N, F>* NewFusedNormalCost(
+    std::vector<int> block_sizes, size_t num_items, F linearize, const ceres::LossFunction* loss,
+    int num_threads, size_t min_chunk = FusedNormalCost<D, N, F>::kDefaultMinChunk) {
   return new FusedNormalCost<D, N, F>(std::move(block_sizes), num_items, std::move(linearize), loss,
-                                      num_threads);
+                                      num_threads, min_chunk);
 }
 
 }  // namespace calib

@@ -145,10 +145,13 @@ StatusOr<LaserEffectFit> FitLaserEffects(const LaserEffectData& data, const Lase
             {3, 3}, fitted.size(), BaseLinearization(data, fitted), data.loss(), threads),
         nullptr, odometry, mounting);
   } else {
-    problem.AddResidualBlock(NewFusedNormalCost<3, kNumLaserFullParams>(
-                                 {3, 3, kNumLaserEffectParams}, fitted.size(),
-                                 EffectLinearization(data, contexts, fitted), data.loss(), threads),
-                             nullptr, odometry, mounting, gamma.data());
+    // Automatic derivatives in 15 variables per interval: two threads pay from a few hundred.
+    constexpr size_t kEffectMinChunk = 400;
+    problem.AddResidualBlock(
+        NewFusedNormalCost<3, kNumLaserFullParams>({3, 3, kNumLaserEffectParams}, fitted.size(),
+                                                   EffectLinearization(data, contexts, fitted),
+                                                   data.loss(), threads, kEffectMinChunk),
+        nullptr, odometry, mounting, gamma.data());
   }
 
   ceres::Solver::Summary summary;
