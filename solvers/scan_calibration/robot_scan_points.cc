@@ -1,6 +1,8 @@
+#include <calib/core/text_number.h>
 #include <calib/solvers/scan_calibration/robot_scan_points.h>
 
 #include <algorithm>
+#include <cmath>
 #include <unordered_map>
 #include <vector>
 
@@ -70,15 +72,15 @@ StatusOr<ScanPointCalibration> RefineRobotOnScanPoints(const RobotMessages& bag,
       const double matcher_sigma_m = sigmas[sigmas.size() / 2];
       if (out->range_sigma_m > 3.0 * matcher_sigma_m) {
         return Status::NotConverged("it did not settle: its points lie " +
-                                    std::to_string(1e3 * out->range_sigma_m) +
+                                    Num(std::round(1e4 * out->range_sigma_m) / 10) +
                                     " mm (robust σ) from their lines, the scan matcher's " +
-                                    std::to_string(1e3 * matcher_sigma_m) + " mm");
+                                    Num(std::round(1e4 * matcher_sigma_m) / 10) + " mm");
       }
     }
   }
   if (out.ok() && !timed) {
     out->warnings.push_back("the scan timing of the two-stage route is undetermined (offset σ " +
-                            std::to_string(1e3 * timing.time_offset_stddev_s) +
+                            Num(std::round(1e3 * timing.time_offset_stddev_s)) +
                             " ms): the scan points started from the stamps");
   }
   return out;
