@@ -1,4 +1,5 @@
 #include <calib/core/laser/laser_log_io.h>
+#include <calib/core/text_number.h>
 #include <calib/core/timing/encoder_integration.h>
 #include <calib/solvers/scan_matching/scan_laser_log.h>
 
@@ -108,10 +109,45 @@ bool SameSample(const LaserScan& a, const LaserScan& b) {
          std::memcmp(a.ranges_m.data(), b.ranges_m.data(), a.ranges_m.size() * sizeof(float)) == 0;
 }
 
+double SweepSeconds(const LaserScan& scan) {
+  return scan.time_increment_s * static_cast<double>(scan.ranges_m.size());
+}
+
+// The longest sweep taken as one (max_sweep_periods of the median step between the stamps), and
+// a warning when some scans' sweeps are longer.
+double MaxSweep(const std::vector<const LaserScan*>& scans, const ScanLogOptions& options,
+                const std::string& scans_name, std::vector<std::string>* warnings) {
+  std::vector<double> steps;
+  for (size_t i = 1; i < scans.size(); ++i) {
+    steps.push_back(scans[i]->stamp_s - scans[i - 1]->stamp_s);
+  }
+  if (steps.empty()) return 0.0;
+  std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+  const double period_s = steps[steps.size() / 2];
+  const double max_sweep_s = options.max_sweep_periods * period_s;
+  int longer = 0;
+  const LaserScan* first = nullptr;
+  for (const LaserScan* scan : scans) {
+    if (std::abs(SweepSeconds(*scan)) <= max_sweep_s) continue;
+    ++longer;
+    if (first == nullptr) first = scan;
+  }
+  if (longer > 0) {
+    const auto seconds = [](double t) { return Num(std::round(t * 1e6) / 1e6) + " s"; };
+    warnings->push_back(scans_name + ": " + std::to_string(longer) + " scan(s) (first: record " +
+                        std::to_string(first->record) +
+                        ") sweep for time_increment × beams = " + seconds(SweepSeconds(*first)) +
+                        ", longer than the scans' period " + seconds(period_s) +
+                        " (is time_increment in another unit?): those scans are taken as "
+                        "instantaneous, not de-skewed");
+  }
+  return max_sweep_s;
+}
+
 // Matches scans [begin, end), each seeded (and de-skewed) through the nominal wheels when known.
 StatusOr<ScanOdometryResult> MatchRun(const std::vector<const LaserScan*>& scans, size_t begin,
                                       size_t end, const std::vector<EncoderSample>& encoders,
-                                      const ScanLogOptions& options) {
+                                      const ScanLogOptions& options, double max_sweep_s) {
   const bool nominal = HasNominal(options);
   ScanOdometry odometry(options.matching);
   for (size_t i = begin; i < end; ++i) {
@@ -121,8 +157,8 @@ StatusOr<ScanOdometryResult> MatchRun(const std::vector<const LaserScan*>& scans
       guess = NominalSensorMotion(encoders, scans[i - 1]->stamp_s, scan.stamp_s, options);
     }
     std::optional<SweepMotion> sweep;
-    const double sweep_s = scan.time_increment_s * static_cast<double>(scan.ranges_m.size());
-    if (options.deskew && nominal && sweep_s > 0.0) {
+    const double sweep_s = SweepSeconds(scan);
+    if (options.deskew && nominal && sweep_s > 0.0 && sweep_s <= max_sweep_s) {
       sweep = NominalSweep(encoders, scan.stamp_s, sweep_s, options);
     }
     CALIB_RETURN_IF_ERROR(odometry.AddScan(scan, guess, sweep));
@@ -155,13 +191,14 @@ constexpr size_t kScansPerThread = 1000;
 
 StatusOr<ScanOdometryResult> MatchScans(const std::vector<const LaserScan*>& scans,
                                         const std::vector<EncoderSample>& encoders,
-                                        const ScanLogOptions& options) {
+                                        const ScanLogOptions& options, double max_sweep_s) {
   if (scans.size() < 2 * kScansPerThread)
-    return MatchRun(scans, 0, scans.size(), encoders, options);
+    return MatchRun(scans, 0, scans.size(), encoders, options, max_sweep_s);
   const size_t half = scans.size() / 2;
-  auto second = std::async(std::launch::async,
-                           [&] { return MatchRun(scans, half, scans.size(), encoders, options); });
-  StatusOr<ScanOdometryResult> first = MatchRun(scans, 0, half, encoders, options);
+  auto second = std::async(std::launch::async, [&] {
+    return MatchRun(scans, half, scans.size(), encoders, options, max_sweep_s);
+  });
+  StatusOr<ScanOdometryResult> first = MatchRun(scans, 0, half, encoders, options, max_sweep_s);
   StatusOr<ScanOdometryResult> rest = second.get();
   if (!first.ok()) return first;
   if (!rest.ok()) return rest;
@@ -191,7 +228,8 @@ StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
     distinct_of[i] = static_cast<int>(distinct.size()) - 1;
   }
   const auto start = std::chrono::steady_clock::now();
-  CALIB_ASSIGN_OR_RETURN(out.matching, MatchScans(distinct, encoders, options));
+  const double max_sweep_s = MaxSweep(distinct, options, scans_name, &out.warnings);
+  CALIB_ASSIGN_OR_RETURN(out.matching, MatchScans(distinct, encoders, options, max_sweep_s));
   out.matching_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const ScanOdometryResult& r = out.matching;

@@ -28,6 +28,10 @@ struct ScanLogOptions {
   // With a nominal radius and beams at their own times: each scan is de-skewed with the
   // sensor's velocity over its sweep from the wheels.
   bool deskew = true;
+  // A sweep (time_increment × beams) longer than this many scan periods (the median step between
+  // the stamps) cannot be, e.g. a time_increment in ms: such scans are taken as instantaneous,
+  // with a warning.
+  double max_sweep_periods = 1.5;
 };
 
 struct ScanLog {

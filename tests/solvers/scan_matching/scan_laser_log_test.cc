@@ -191,6 +191,28 @@ TEST(ScanLaserLog, SweepsAreDeskewedThroughEveryEncoderStep) {
   EXPECT_LT(rms(2), 30e-6);
 }
 
+// A time_increment in ms (sweeps 1000× the scans' period) cannot be: those scans are matched as
+// instantaneous, with a warning that names the stream, the first record and the figures.
+TEST(ScanLaserLog, ASweepLongerThanThePeriodIsTakenAsInstantaneous) {
+  ScanSimOptions o = Robot(100, 4);
+  o.sweep_s = 0.1;
+  StatusOr<ScanSimulation> sim = SimulateScans(o);
+  ASSERT_TRUE(sim.ok()) << sim.message();
+  for (LaserScan& scan : sim->scans) scan.time_increment_s *= 1000.0;
+  ScanLogOptions options;
+  options.nominal = sim->truth.odometry;
+  const StatusOr<ScanLog> log =
+      LaserLogFromScans(sim->scans, sim->encoders, {"sim", "", "run.bag /scan"}, options);
+  ASSERT_TRUE(log.ok()) << log.message();
+  ASSERT_FALSE(log->warnings.empty());
+  const std::string& warning = log->warnings.front();
+  EXPECT_NE(warning.find("run.bag /scan: 100 scan(s) (first: record 0)"), std::string::npos)
+      << warning;
+  EXPECT_NE(warning.find("= 100 s, longer than the scans' period 0.1 s"), std::string::npos)
+      << warning;
+  EXPECT_EQ(log->failed_matches, 0);
+}
+
 // A lidar mounted upside down: its raw scans turn clockwise, and tf says so (the sensor's z axis
 // down). The scans are mirrored back and the calibration is right, with a warning.
 TEST(ScanLaserLog, AnUpsideDownLidarIsMirroredThroughTf) {
