@@ -26,7 +26,7 @@ struct ScanLogOptions {
   OdometryParams nominal{0.0, 0.0, 0.0};
   Pose2d nominal_base_T_sensor = Pose2d::Zero();
   // With a nominal radius and beams at their own times: each scan is de-skewed with the
-  // sensor's velocity over its sweep from the wheels.
+  // sensor's motion over its sweep from the wheels, one piece per encoder step.
   bool deskew = true;
   // A sweep (time_increment × beams) longer than this many scan periods (the median step between
   // the stamps) cannot be, e.g. a time_increment in ms: such scans are taken as instantaneous,
