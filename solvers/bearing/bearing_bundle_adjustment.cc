@@ -129,6 +129,7 @@ BearingProblem::BearingProblem(const BearingLog& log, const BearingParams& initi
   }
   const double r = log.meta.wheel_radius_m;
   const double b = log.meta.wheelbase_m;
+  int num_residuals = 0;
   for (size_t i = 0; i < log.runs.size(); ++i) {
     const BearingRun& run = log.runs[i];
     const BearingRunNodes& nodes = nodes_[i];
@@ -142,7 +143,8 @@ BearingProblem::BearingProblem(const BearingLog& log, const BearingParams& initi
         ceres::CostFunction* cost = BearingOdometryResidual::Create(
             &odometry, nodes.t_s[k - 1], nodes.t_s[k], r, b, &sqrt_information_[odometry_.size()]);
         problem_->AddResidualBlock(cost, nullptr, Node(i, k - 1), Node(i, k), calibration_);
-        odometry_.push_back(OdometryTerm{static_cast<int>(i), static_cast<int>(k), cost});
+        odometry_.push_back(
+            OdometryTerm{num_residuals++, static_cast<int>(i), static_cast<int>(k), cost});
       }
       const int j = nodes.bearing[k];
       const bool used = j >= 0 && (options.use_bearing.empty() || options.use_bearing[i][j]);
@@ -158,8 +160,8 @@ BearingProblem::BearingProblem(const BearingLog& log, const BearingParams& initi
               BearingObservationResidual::Create(beta, &inverse_bearing_sigma_[bearings_.size()]);
           problem_->AddResidualBlock(cost, loss_.get(), Node(i, k), calibration_);
         }
-        bearings_.push_back(
-            BearingTerm{static_cast<int>(i), static_cast<int>(k), nodes.bearing[k], beta, cost});
+        bearings_.push_back(BearingTerm{num_residuals++, static_cast<int>(i), static_cast<int>(k),
+                                        nodes.bearing[k], beta, cost});
         ++num_bearings_;
       }
     }

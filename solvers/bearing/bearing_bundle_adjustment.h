@@ -7,6 +7,7 @@
 #include <calib/core/se2.h>
 #include <calib/core/status.h>
 #include <calib/problems/bearing/bearing_observation_residual.h>
+#include <calib/solvers/common/band_arrow_covariance.h>
 #include <calib/solvers/common/robust_covariance.h>
 #include <calib/solvers/common/robust_loss.h>
 #include <ceres/ceres.h>
@@ -208,11 +209,13 @@ class BearingProblem {
 
  private:
   struct OdometryTerm {
+    int residual = 0;  // Index among the problem's residual blocks (in the order added).
     int run = 0;
     int node = 0;  // Between node − 1 and node.
     const ceres::CostFunction* cost = nullptr;
   };
   struct BearingTerm {
+    int residual = 0;
     int run = 0;
     int node = 0;
     int bearing = 0;
@@ -229,13 +232,9 @@ class BearingProblem {
   // Σ₁ of one odometry term of run `run`.
   Eigen::Matrix3d UnitCovariance(size_t run, double t0_s, double t1_s, double delta,
                                  double xi) const;
+  // Every pose block in chain order (run by run, node by node).
+  std::vector<double*> Latents() const;
   StatusOr<Eigen::MatrixXd> BlockCovariance(const std::vector<const double*>& blocks) const;
-  // For VarianceComponents: the covariance blocks it reads, and one term's leverage.
-  std::vector<std::pair<const double*, const double*>> LeveragePairs(bool with_offset) const;
-  StatusOr<double> BearingLeverage(const ceres::Covariance& covariance, const BearingTerm& term,
-                                   bool with_offset, double* residual) const;
-  StatusOr<double> OdometryLeverage(const ceres::Covariance& covariance, const OdometryTerm& term,
-                                    double* squared_norm) const;
 
   const BearingLog* log_;
   std::vector<BearingRunNodes> nodes_;

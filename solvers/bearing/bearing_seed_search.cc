@@ -1,6 +1,7 @@
 #include <calib/core/bearing/bearing_log_io.h>
 #include <calib/solvers/bearing/bearing_seed_search.h>
 #include <calib/solvers/bearing/bearing_text.h>
+#include <calib/solvers/common/parallel_chunks.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -22,10 +23,29 @@ bool Kept(const std::vector<std::vector<bool>>* keep, size_t run, size_t bearing
   return keep == nullptr || (*keep)[run][bearing];
 }
 
-// Per run: the nominal wheel travels r·Δα from the previous bearing (0 for the first) and β.
+// (cos a, sin a) as a vector, and a vector turned by the angle whose (cos, sin) is `turn`.
+Eigen::Vector2d Rotate(const Eigen::Vector2d& turn, const Eigen::Vector2d& v) {
+  return Eigen::Vector2d(turn.x() * v.x() - turn.y() * v.y(), turn.y() * v.x() + turn.x() * v.y());
+}
+
+// sin a and 1 − cos a by their series for the small turns between bearings (the search evaluates
+// every interval at every grid point: libm's sincos was most of its time), libm beyond.
+void SinVersine(double a, double* sine, double* versine) {
+  if (std::abs(a) > 0.5) {
+    *sine = std::sin(a), *versine = 1.0 - std::cos(a);
+    return;
+  }
+  const double q = a * a;  // Truncation below 1e-17 relative for |a| ≤ 0.5.
+  *sine = a * (1 - q / 6 * (1 - q / 20 * (1 - q / 42 * (1 - q / 72 * (1 - q / 110 * (1 - q / 156))))));
+  *versine = q / 2 * (1 - q / 12 * (1 - q / 30 * (1 - q / 56 * (1 - q / 90 * (1 - q / 132)))));
+}
+
+// Per run: the nominal wheel travels r·Δα from the previous bearing (0 for the first), β and
+// its direction u(β).
 struct SearchRun {
   std::vector<double> right_m, left_m;
   std::vector<double> beta;
+  std::vector<Eigen::Vector2d> u;
 };
 
 struct SearchFit {
@@ -35,14 +55,19 @@ struct SearchFit {
   Eigen::Vector2d mount = Eigen::Vector2d::Zero();
 };
 
-// The dead-reckoned poses of every run at its (used) bearings, and those bearings.
-struct SearchPaths {
-  std::vector<std::vector<Pose2d>> poses;
-  std::vector<std::vector<double>> beta;
+// A dead-reckoned pose at a used bearing: position, heading as (cos θ, sin θ), and the bearing.
+struct PathPoint {
+  Eigen::Vector2d position, heading;
+  double beta = 0.0;
+  Eigen::Vector2d u;  // u(β).
+};
 
-  Eigen::Vector2d Sensor(size_t i, size_t k, const SearchFit& fit) const {
-    const Pose2d& p = poses[i][k];
-    return p.head<2>() + Eigen::Rotation2Dd(p(2)) * fit.mount;
+// The dead-reckoned poses of every run at its (used) bearings.
+struct SearchPaths {
+  std::vector<std::vector<PathPoint>> points;
+
+  static Eigen::Vector2d Sensor(const PathPoint& p, const SearchFit& fit) {
+    return p.position + Rotate(p.heading, fit.mount);
   }
 };
 
@@ -52,19 +77,17 @@ struct SearchPaths {
 void SolveGeometry(const SearchPaths& paths, const std::vector<std::vector<double>>& weight,
                    SearchFit* fit, std::vector<Eigen::Vector2d>* landmark) {
   using Matrix24 = Eigen::Matrix<double, 2, 4>;
-  const size_t runs = paths.poses.size();
+  const size_t runs = paths.points.size();
   Eigen::Matrix4d s = Eigen::Matrix4d::Zero();
   std::vector<Eigen::Matrix2d> local_inverse(runs);
   std::vector<Matrix24> cross_term(runs);
   for (size_t i = 0; i < runs; ++i) {
     Eigen::Matrix2d ll = Eigen::Matrix2d::Zero();
     Matrix24 ls = Matrix24::Zero();
-    for (size_t k = 0; k < paths.poses[i].size(); ++k) {
-      const Pose2d& p = paths.poses[i][k];
-      const Eigen::Vector2d u = Direction(paths.beta[i][k]);
-      const Eigen::Vector2d d = Direction(paths.beta[i][k] + p(2));
-      const Eigen::Vector2d pos = p.head<2>();
-      const Eigen::Vector4d row_s(-u.x(), -u.y(), Cross(pos, d), pos.dot(d));
+    for (size_t k = 0; k < paths.points[i].size(); ++k) {
+      const PathPoint& p = paths.points[i][k];
+      const Eigen::Vector2d d = Rotate(p.heading, p.u);
+      const Eigen::Vector4d row_s(-p.u.x(), -p.u.y(), Cross(p.position, d), p.position.dot(d));
       const double wt = weight[i][k];
       ll += wt * d * d.transpose();
       ls += wt * d * row_s.transpose();
@@ -88,13 +111,13 @@ void SolveGeometry(const SearchPaths& paths, const std::vector<std::vector<doubl
   fit->c = std::atan2(v(1), v(0));
   const Eigen::Rotation2Dd back(fit->c + 0.5 * M_PI);  // Q⁻¹.
   fit->mount = back * f;
+  const Eigen::Vector2d turn_c = Direction(fit->c);
   double agreement = 0.0;
   for (size_t i = 0; i < runs; ++i) {
     (*landmark)[i] = back * (-local_inverse[i] * cross_term[i] * shared);
-    for (size_t k = 0; k < paths.poses[i].size(); ++k) {
-      const Eigen::Vector2d sensor = paths.Sensor(i, k, *fit);
-      agreement += ((*landmark)[i] - sensor)
-                       .dot(Direction(paths.beta[i][k] + paths.poses[i][k](2) + fit->c));
+    for (const PathPoint& p : paths.points[i]) {
+      agreement += ((*landmark)[i] - SearchPaths::Sensor(p, *fit))
+                       .dot(Rotate(turn_c, Rotate(p.heading, p.u)));
     }
   }
   if (agreement < 0.0) fit->c += M_PI;
@@ -106,9 +129,9 @@ void ReweightByDistance(const SearchPaths& paths, const SearchFit& fit,
                         std::vector<std::vector<double>>* weight) {
   double mean_distance = 0.0;
   int count = 0;
-  for (size_t i = 0; i < paths.poses.size(); ++i) {
-    for (size_t k = 0; k < paths.poses[i].size(); ++k) {
-      (*weight)[i][k] = (landmark[i] - paths.Sensor(i, k, fit)).norm();
+  for (size_t i = 0; i < paths.points.size(); ++i) {
+    for (size_t k = 0; k < paths.points[i].size(); ++k) {
+      (*weight)[i][k] = (landmark[i] - SearchPaths::Sensor(paths.points[i][k], fit)).norm();
       mean_distance += (*weight)[i][k];
       ++count;
     }
@@ -125,11 +148,14 @@ double BearingCost(const SearchPaths& paths, const SearchFit& fit,
                    const std::vector<Eigen::Vector2d>& landmark) {
   double cost = 0.0;
   int count = 0;
-  for (size_t i = 0; i < paths.poses.size(); ++i) {
-    for (size_t k = 0; k < paths.poses[i].size(); ++k) {
-      const Eigen::Vector2d to = landmark[i] - paths.Sensor(i, k, fit);
-      const double predicted = std::atan2(to.y(), to.x()) - paths.poses[i][k](2) - fit.c;
-      const double e = WrapAngle(paths.beta[i][k] - predicted);
+  for (size_t i = 0; i < paths.points.size(); ++i) {
+    for (const PathPoint& p : paths.points[i]) {
+      // The landmark's direction in the robot frame: R(−θ)·(L − sensor).
+      const Eigen::Vector2d to = landmark[i] - SearchPaths::Sensor(p, fit);
+      const Eigen::Vector2d back(p.heading.x(), -p.heading.y());
+      const Eigen::Vector2d local = Rotate(back, to);
+      const double predicted = std::atan2(local.y(), local.x()) - fit.c;
+      const double e = WrapAngle(p.beta - predicted);
       cost += std::min(e * e, 0.25);
       ++count;
     }
@@ -155,6 +181,7 @@ class SeedSearch {
         s.right_m.push_back(first ? 0.0 : r * (right - right0));
         s.left_m.push_back(first ? 0.0 : r * (left - left0));
         s.beta.push_back(run.bearings[j].bearing_rad);
+        s.u.push_back(Direction(run.bearings[j].bearing_rad));
         left0 = left, right0 = right;
       }
       runs_.push_back(std::move(s));
@@ -191,7 +218,7 @@ class SeedSearch {
     const SearchPaths paths =
         DeadReckon(std::exp(log_delta), std::exp(log_xi_b) / wheelbase_, stride);
     std::vector<std::vector<double>> weight(runs_.size());
-    for (size_t i = 0; i < runs_.size(); ++i) weight[i].assign(paths.poses[i].size(), 1.0);
+    for (size_t i = 0; i < runs_.size(); ++i) weight[i].assign(paths.points[i].size(), 1.0);
     std::vector<Eigen::Vector2d> landmark(runs_.size(), Eigen::Vector2d::Zero());
     for (int pass = 0; pass < 2; ++pass) {
       SolveGeometry(paths, weight, &fit, &landmark);
@@ -202,21 +229,28 @@ class SeedSearch {
   }
 
  private:
+  // Each interval one arc: the displacement (d·sin a/a, d·(1 − cos a)/a) turned by the heading.
   SearchPaths DeadReckon(double delta, double xi, int stride) const {
     SearchPaths paths;
-    paths.poses.resize(runs_.size());
-    paths.beta.resize(runs_.size());
+    paths.points.resize(runs_.size());
     for (size_t i = 0; i < runs_.size(); ++i) {
       const SearchRun& run = runs_[i];
-      Pose2d pose = Pose2d::Zero();
+      Eigen::Vector2d position = Eigen::Vector2d::Zero(), heading(1.0, 0.0);
       for (size_t j = 0; j < run.beta.size(); ++j) {
         if (j > 0) {
           const double right = run.right_m[j], left = delta * run.left_m[j];
-          pose = Compose(pose, ArcDisplacement(0.5 * (right + left), xi * (right - left)));
+          const double d = 0.5 * (right + left), a = xi * (right - left);
+          double sine = 0.0, versine = 0.0;
+          SinVersine(a, &sine, &versine);
+          const Eigen::Vector2d local = std::abs(a) > 1e-12
+                                            ? Eigen::Vector2d(d * sine / a, d * versine / a)
+                                            : Eigen::Vector2d(d, 0.5 * d * a);
+          position += Rotate(heading, local);
+          heading = Rotate(heading, Eigen::Vector2d(1.0 - versine, sine));
+          if (j % 256 == 0) heading.normalize();
         }
         if (j % stride == 0) {
-          paths.poses[i].push_back(pose);
-          paths.beta[i].push_back(run.beta[j]);
+          paths.points[i].push_back(PathPoint{position, heading, run.beta[j], run.u[j]});
         }
       }
     }
@@ -258,13 +292,14 @@ SearchGrid MakeGrid(const SeedSearch& search, const BearingSearchOptions& option
 
 // The local minima of the grid, best first, at most `count`.
 std::vector<SearchFit> GridMinima(const SeedSearch& search, const SearchGrid& g, int stride,
-                                  int count) {
+                                  int count, int num_threads) {
   std::vector<SearchFit> grid(static_cast<size_t>(g.nd) * g.nx);
-  for (int i = 0; i < g.nd; ++i) {
-    for (int j = 0; j < g.nx; ++j) {
-      grid[i * g.nx + j] = search.Evaluate(g.d0 + i * g.step_d, g.x0 + j * g.step_x, stride);
+  ParallelChunks(grid.size(), num_threads, 1, [&](int, size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k) {
+      const int i = static_cast<int>(k) / g.nx, j = static_cast<int>(k) % g.nx;
+      grid[k] = search.Evaluate(g.d0 + i * g.step_d, g.x0 + j * g.step_x, stride);
     }
-  }
+  });
   std::vector<SearchFit> candidates;
   for (int i = 0; i < g.nd; ++i) {
     for (int j = 0; j < g.nx; ++j) {
@@ -289,18 +324,22 @@ std::vector<SearchFit> GridMinima(const SeedSearch& search, const SearchGrid& g,
 }
 
 // Refinement of each candidate on every bearing, 5×5 around it, the step halving at each level.
-void RefineCandidates(const SeedSearch& search, SearchGrid g, int levels,
+void RefineCandidates(const SeedSearch& search, SearchGrid g, int levels, int num_threads,
                       std::vector<SearchFit>* candidates) {
   for (int level = 0; level < levels; ++level) {
     if (level > 0) g.step_d *= 0.5, g.step_x *= 0.5;
     for (SearchFit& candidate : *candidates) {
-      SearchFit best;
-      for (int i = -2; i <= 2; ++i) {
-        for (int j = -2; j <= 2; ++j) {
-          const SearchFit fit = search.Evaluate(candidate.log_delta + i * g.step_d,
-                                                candidate.log_xi_b + j * g.step_x, 1);
-          if (fit.cost < best.cost) best = fit;
+      std::vector<SearchFit> fits(25);
+      ParallelChunks(fits.size(), num_threads, 1, [&](int, size_t begin, size_t end) {
+        for (size_t k = begin; k < end; ++k) {
+          const int i = static_cast<int>(k) / 5 - 2, j = static_cast<int>(k) % 5 - 2;
+          fits[k] = search.Evaluate(candidate.log_delta + i * g.step_d,
+                                    candidate.log_xi_b + j * g.step_x, 1);
         }
+      });
+      SearchFit best;
+      for (const SearchFit& fit : fits) {
+        if (fit.cost < best.cost) best = fit;  // The first of equals, as in a serial loop.
       }
       if (std::isfinite(best.cost)) candidate = best;
     }
@@ -384,11 +423,12 @@ StatusOr<BearingParams> SearchBearingSeedOf(const BearingLog& log,
   const SearchGrid grid = MakeGrid(search, options);
   const int stride = std::max(1, (search.num_bearings() + options.max_search_bearings - 1) /
                                      std::max(1, options.max_search_bearings));
-  std::vector<SearchFit> candidates = GridMinima(search, grid, stride, options.candidates);
+  std::vector<SearchFit> candidates =
+      GridMinima(search, grid, stride, options.candidates, options.num_threads);
   if (candidates.empty()) {
     return Status::NotObservable("the search found no calibration that explains the bearings");
   }
-  RefineCandidates(search, grid, options.refine_levels, &candidates);
+  RefineCandidates(search, grid, options.refine_levels, options.num_threads, &candidates);
   const SearchFit& best = candidates.front();
   const double rho = best.mount.norm();
   if (!(rho > 0.0) || !std::isfinite(rho)) {

@@ -26,6 +26,7 @@ struct BearingSearchOptions {
   int max_search_bearings = 300;  // The grid uses every k-th bearing to stay within this.
   int candidates = 4;             // Grid minima refined on every bearing.
   int refine_levels = 5;          // 5×5 refinements, the step halving each time.
+  int num_threads = 1;            // Grid points evaluated in parallel.
 };
 
 // The landmark's position in each run's start frame (gauge units) for a given calibration: with

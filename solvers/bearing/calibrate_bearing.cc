@@ -137,7 +137,9 @@ StatusOr<SeedChoice> ChooseSeed(const BearingLog& log, const BearingMask& keep,
     }
   }
   progress("searching for a seed");
-  StatusOr<BearingParams> searched = SearchBearingSeedOf(log, &keep, options.search);
+  BearingSearchOptions search = options.search;  // On the threads the adjustment may use.
+  search.num_threads = std::max(search.num_threads, options.adjustment.num_threads);
+  StatusOr<BearingParams> searched = SearchBearingSeedOf(log, &keep, search);
   if (!searched.ok()) {
     AppendReason(&choice.rejected, searched.message());
   } else if (AdjustFromSeed(log, keep, *searched, BearingSeedMethod::kSearch, noise, scatter_rad,

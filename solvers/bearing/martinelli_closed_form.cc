@@ -12,26 +12,6 @@ namespace {
 
 using Complex = std::complex<double>;
 
-// The per-run fits of every circular run (non-circular ones skipped when the options say so).
-Status FitRuns(const BearingLog& log, const std::vector<std::vector<bool>>* keep,
-               const MartinelliOptions& options, MartinelliEstimate* estimate) {
-  for (size_t i = 0; i < log.runs.size(); ++i) {
-    const BearingRun& run = log.runs[i];
-    CALIB_ASSIGN_OR_RETURN(const CircularRunSamples samples,
-                           ExtractCircularRun(run, log.meta.wheel_radius_m, options,
-                                              keep != nullptr ? &(*keep)[i] : nullptr));
-    if (!samples.circle) {
-      if (!options.skip_non_circular_runs) return Status::NotObservable(samples.not_circle);
-      estimate->skipped_runs.push_back(run.id);
-      continue;
-    }
-    CALIB_ASSIGN_OR_RETURN(const MartinelliRunEstimate fitted,
-                           FitCircularRun(samples, log.meta.wheelbase_m, options));
-    estimate->runs.push_back(fitted);
-  }
-  return Status::Ok();
-}
-
 // At least three distinct q (§7).
 Status CheckDistinctRatios(const MartinelliEstimate& estimate, const MartinelliOptions& options) {
   std::vector<double> distinct;
@@ -53,6 +33,38 @@ Status CheckDistinctRatios(const MartinelliEstimate& estimate, const MartinelliO
         (qs.empty() ? "" : " (" + qs + ")"));
   }
 
+  return Status::Ok();
+}
+
+// The per-run fits of every circular run (non-circular ones skipped when the options say so).
+// Fewer than three distinct q leave the closed form undetermined whatever the circles: that is
+// said before fitting them (a long run weaving about one mean ratio passes as circular, and its
+// fit was most of a bearing calibration's time).
+Status FitRuns(const BearingLog& log, const std::vector<std::vector<bool>>* keep,
+               const MartinelliOptions& options, MartinelliEstimate* estimate) {
+  std::vector<CircularRunSamples> circular;
+  MartinelliEstimate ratios;
+  for (size_t i = 0; i < log.runs.size(); ++i) {
+    const BearingRun& run = log.runs[i];
+    CALIB_ASSIGN_OR_RETURN(CircularRunSamples samples,
+                           ExtractCircularRun(run, log.meta.wheel_radius_m, options,
+                                              keep != nullptr ? &(*keep)[i] : nullptr));
+    if (!samples.circle) {
+      if (!options.skip_non_circular_runs) return Status::NotObservable(samples.not_circle);
+      estimate->skipped_runs.push_back(run.id);
+      continue;
+    }
+    ratios.runs.emplace_back();
+    ratios.runs.back().run = samples.run;
+    ratios.runs.back().q = samples.q;
+    circular.push_back(std::move(samples));
+  }
+  CALIB_RETURN_IF_ERROR(CheckDistinctRatios(ratios, options));
+  for (const CircularRunSamples& samples : circular) {
+    CALIB_ASSIGN_OR_RETURN(const MartinelliRunEstimate fitted,
+                           FitCircularRun(samples, log.meta.wheelbase_m, options));
+    estimate->runs.push_back(fitted);
+  }
   return Status::Ok();
 }
 

@@ -11,26 +11,22 @@ namespace calib {
 namespace band_arrow_internal {
 namespace {
 
-// The largest residual block it takes (the timing-aware interval: 3 residuals, at most 16
-// parameters in at most 10 blocks).
-constexpr int kMaxResiduals = 4, kMaxColumns = 24, kMaxBlocks = 12;
 // How many residuals ahead the evaluation prefetches a cost function.
 constexpr size_t kPrefetchAhead = 4;
-// Residuals per evaluation thread, at least.
-constexpr size_t kMinChunk = 256;
 
 }  // namespace
 
 Status BandArrowProblem::Build(const std::vector<double*>& latents, ceres::Problem* problem) {
-  std::unordered_map<const double*, int> index;
+  std::unordered_map<const double*, int>& index = block_index_;
   for (double* value : latents) {
-    if (problem->ParameterBlockSize(value) != 1 || problem->GetManifold(value) != nullptr) {
-      return Status::Internal("a latent of the band-arrow solver is not a plain scalar block");
-    }
-    Block b;
-    b.values = value, b.size = b.tangent = 1, b.latent = true;
-    b.column = static_cast<int>(latent_blocks_.size());
     if (problem->IsParameterBlockConstant(value)) continue;
+    Block b;
+    b.values = value, b.size = problem->ParameterBlockSize(value), b.latent = true;
+    b.manifold = problem->GetManifold(value);
+    b.tangent = b.manifold ? b.manifold->TangentSize() : b.size;
+    if (b.tangent == 0) continue;
+    b.column = latent_columns_;
+    latent_columns_ += b.tangent;
     index[value] = static_cast<int>(blocks_.size());
     latent_blocks_.push_back(static_cast<int>(blocks_.size()));
     blocks_.push_back(b);
@@ -55,6 +51,7 @@ Status BandArrowProblem::Build(const std::vector<double*>& latents, ceres::Probl
   std::vector<double*> values;
   for (const ceres::ResidualBlockId id : ids) {
     Term term;
+    term.index = static_cast<int>(terms_.size());
     term.cost = problem->GetCostFunctionForResidualBlock(id);
     term.loss = problem->GetLossFunctionForResidualBlock(id);
     problem->GetParameterBlocksForResidualBlock(id, &values);
@@ -76,7 +73,7 @@ Status BandArrowProblem::Build(const std::vector<double*>& latents, ceres::Probl
       if (block >= 0 && !blocks_[block].latent) term.columns += blocks_[block].tangent;
     }
     term.globals = term.columns;
-    int lo = static_cast<int>(latents.size()), hi = -1;
+    int lo = latent_columns_, hi = -1;
     term_column_.resize(term.first_column + ambient);
     int global_at = 0;
     for (int p = 0; p < term.num_blocks; ++p) {
@@ -90,11 +87,11 @@ Status BandArrowProblem::Build(const std::vector<double*>& latents, ceres::Probl
       term_offset_.push_back(at);
       for (int c = 0; c < b.tangent; ++c) term_column_[term.first_column + at + c] = b.column + c;
       at += b.tangent;
-      if (b.latent) lo = std::min(lo, b.column), hi = std::max(hi, b.column);
+      if (b.latent) lo = std::min(lo, b.column), hi = std::max(hi, b.column + b.tangent - 1);
     }
     term_column_.resize(term.first_column + term.columns);
     if (hi >= lo) width_ = std::max(width_, hi - lo);
-    term.first_latent = hi >= lo ? lo : static_cast<int>(latents.size());
+    term.first_latent = hi >= lo ? lo : latent_columns_;
     terms_.push_back(term);
   }
   // In band order: the evaluation threads' contiguous ranges then share the costly residuals
@@ -132,15 +129,8 @@ bool BandArrowProblem::EvaluateRange(size_t begin, size_t end, ArrowSystem* syst
   double r[kMaxResiduals];
   double ambient[kMaxResiduals * kMaxColumns];
   double* jacobians[kMaxBlocks];
-  // The globals' manifold Jacobians, the same for every residual of this evaluation.
-  std::vector<RowMatrix> plus(blocks_.size());
-  if (system) {
-    for (size_t b = 0; b < blocks_.size(); ++b) {
-      if (!blocks_[b].manifold) continue;
-      plus[b].resize(blocks_[b].size, blocks_[b].tangent);
-      blocks_[b].manifold->PlusJacobian(blocks_[b].values, plus[b].data());
-    }
-  }
+  // The manifolds' Jacobians, the same for every residual of this evaluation.
+  const std::vector<RowMatrix> plus = system ? PlusJacobians() : std::vector<RowMatrix>();
   double sum = 0.0;  // Local: the threads' outputs share a cache line.
   for (size_t i = begin; i < end; ++i) {
     // The cost functions are scattered over the heap: fetch a later one's first lines now.
@@ -175,10 +165,18 @@ bool BandArrowProblem::EvaluateRange(size_t begin, size_t end, ArrowSystem* syst
   return true;
 }
 
-void BandArrowProblem::AccumulateTerm(const Term& term, int m, const double* r, double weight,
-                                      double* const* jacobians, const std::vector<RowMatrix>& plus,
-                                      double* jt, ArrowSystem* system) const {
-  // The tangent Jacobian, the globals' columns first.
+std::vector<RowMatrix> BandArrowProblem::PlusJacobians() const {
+  std::vector<RowMatrix> plus(blocks_.size());
+  for (size_t b = 0; b < blocks_.size(); ++b) {
+    if (!blocks_[b].manifold) continue;
+    plus[b].resize(blocks_[b].size, blocks_[b].tangent);
+    blocks_[b].manifold->PlusJacobian(blocks_[b].values, plus[b].data());
+  }
+  return plus;
+}
+
+void BandArrowProblem::TangentJacobian(const Term& term, int m, double* const* jacobians,
+                                       const std::vector<RowMatrix>& plus, double* jt) const {
   for (int p = 0; p < term.num_blocks; ++p) {
     const int index = term_block_[term.first_block + p];
     if (index < 0) continue;
@@ -191,6 +189,12 @@ void BandArrowProblem::AccumulateTerm(const Term& term, int m, const double* r, 
       out = j;
     }
   }
+}
+
+void BandArrowProblem::AccumulateTerm(const Term& term, int m, const double* r, double weight,
+                                      double* const* jacobians, const std::vector<RowMatrix>& plus,
+                                      double* jt, ArrowSystem* system) const {
+  TangentJacobian(term, m, jacobians, plus, jt);  // The globals' columns first.
   // Reweighted: H += ρ′JᵀJ, g += ρ′Jᵀr, entry by entry into the arrow's pieces.
   const int* column = term_column_.data() + term.first_column;
   const auto dot = [&](int a, const double* v) {
@@ -272,13 +276,12 @@ void BandArrowProblem::Restore() const {
 void BandArrowProblem::Apply(const Eigen::VectorXd& delta_g, const Eigen::VectorXd& delta_l) const {
   std::vector<double> x;
   for (const Block& b : blocks_) {
-    if (b.latent) {
-      b.values[0] += delta_l(b.column);
-    } else if (b.manifold) {
+    const double* delta = (b.latent ? delta_l.data() : delta_g.data()) + b.column;
+    if (b.manifold) {
       x.assign(b.values, b.values + b.size);
-      b.manifold->Plus(x.data(), delta_g.data() + b.column, b.values);
+      b.manifold->Plus(x.data(), delta, b.values);
     } else {
-      for (int i = 0; i < b.size; ++i) b.values[i] += delta_g(b.column + i);
+      for (int i = 0; i < b.size; ++i) b.values[i] += delta[i];
     }
   }
 }
@@ -290,8 +293,6 @@ double BandArrowProblem::ParameterNorm() const {
   }
   return std::sqrt(sum);
 }
-
-// Levenberg–Marquardt on a built arrow.
 
 }  // namespace band_arrow_internal
 }  // namespace calib

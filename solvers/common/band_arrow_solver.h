@@ -9,10 +9,12 @@
 #include <vector>
 
 // Levenberg–Marquardt for a Ceres problem whose variables are a few dense "global" blocks and many
-// scalar latents, each residual touching latents within a short window of an order given by the
-// caller (sample times ordered by time). The normal equations are then an arrow: a banded latent
-// block, a dense border and a small corner; one step costs a banded LDLᵀ and a Schur complement,
-// O(n·w²), where Ceres' sparse Cholesky pays for the general pattern at every iteration.
+// latent blocks, each residual touching latents within a short window of an order given by the
+// caller (sample times ordered by time, poses along their chain; a latent block may have a
+// manifold). The normal equations are then an arrow: a banded latent block (w its half-bandwidth
+// in tangent columns), a dense border and a small corner; one step costs a banded LDLᵀ and a
+// Schur complement, O(n·w²), where Ceres' sparse Cholesky pays for the general pattern at every
+// iteration. Its covariance: solvers/common/band_arrow_covariance.h.
 //
 // Robust losses are reweighted (ρ′JᵀJ, as Ceres does for ρ″ < 0). That overstates the curvature,
 // so LM crawls along nearly the same step for many iterations; an accepted step whose gain beat
@@ -41,8 +43,8 @@ struct BandArrowSummary {
   int band_width = 0;  // Of the latent block (0: diagonal).
 };
 
-// Minimises the cost of `problem` over its non-constant parameter blocks. `latents` lists scalar
-// blocks in band order; every other non-constant block is a global (with its manifold, if any).
+// Minimises the cost of `problem` over its non-constant parameter blocks. `latents` lists blocks
+// in band order; every other non-constant block is a global (with its manifold, if any).
 // Fails (and leaves the problem at the last accepted point) when the cost or the normal
 // equations cannot be evaluated.
 Status SolveBandArrow(const BandArrowOptions& options, const std::vector<double*>& latents,

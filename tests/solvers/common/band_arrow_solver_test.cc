@@ -140,12 +140,5 @@ TEST(BandArrowSolverTest, ConstantBlocksStayPut) {
   EXPECT_LT(summary.final_cost, summary.initial_cost);
 }
 
-TEST(BandArrowSolverTest, RejectsLatentThatIsNotAScalar) {
-  Problem band(20);
-  const Status status =
-      SolveBandArrow(BandArrowOptions(), {band.shift}, "test", &band.problem, nullptr);
-  EXPECT_FALSE(status.ok());
-}
-
 }  // namespace
 }  // namespace calib
