@@ -396,6 +396,59 @@ nlohmann::ordered_json GeometryScanSection(bool quick) {
   return {{"rows", scan_json}, {"best", best_text}, {"best_max_ratio", best}};
 }
 
+// Time against the log's length: one weaving run (WeavingRun: the turn rate swings with an 80 s
+// period at 0.05 m/s) of N bearings at 1 Hz, 50 Hz encoders, σβ = 1°, initial distance given;
+// CalibrateBearing end to end on the bench's threads, and the largest |z| of its estimate.
+nlohmann::ordered_json ScalingSection(const BenchConfig& config) {
+  std::printf(
+      "\n=== Time against the number of bearings ===\nOne weaving run (turn rate 0.09·sin(2πt/80 "
+      "s) rad/s about a straight line at 0.05 m/s, landmark 1 m to the left at the start), "
+      "bearings "
+      "at 1 Hz with σβ = 1°, encoders at 50 Hz; CalibrateBearing end to end on %d threads "
+      "(seed search, adjustments with the noise levels and the timing tests, covariance).\n",
+      config.threads);
+  std::vector<int> sizes = {300, 1000, 3000};
+  if (!config.quick) sizes.push_back(10000);
+  TextTable table({"bearings", "seconds", "ms/bearing", "max |z|"});
+  nlohmann::ordered_json rows = nlohmann::ordered_json::array();
+  std::vector<double> n_values, seconds_values;
+  for (int n : sizes) {
+    BearingSimOptions o;
+    o.bearing_noise_rad = 1.0 / kDeg;
+    o.runs = {WeavingRun(n - 1.0)};
+    o.initial_distance_run = 1;
+    o.seed = 9000 + n;
+    BearingSimTruth truth;
+    const BearingLog log = SimulateBearingLog(o, &truth);
+    BearingCalibrationOptions options;
+    options.adjustment.num_threads = config.threads;
+    const Stopwatch watch;
+    const StatusOr<BearingCalibrationResult> result = CalibrateBearing(log, options);
+    const double seconds = watch.Seconds();
+    double max_z = NAN;
+    if (result.ok()) {
+      const BearingParamVector e = ToVector(result->estimate), t = ToVector(truth.params);
+      max_z = 0.0;
+      for (int i = 0; i < kNumBearingParams; ++i) {
+        const double d = i < 2 ? WrapAngle(e(i) - t(i)) : e(i) - t(i);
+        max_z = std::max(max_z, std::abs(d / result->stddev(i)));
+      }
+    }
+    table.AddRow({std::to_string(n), Format("%.2f", seconds), Format("%.2f", 1e3 * seconds / n),
+                  result.ok() ? Format("%.2f", max_z) : "failed: " + result.message()});
+    rows.push_back({{"bearings", n},
+                    {"seconds", seconds},
+                    {"ok", result.ok()},
+                    {"max_abs_z", result.ok() ? nlohmann::ordered_json(max_z) : nullptr}});
+    n_values.push_back(n);
+    seconds_values.push_back(seconds);
+  }
+  table.Print();
+  const double slope = LogLogSlope(n_values, seconds_values);
+  std::printf("  log-log slope of the time: %.2f\n", slope);
+  return {{"rows", rows}, {"loglog_slope", slope}};
+}
+
 }  // namespace
 
 nlohmann::ordered_json RunBearingBench(const BenchConfig& config) {
@@ -426,6 +479,7 @@ nlohmann::ordered_json RunBearingBench(const BenchConfig& config) {
   root["table4"] = Table4Section(seeds);
   root["non_circular"] = NonCircularSection(seeds);
   root["geometry_scan"] = GeometryScanSection(config.quick);
+  root["scaling"] = ScalingSection(config);
   root["seconds"] = total.Seconds();
   return root;
 }

@@ -26,6 +26,8 @@ nlohmann::json RunLaserReal(const BenchConfig& config);
 //   2. A non-circular trajectory (varying curvature), which the closed form cannot handle.
 //   3. A scan of the geometry (start distance and direction of the landmark) for a setting in
 //      which the bound would allow Table 4's errors.
+//   4. The time of CalibrateBearing against the number of bearings (300 to 10 000; 3000 with
+//      quick) on one weaving run, with its log-log slope.
 // config.seeds logs per case; 0: 100 (10 with config.quick).
 nlohmann::ordered_json RunBearingBench(const BenchConfig& config);
 

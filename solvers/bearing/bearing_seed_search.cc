@@ -28,16 +28,26 @@ Eigen::Vector2d Rotate(const Eigen::Vector2d& turn, const Eigen::Vector2d& v) {
   return Eigen::Vector2d(turn.x() * v.x() - turn.y() * v.y(), turn.y() * v.x() + turn.x() * v.y());
 }
 
-// sin a and 1 − cos a by their series for the small turns between bearings (the search evaluates
-// every interval at every grid point: libm's sincos was most of its time), libm beyond.
-void SinVersine(double a, double* sine, double* versine) {
+// One interval's turn a: sin a, 1 − cos a, and both over a (the arc's displacement), by their
+// series for the small turns between bearings (the search evaluates every interval at every grid
+// point: libm's sincos and the divisions were most of its time), by libm beyond.
+struct Turn {
+  double sine, versine, sine_over_a, versine_over_a;
+};
+Turn SmallTurn(double a) {
   if (std::abs(a) > 0.5) {
-    *sine = std::sin(a), *versine = 1.0 - std::cos(a);
-    return;
+    const double sine = std::sin(a), versine = 1.0 - std::cos(a);
+    return {sine, versine, sine / a, versine / a};
   }
   const double q = a * a;  // Truncation below 1e-17 relative for |a| ≤ 0.5.
-  *sine = a * (1 - q / 6 * (1 - q / 20 * (1 - q / 42 * (1 - q / 72 * (1 - q / 110 * (1 - q / 156))))));
-  *versine = q / 2 * (1 - q / 12 * (1 - q / 30 * (1 - q / 56 * (1 - q / 90 * (1 - q / 132)))));
+  constexpr double k6 = 1.0 / 6, k20 = 1.0 / 20, k42 = 1.0 / 42, k72 = 1.0 / 72, k110 = 1.0 / 110,
+                   k156 = 1.0 / 156, k12 = 1.0 / 12, k30 = 1.0 / 30, k56 = 1.0 / 56, k90 = 1.0 / 90,
+                   k132 = 1.0 / 132;
+  const double so =
+      1 - q * k6 * (1 - q * k20 * (1 - q * k42 * (1 - q * k72 * (1 - q * k110 * (1 - q * k156)))));
+  const double vo =
+      0.5 * a * (1 - q * k12 * (1 - q * k30 * (1 - q * k56 * (1 - q * k90 * (1 - q * k132)))));
+  return {a * so, a * vo, so, vo};
 }
 
 // Per run: the nominal wheel travels r·Δα from the previous bearing (0 for the first), β and
@@ -240,13 +250,10 @@ class SeedSearch {
         if (j > 0) {
           const double right = run.right_m[j], left = delta * run.left_m[j];
           const double d = 0.5 * (right + left), a = xi * (right - left);
-          double sine = 0.0, versine = 0.0;
-          SinVersine(a, &sine, &versine);
-          const Eigen::Vector2d local = std::abs(a) > 1e-12
-                                            ? Eigen::Vector2d(d * sine / a, d * versine / a)
-                                            : Eigen::Vector2d(d, 0.5 * d * a);
-          position += Rotate(heading, local);
-          heading = Rotate(heading, Eigen::Vector2d(1.0 - versine, sine));
+          const Turn turn = SmallTurn(a);
+          position +=
+              Rotate(heading, Eigen::Vector2d(d * turn.sine_over_a, d * turn.versine_over_a));
+          heading = Rotate(heading, Eigen::Vector2d(1.0 - turn.versine, turn.sine));
           if (j % 256 == 0) heading.normalize();
         }
         if (j % stride == 0) {
