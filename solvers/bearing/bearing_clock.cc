@@ -17,22 +17,46 @@ constexpr int kMaxPeriods = 4;
 constexpr int kMinSegment = 5;        // Bearings of a run to enter the slope.
 constexpr int kMinCountedSteps = 20;  // Over the log, to fit P at all.
 constexpr int kEvidence = 2;          // Held or skipped samples that show the clock.
+// Skipped samples counted by the bearings show the clock only when noise alone would make that
+// many this rarely: a counted one-period step reads as two when its noise reaches 0.7 of the
+// change, which over thousands of counted steps happens a few times (10 000 bearings at 1°
+// showed 2 and adopted a clock 290 ppm off).
+constexpr double kFalseSkipLevel = 1e-3;
 // Held repeats on this share of the rows: the logger outpaces the sensor and picks up every
 // sample, so consecutive rows (repeats dropped) are consecutive samples.
 constexpr double kEverySampleShare = 0.1;
 
-// Periods between rows k − 1 and k by the bearings' step (0: not counted).
-int CountedPeriods(const BearingClockRun& run, size_t k, double step_s, double sigma_rad) {
+// Periods between rows k − 1 and k by the bearings' step (0: not counted); the step's predicted
+// change of one period in `change`.
+int CountedPeriods(const BearingClockRun& run, size_t k, double step_s, double sigma_rad,
+                   double* change_rad) {
   if (!run.inlier[k - 1] || !run.inlier[k]) return 0;
   // The rate must hold over the step (within kRateChange at its ends) for g·P to predict it.
   const double g0 = run.rates_rad_per_s[k - 1], g1 = run.rates_rad_per_s[k];
   if (!(std::abs(g1 - g0) <= kRateChange * 0.5 * std::abs(g0 + g1))) return 0;
   const double change = 0.5 * (g0 + g1) * step_s;
+  *change_rad = change;
   if (!(std::abs(change) > kCountedSigmas * sigma_rad * std::sqrt(2.0))) return 0;
   const double ratio = WrapAngle(run.bearings_rad[k] - run.bearings_rad[k - 1]) / change;
   const double whole = std::round(ratio);
   if (whole < 1.0 || whole > kMaxPeriods || std::abs(ratio - whole) > kWholeTolerance) return 0;
   return static_cast<int>(whole);
+}
+
+// The chance that noise alone lifts a counted step of `stamp_periods` by one period or more:
+// its noise (σβ·√2) beyond (1 − kWholeTolerance) of one period's change.
+double FalseSkipChance(double change_rad, double sigma_rad) {
+  return 0.5 * std::erfc((1.0 - kWholeTolerance) * std::abs(change_rad) / (2.0 * sigma_rad));
+}
+
+// P(X ≥ m) for X ~ Poisson(λ).
+double PoissonTail(double lambda, int m) {
+  double term = std::exp(-lambda), below = 0.0;
+  for (int j = 0; j < m; ++j) {
+    below += term;
+    term *= lambda / (j + 1);
+  }
+  return std::max(0.0, 1.0 - below);
 }
 
 double MedianStampStep(const std::vector<BearingClockRun>& runs) {
@@ -78,6 +102,7 @@ BearingClockEstimate EstimateBearingClock(const std::vector<BearingClockRun>& ru
   for (const BearingClockRun& run : runs) rows += static_cast<int>(run.stamps_s.size());
   const bool every_sample = held >= kEverySampleShare * rows;
   SlopeSums sums;
+  double expected_false_skips = 0.0;  // Of noise alone, over the counted steps.
   std::vector<std::vector<double>> counted(runs.size());
   for (size_t i = 0; i < runs.size(); ++i) {
     const BearingClockRun& run = runs[i];
@@ -92,17 +117,21 @@ BearingClockEstimate EstimateBearingClock(const std::vector<BearingClockRun>& ru
       const double stamp_ratio = (run.stamps_s[k] - run.stamps_s[k - 1]) / out.stamp_step_s;
       const double stamp_periods =
           every_sample && stamp_ratio < 1.5 ? 1.0 : std::max(1.0, std::round(stamp_ratio));
-      const int periods = CountedPeriods(run, k, out.stamp_step_s, sigma_rad);
+      double change = 0.0;
+      const int periods = CountedPeriods(run, k, out.stamp_step_s, sigma_rad, &change);
       n.push_back(n.back() + (periods > 0 ? periods : stamp_periods));
       if (periods == 0) continue;
       ++out.counted_steps;
       out.skipped_samples += std::max(0, periods - static_cast<int>(stamp_periods));
+      expected_false_skips += FalseSkipChance(change, sigma_rad);
     }
     sums.Add(n, run.stamps_s);
   }
   out.held_samples = held;
-  out.free_running = held >= kEvidence || out.skipped_samples >= kEvidence;
-  out.period_determined = every_sample || out.skipped_samples >= kEvidence;
+  const bool skips_show = out.skipped_samples >= kEvidence &&
+                          PoissonTail(expected_false_skips, out.skipped_samples) < kFalseSkipLevel;
+  out.free_running = held >= kEvidence || skips_show;
+  out.period_determined = every_sample || skips_show;
   if (out.counted_steps < kMinCountedSteps || !(sums.nn > 0.0)) return out;
   out.tested = true;
   out.period_s = sums.ns / sums.nn;

@@ -45,9 +45,11 @@ struct BearingClockEstimate {
   double period_stddev_s = 0.0;
   std::vector<SampleClock> clocks;  // Per run (period 0: none, stamps kept).
   int counted_steps = 0;            // Steps counted by the bearings.
-  int skipped_samples = 0;          // Steps of two or more periods under one stamp step.
-  int held_samples = 0;             // Rows that repeat their predecessor (the caller's count).
-  bool free_running = false;        // Held or skipped samples show a free-running sensor.
+  // Steps of two or more periods under one stamp step; they show the clock only beyond what the
+  // bearings' noise makes of that many counted steps (p < 10⁻³).
+  int skipped_samples = 0;
+  int held_samples = 0;       // Rows that repeat their predecessor (the caller's count).
+  bool free_running = false;  // Held or skipped samples show a free-running sensor.
   // The indices, hence P, are fixed by the log: the logger picks up every sample (held repeats
   // on ≥ 10 % of the rows) or the bearings counted the samples it missed. Otherwise the stamps'
   // step may differ from P unseen, and the clock is not modelled.

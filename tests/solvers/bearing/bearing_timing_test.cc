@@ -4,6 +4,7 @@
 #include <calib/core/bearing/bearing_log_io.h>
 #include <calib/core/bearing/bearing_simulator.h>
 #include <calib/core/random.h>
+#include <calib/solvers/bearing/bearing_clock.h>
 #include <calib/solvers/bearing/bearing_timing.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
 #include <gtest/gtest.h>
@@ -289,6 +290,39 @@ TEST(BearingTimingTest, PeriodTheLogCannotFixIsAWarning) {
     said |= w.find("whose period the log cannot fix") != std::string::npos;
   }
   EXPECT_TRUE(said) << ::testing::PrintToString(r->warnings);
+}
+
+// A long run whose stamps are the sample times, each step's change 4σ clear of the noise so that
+// the bearings count every step: noise alone makes some one-period steps read as two (about 44 of
+// 20 000 here), which is not a free-running sensor. Genuinely missed samples, as many again on
+// top, are.
+TEST(BearingClockTest, NoiseAloneDoesNotMakeSkippedSamples) {
+  constexpr int kSteps = 20000;
+  const double sigma = 1.0 * kDeg, rate = 0.1;  // rad/s; one period's change 4.05 σ·√2.
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0.0, sigma);
+  for (const int missed : {0, 90}) {
+    BearingClockRun run;
+    int sample = 0;
+    for (int k = 0; k <= kSteps; ++k) {
+      if (k > 0) sample += (missed > 0 && k % (kSteps / missed) == 0) ? 2 : 1;
+      run.stamps_s.push_back(k);
+      run.bearings_rad.push_back(WrapAngle(rate * sample + noise(rng)));
+      run.rates_rad_per_s.push_back(rate);
+      run.inlier.push_back(true);
+    }
+    const BearingClockEstimate clock = EstimateBearingClock({run}, sigma, 0);
+    ASSERT_TRUE(clock.tested);
+    if (missed == 0) {
+      EXPECT_GE(clock.skipped_samples, 20);  // Noise's doing, ...
+      EXPECT_FALSE(clock.free_running);      // ... and taken as such.
+      EXPECT_FALSE(clock.period_determined);
+    } else {
+      EXPECT_GE(clock.skipped_samples, 90);
+      EXPECT_TRUE(clock.free_running);
+      EXPECT_TRUE(clock.period_determined);
+    }
+  }
 }
 
 TEST(BearingTimingTest, DISABLED_PickUpStudy) {
