@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <utility>
 
 namespace calib {
@@ -85,7 +86,10 @@ BearingProblem::BearingProblem(const BearingLog& log, const BearingParams& initi
                                const std::vector<std::vector<Pose2d>>& world_T_robot,
                                const BearingNoise& noise, const BearingAdjustmentOptions& options)
     : log_(&log), nodes_(BearingNodes(log)), options_(options), noise_(noise) {
-  loss_ = MakeLossFunction(options.loss, options.loss_scale);
+  if (options.loss != RobustLoss::kNone) {
+    loss_ = std::make_unique<ceres::LossFunctionWrapper>(
+        MakeLossFunction(options.loss, options.loss_scale).release(), ceres::TAKE_OWNERSHIP);
+  }
   ceres::Problem::Options problem_options;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.enable_fast_removal = false;
@@ -239,10 +243,26 @@ std::vector<double> BearingProblem::BearingSigmas() const {
 }
 
 Status BearingProblem::Solve(ceres::Solver::Summary* summary) {
-  CALIB_RETURN_IF_ERROR(
-      calib::Solve(BearingAdjustmentSettings(options_.max_iterations, options_.num_threads,
-                                             options_.initial_trust_region_radius),
-                   "the bundle adjustment", problem_.get(), summary));
+  const auto solve = [&](ceres::Solver::Summary* stage) {
+    return calib::Solve(BearingAdjustmentSettings(options_.max_iterations, options_.num_threads,
+                                                  options_.initial_trust_region_radius),
+                        "the bundle adjustment", problem_.get(), stage);
+  };
+  ceres::Solver::Summary own;
+  if (summary == nullptr) summary = &own;
+  if (redescends() && !redescended_) {
+    // Tukey's loss is not convex: it starts from the optimum of the first loss.
+    ceres::Solver::Summary first;
+    CALIB_RETURN_IF_ERROR(solve(&first));
+    loss_->Reset(MakeLossFunction(RobustLoss::kTukey, options_.redescending_scale).release(),
+                 ceres::TAKE_OWNERSHIP);
+    redescended_ = true;
+    CALIB_RETURN_IF_ERROR(solve(summary));
+    summary->iterations.insert(summary->iterations.begin(), first.iterations.begin(),
+                               first.iterations.end());
+  } else {
+    CALIB_RETURN_IF_ERROR(solve(summary));
+  }
   for (double v : calibration_) {
     if (!std::isfinite(v)) return Status::NotConverged("the bundle adjustment diverged");
   }
@@ -331,6 +351,14 @@ std::vector<BearingProblem::BearingTermInfo> BearingProblem::BearingTerms() cons
     out.push_back(info);
   }
   return out;
+}
+
+std::string BearingLossStages(const BearingAdjustmentOptions& options) {
+  std::string text = RobustLossName(options.loss);
+  if (options.loss == RobustLoss::kNone || !(options.redescending_scale > 0.0)) return text;
+  char scale[32];
+  std::snprintf(scale, sizeof(scale), "%g", options.redescending_scale);
+  return text + ", then tukey (" + scale + ")";
 }
 
 }  // namespace calib

@@ -64,6 +64,11 @@ struct BearingNoise {
 struct BearingAdjustmentOptions {
   RobustLoss loss = RobustLoss::kCauchy;
   double loss_scale = 3.0;  // Of the bearing loss, in units of σβ.
+  // The last passes, from the optimum under `loss`, use Tukey's biweight at this scale (σβ): a
+  // gross bearing then has no influence, where under Cauchy it leaks a fixed bias that a σ
+  // shrinking as 1/√N stops covering (20 % of bearings 6–17° off to one side put ψ 13σ off at
+  // 10 000 bearings). 0: stay with `loss`; unused without a robust loss.
+  double redescending_scale = 6.0;
   int max_iterations = 200;
   int num_threads = 1;
   double initial_trust_region_radius = 1e10;
@@ -126,6 +131,8 @@ class BearingProblem {
   BearingProblem(const BearingProblem&) = delete;
   BearingProblem& operator=(const BearingProblem&) = delete;
 
+  // Solves; the first solve of a redescending problem runs under `loss`, then under Tukey's
+  // biweight from that optimum (the summary then holds both stages' iterations).
   Status Solve(ceres::Solver::Summary* summary = nullptr);
 
   BearingParams params() const;
@@ -249,7 +256,12 @@ class BearingProblem {
   // bearing rates the jitter weighs them with (computed while a jitter is set).
   std::vector<double> inverse_bearing_sigma_;
   std::vector<double> bearing_rates_;
-  std::unique_ptr<ceres::LossFunction> loss_;
+  bool redescends() const {
+    return options_.loss != RobustLoss::kNone && options_.redescending_scale > 0.0;
+  }
+
+  std::unique_ptr<ceres::LossFunctionWrapper> loss_;  // Null without a robust loss.
+  bool redescended_ = false;
   std::unique_ptr<ceres::Problem> problem_;
   std::vector<OdometryTerm> odometry_;
   std::vector<BearingTerm> bearings_;
@@ -271,6 +283,9 @@ StatusOr<BearingEstimateCovariance> EstimateCovariance(const BearingProblem& pro
                                                        const BearingLog& log,
                                                        const BearingParams& at,
                                                        bool loss_correction = true);
+
+// The losses an adjustment with `options` ends with, e.g. "cauchy, then tukey (6)".
+std::string BearingLossStages(const BearingAdjustmentOptions& options);
 
 // The index in log.runs of the run the initial distance is given for (log.runs.size() without).
 size_t InitialDistanceRun(const BearingLog& log);

@@ -242,9 +242,13 @@ const std::vector<std::string>& BearingCovariateNames() {
 }
 
 StatusOr<BearingDiagnosis> DiagnoseBearing(const BearingLog& log,
-                                           const BearingDiagnosisOptions& options) {
+                                           const BearingDiagnosisOptions& given) {
   using namespace bearing_diagnosis;  // NOLINT: the adapter's internals.
   const auto clock = std::chrono::steady_clock::now();
+  // Every fit here keeps the first loss, as the laser's diagnosis does: its tests compare costs
+  // and scores under one loss, and an effect a redescending loss would reject still shows.
+  BearingDiagnosisOptions options = given;
+  options.calibration.adjustment.redescending_scale = 0.0;
   Steps steps(log, options, log.source.empty() ? "bearing log" : log.source, LogStart(log));
   // The base model takes the stamps as sample times: τ is the candidate tested here (and the
   // series, held-out blocks and inlier cuts below weigh every bearing by one σβ).

@@ -60,7 +60,8 @@ double BearingProblem::LossCorrection() const {
 std::vector<double*> BearingProblem::Latents() const {
   std::vector<double*> latents;
   for (size_t i = 0; i < poses_.size(); ++i) {
-    for (size_t k = 0; k < poses_[i].size(); ++k) latents.push_back(const_cast<double*>(Node(i, k)));
+    for (size_t k = 0; k < poses_[i].size(); ++k)
+      latents.push_back(const_cast<double*>(Node(i, k)));
   }
   return latents;
 }

@@ -22,6 +22,9 @@ constexpr double kMinRedundancy = 2.0;
 constexpr double kMinOdometryRedundancy = 0.5;
 // Bounds of the estimated noise levels (rad, m^½).
 constexpr double kMinSigma = 1e-8, kMaxSigma = 0.5, kMinK = 1e-8;
+// The noise rounds start from the fit's robust scale when it is below this share of σβ.
+// (Not on noise-free logs: below kMinStartSigma (rad) the bearings' weights swamp the odometry.)
+constexpr double kStartBelow = 0.8, kMinStartSigma = 1e-6;
 
 double Seconds(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -340,6 +343,22 @@ StatusOr<BearingMask> EstimateNoise(const BearingCalibrationOptions& options,
                                     BearingCalibrationResult* result) {
   const double cut = std::sqrt(options.inlier_chi2);
   const double kept_variance = TruncatedVariance(cut);
+  // The rounds have a second, inflated fixed point where gross bearings pass the inlier cut of an
+  // inflated σβ, and the neighbours' scatter they start from can lie beyond it (20 % of bearings
+  // 6–17° off to one side: a scatter of 3.5° for σβ = 1°, kept, with ψ 13σ off). Well above the
+  // fit's own robust scale (its median error, shrunk by the leverages), they start from that
+  // instead: from below they rise to the fixed point the inliers make.
+  const double robust = RobustSigma(problem->BearingErrors());
+  if (!options.bearing_sigma_rad && robust > kMinStartSigma &&
+      robust < kStartBelow * problem->noise().bearing_sigma_rad) {
+    BearingNoise lower = problem->noise();
+    lower.bearing_sigma_rad = robust;
+    progress("noise: σβ from the fit's median error, " +
+             Num(lower.bearing_sigma_rad * 180.0 / M_PI) + "°, below the neighbours' scatter");
+    problem->SetNoise(lower);
+    CALIB_RETURN_IF_ERROR(problem->Solve(summary));
+    result->iterations += static_cast<int>(summary->iterations.size());
+  }
   for (int round = 0; round < options.noise_rounds; ++round) {
     CALIB_ASSIGN_OR_RETURN(const BearingVarianceComponents vc,
                            problem->VarianceComponents(ClassifyInliers(*problem, cut)));
@@ -390,6 +409,7 @@ StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
     return Status::InvalidInput("the encoder noise K must be non-negative");
   }
   BearingCalibrationResult result;
+  result.loss = BearingLossStages(options.adjustment);
   auto clock = std::chrono::steady_clock::now();
 
   // Bearings that disagree with their neighbours in time are left out of the seeds; the

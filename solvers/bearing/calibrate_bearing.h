@@ -146,6 +146,7 @@ struct BearingCalibrationResult {
   double covariance_scale = 1.0;                   // κ.
   int iterations = 0;
   bool converged = true;  // The final adjustment stopped by a convergence test.
+  std::string loss;       // The adjustment's losses, e.g. "cauchy, then tukey (6)".
   // What the calibration modelled of the timing (τ with σ, the stamp jitter; see above).
   BearingTiming timing;
   // What went wrong on the way without stopping the calibration (e.g. no convergence).

@@ -113,6 +113,10 @@ StatusOr<BearingInput> ReadBearingInput(const CalibrateOptions& flags) {
   CALIB_ASSIGN_OR_RETURN(input.calibration.adjustment.loss,
                          ParseLossFlags(flags.loss, flags.loss_scale));
   input.calibration.adjustment.loss_scale = flags.loss_scale;
+  if (!(flags.redescending_scale >= 0.0) || !std::isfinite(flags.redescending_scale)) {
+    return Status::InvalidInput("--redescending_scale must be 0 (off) or a positive number");
+  }
+  input.calibration.adjustment.redescending_scale = flags.redescending_scale;
   input.calibration.adjustment.num_threads = 2;
   CALIB_ASSIGN_OR_RETURN(input.log, ReadBearingLog(flags.input));
   if (flags.time_offset_s) {

@@ -99,6 +99,7 @@ nlohmann::ordered_json BearingResultJson(const BearingCalibrationResult& result,
   out["converged"] = result.converged;
   out["warnings"] = result.warnings;
   out["loss"] = loss;
+  out["loss_stages"] = result.loss.empty() ? loss : result.loss;
   out["gauge"] =
       result.has_metric
           ? "metric: the initial distance fixes the scale; eta, delta, xi are the observable set"
@@ -169,7 +170,8 @@ std::string BearingResultSummary(const BearingCalibrationResult& result, const s
   char line[256];
   std::snprintf(line, sizeof(line),
                 "%s: bearing-only calibration, %zu runs, %d bearings (%d inliers), loss %s\n",
-                input.c_str(), result.runs.size(), result.samples, result.inliers, loss.c_str());
+                input.c_str(), result.runs.size(), result.samples, result.inliers,
+                result.loss.empty() ? loss.c_str() : result.loss.c_str());
   text += line;
   std::snprintf(
       line, sizeof(line), "  %-14s %14s   %-12s %14s\n", "parameter", "estimate", "± σ",
