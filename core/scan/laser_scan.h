@@ -30,6 +30,11 @@ struct LaserScan {
 
   double BeamAngle(int i) const { return angle_min_rad + i * angle_increment_rad; }
   double BeamTime(int i) const { return stamp_s + i * time_increment_s; }
+  // From the first beam's time to the last's, (n − 1)·time_increment_s (negative for a scan whose
+  // beams run backwards in time, e.g. mirrored).
+  double SweepSeconds() const {
+    return ranges_m.empty() ? 0.0 : time_increment_s * (static_cast<double>(ranges_m.size()) - 1.0);
+  }
   bool IsReturn(int i) const {
     const float r = ranges_m[i];
     return r == r && r >= range_min_m && r <= range_max_m && r < 1e30f;

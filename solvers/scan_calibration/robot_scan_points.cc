@@ -51,8 +51,7 @@ StatusOr<ScanPointCalibration> RefineRobotOnScanPoints(const RobotMessages& bag,
       continue;
     }
     // Mirrored, the beams keep their times: the first is the last measured.
-    const double sweep_s =
-        scans[i].time_increment_s * (static_cast<double>(scans[i].ranges_m.size()) - 1.0);
+    const double sweep_s = scans[i].SweepSeconds();
     mirrored.push_back(MirroredScan(scans[i]));
     mirrored.back().time_increment_s = -scans[i].time_increment_s;
     mirrored.back().stamp_s += sweep_s;

@@ -7,10 +7,6 @@
 namespace calib {
 namespace {
 
-double SweepSeconds(const LaserScan& scan) {
-  return scan.time_increment_s * (static_cast<double>(scan.ranges_m.size()) - 1.0);
-}
-
 Eigen::Vector2d Apply(const Pose2d& pose, const Eigen::Vector2d& p) {
   return Compose(pose, Pose2d(p.x(), p.y(), 0.0)).head<2>();
 }
@@ -113,7 +109,7 @@ Status FindPairLines(const ScanPointInput& input, const LaserCalibration& c, dou
     return Between(stamp_pose, LaserMotion(pair->timeline, knots, c, t));
   };
   ScanPointsOptions deskew;
-  const double ref_sweep_s = SweepSeconds(ref);
+  const double ref_sweep_s = ref.SweepSeconds();
   if (ref_sweep_s > 0.0) {  // One piece per encoder step, as the matcher de-skews.
     const double min_step_s = 1e-6 * ref_sweep_s, end_s = t_ref + ref_sweep_s;
     std::vector<double> knots{t_ref};
@@ -141,7 +137,7 @@ Status FindPairLines(const ScanPointInput& input, const LaserCalibration& c, dou
   }
   std::vector<Correspondence> found;
   FindBeamCorrespondences(ref_points, cur_in_ref, options.correspondence, &found);
-  const double cur_angle = from_stamp(t_cur + SweepSeconds(cur) / 2)(2);
+  const double cur_angle = from_stamp(t_cur + cur.SweepSeconds() / 2)(2);
   ScanPairGeometry& g = pair->geometry;
   g = ScanPairGeometry();
   g.steps = pair->timeline.steps;

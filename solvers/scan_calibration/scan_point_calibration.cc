@@ -18,8 +18,7 @@ constexpr int kMinPairs = 12;
 // The earliest and the latest beam's time (a mirrored scan's beams run backwards in time).
 double BeamTime(const ScanPointInput& in, int i, bool latest) {
   const LaserScan& s = *in.scans[i];
-  const double last =
-      in.first_beam_time_s[i] + s.time_increment_s * (static_cast<double>(s.ranges_m.size()) - 1.0);
+  const double last = in.first_beam_time_s[i] + s.SweepSeconds();
   return latest ? std::max(last, in.first_beam_time_s[i]) : std::min(last, in.first_beam_time_s[i]);
 }
 

@@ -109,10 +109,6 @@ bool SameSample(const LaserScan& a, const LaserScan& b) {
          std::memcmp(a.ranges_m.data(), b.ranges_m.data(), a.ranges_m.size() * sizeof(float)) == 0;
 }
 
-double SweepSeconds(const LaserScan& scan) {
-  return scan.time_increment_s * static_cast<double>(scan.ranges_m.size());
-}
-
 // The longest sweep taken as one (max_sweep_periods of the median step between the stamps), and
 // a warning when some scans' sweeps are longer.
 double MaxSweep(const std::vector<const LaserScan*>& scans, const ScanLogOptions& options,
@@ -128,18 +124,18 @@ double MaxSweep(const std::vector<const LaserScan*>& scans, const ScanLogOptions
   int longer = 0;
   const LaserScan* first = nullptr;
   for (const LaserScan* scan : scans) {
-    if (std::abs(SweepSeconds(*scan)) <= max_sweep_s) continue;
+    if (std::abs(scan->SweepSeconds()) <= max_sweep_s) continue;
     ++longer;
     if (first == nullptr) first = scan;
   }
   if (longer > 0) {
     const auto seconds = [](double t) { return Num(std::round(t * 1e6) / 1e6) + " s"; };
-    warnings->push_back(scans_name + ": " + std::to_string(longer) + " scan(s) (first: record " +
-                        std::to_string(first->record) +
-                        ") sweep for time_increment × beams = " + seconds(SweepSeconds(*first)) +
-                        ", longer than the scans' period " + seconds(period_s) +
-                        " (is time_increment in another unit?): those scans are taken as "
-                        "instantaneous, not de-skewed");
+    warnings->push_back(
+        scans_name + ": " + std::to_string(longer) + " scan(s) (first: record " +
+        std::to_string(first->record) + ") sweep for time_increment × (beams − 1) = " +
+        seconds(first->SweepSeconds()) + ", longer than the scans' period " + seconds(period_s) +
+        " (is time_increment in another unit?): those scans are taken as "
+        "instantaneous, not de-skewed");
   }
   return max_sweep_s;
 }
@@ -157,7 +153,7 @@ StatusOr<ScanOdometryResult> MatchRun(const std::vector<const LaserScan*>& scans
       guess = NominalSensorMotion(encoders, scans[i - 1]->stamp_s, scan.stamp_s, options);
     }
     std::optional<SweepMotion> sweep;
-    const double sweep_s = SweepSeconds(scan);
+    const double sweep_s = scan.SweepSeconds();
     if (options.deskew && nominal && sweep_s > 0.0 && sweep_s <= max_sweep_s) {
       sweep = NominalSweep(encoders, scan.stamp_s, sweep_s, options);
     }
