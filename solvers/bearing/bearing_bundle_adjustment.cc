@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <utility>
 
 namespace calib {
@@ -248,21 +249,15 @@ Status BearingProblem::Solve(ceres::Solver::Summary* summary) {
                                                   options_.initial_trust_region_radius),
                         "the bundle adjustment", problem_.get(), stage);
   };
-  ceres::Solver::Summary own;
-  if (summary == nullptr) summary = &own;
+  std::function<void()> redescend;
   if (redescends() && !redescended_) {
-    // Tukey's loss is not convex: it starts from the optimum of the first loss.
-    ceres::Solver::Summary first;
-    CALIB_RETURN_IF_ERROR(solve(&first));
-    loss_->Reset(MakeLossFunction(RobustLoss::kTukey, options_.redescending_scale).release(),
-                 ceres::TAKE_OWNERSHIP);
-    redescended_ = true;
-    CALIB_RETURN_IF_ERROR(solve(summary));
-    summary->iterations.insert(summary->iterations.begin(), first.iterations.begin(),
-                               first.iterations.end());
-  } else {
-    CALIB_RETURN_IF_ERROR(solve(summary));
+    redescend = [this] {
+      loss_->Reset(MakeLossFunction(RobustLoss::kTukey, options_.redescending_scale).release(),
+                   ceres::TAKE_OWNERSHIP);
+      redescended_ = true;
+    };
   }
+  CALIB_RETURN_IF_ERROR(SolveInStages(solve, redescend, summary));
   for (double v : calibration_) {
     if (!std::isfinite(v)) return Status::NotConverged("the bundle adjustment diverged");
   }

@@ -82,6 +82,20 @@ Status Solve(const SolverSettings& settings, const std::string& what, ceres::Pro
   return Status::Ok();
 }
 
+Status SolveInStages(const std::function<Status(ceres::Solver::Summary*)>& solve,
+                     const std::function<void()>& redescend, ceres::Solver::Summary* summary) {
+  ceres::Solver::Summary own;
+  if (summary == nullptr) summary = &own;
+  if (!redescend) return solve(summary);
+  ceres::Solver::Summary first;
+  CALIB_RETURN_IF_ERROR(solve(&first));
+  redescend();
+  CALIB_RETURN_IF_ERROR(solve(summary));
+  summary->iterations.insert(summary->iterations.begin(), first.iterations.begin(),
+                             first.iterations.end());
+  return Status::Ok();
+}
+
 bool Converged(const ceres::Solver::Summary& summary) {
   return summary.termination_type == ceres::CONVERGENCE ||
          summary.termination_type == ceres::USER_SUCCESS;

@@ -5,6 +5,7 @@
 #include <ceres/ceres.h>
 
 #include <cstddef>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -53,6 +54,12 @@ SolverSettings BearingAdjustmentSettings(int max_iterations, int num_threads,
 // failure here: the caller reads Converged(summary) and reports it.
 Status Solve(const SolverSettings& settings, const std::string& what, ceres::Problem* problem,
              ceres::Solver::Summary* summary);
+
+// A robust problem's solves in two stages: `solve` under its first loss, then, when `redescend`
+// is set, the switch to Tukey's biweight (not convex: it starts from that optimum) and `solve`
+// again; `summary` (when not null) holds both stages' iterations. Without `redescend`, one solve.
+Status SolveInStages(const std::function<Status(ceres::Solver::Summary*)>& solve,
+                     const std::function<void()>& redescend, ceres::Solver::Summary* summary);
 
 // Whether a solve ended by one of its convergence tests (not by its iteration or time limit).
 bool Converged(const ceres::Solver::Summary& summary);

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 
 namespace calib {
 
@@ -110,19 +111,9 @@ Status LaserProblem::Solve(ceres::Solver::Summary* summary) {
                                 options_.per_interval_blocks ? options_.num_threads : 1),
         "the refinement", problem_.get(), stage);
   };
-  ceres::Solver::Summary own;
-  if (summary == nullptr) summary = &own;
-  if (redescends() && !redescended_) {
-    // Tukey's loss is not convex: it starts from the optimum of the first loss.
-    ceres::Solver::Summary first;
-    CALIB_RETURN_IF_ERROR(solve(&first));
-    Redescend();
-    CALIB_RETURN_IF_ERROR(solve(summary));
-    summary->iterations.insert(summary->iterations.begin(), first.iterations.begin(),
-                               first.iterations.end());
-  } else {
-    CALIB_RETURN_IF_ERROR(solve(summary));
-  }
+  std::function<void()> redescend;
+  if (redescends() && !redescended_) redescend = [this] { Redescend(); };
+  CALIB_RETURN_IF_ERROR(SolveInStages(solve, redescend, summary));
   if (!(odometry_[0] > 0.0 && odometry_[1] > 0.0 && odometry_[2] > 0.0)) {
     return Status::NotObservable(
         "the refinement drove a wheel radius or the wheelbase to a non-positive "
