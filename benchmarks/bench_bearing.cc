@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -405,21 +406,34 @@ nlohmann::ordered_json ScalingSection(const BenchConfig& config) {
       "s) rad/s about a straight line at 0.05 m/s, landmark 1 m to the left at the start), "
       "bearings "
       "at 1 Hz with σβ = 1°, encoders at 50 Hz; CalibrateBearing end to end on %d threads "
-      "(seed search, adjustments with the noise levels and the timing tests, covariance).\n",
+      "(seed search, adjustments with the noise levels and the timing tests, covariance); the "
+      "largest again with a fifth of its bearings 6–17° off to one side.\n",
       config.threads);
   std::vector<int> sizes = {300, 1000, 3000};
   if (!config.quick) sizes.push_back(10000);
-  TextTable table({"bearings", "seconds", "ms/bearing", "max |z|"});
+  // The largest again with a fifth of its bearings 6–17° off to one side (a reflection beside
+  // the landmark): the bias such bearings leave grows against a σ that shrinks as 1/√N.
+  sizes.push_back(-sizes.back());
+  TextTable table({"bearings", "seconds", "ms/bearing", "σβ (deg)", "max |z|"});
   nlohmann::ordered_json rows = nlohmann::ordered_json::array();
   std::vector<double> n_values, seconds_values;
-  for (int n : sizes) {
+  for (int signed_n : sizes) {
+    const int n = std::abs(signed_n);
+    const bool gross = signed_n < 0;
     BearingSimOptions o;
     o.bearing_noise_rad = 1.0 / kDeg;
     o.runs = {WeavingRun(n - 1.0)};
     o.initial_distance_run = 1;
     o.seed = 9000 + n;
     BearingSimTruth truth;
-    const BearingLog log = SimulateBearingLog(o, &truth);
+    BearingLog log = SimulateBearingLog(o, &truth);
+    std::mt19937_64 rng(o.seed);
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    for (BearingSample& b : log.runs[0].bearings) {
+      if (gross && uniform(rng) < 0.2) {
+        b.bearing_rad = WrapAngle(b.bearing_rad + 0.2 * (0.5 + uniform(rng)));
+      }
+    }
     BearingCalibrationOptions options;
     options.adjustment.num_threads = config.threads;
     const Stopwatch watch;
@@ -434,12 +448,17 @@ nlohmann::ordered_json ScalingSection(const BenchConfig& config) {
         max_z = std::max(max_z, std::abs(d / result->stddev(i)));
       }
     }
-    table.AddRow({std::to_string(n), Format("%.2f", seconds), Format("%.2f", 1e3 * seconds / n),
+    const double sigma_deg = result.ok() ? result->noise.bearing_sigma_rad * kDeg : NAN;
+    table.AddRow({std::to_string(n) + (gross ? ", 20 % gross" : ""), Format("%.2f", seconds),
+                  Format("%.2f", 1e3 * seconds / n), Format("%.3f", sigma_deg),
                   result.ok() ? Format("%.2f", max_z) : "failed: " + result.message()});
     rows.push_back({{"bearings", n},
+                    {"gross_share", gross ? 0.2 : 0.0},
                     {"seconds", seconds},
                     {"ok", result.ok()},
+                    {"sigma_beta_deg", sigma_deg},
                     {"max_abs_z", result.ok() ? nlohmann::ordered_json(max_z) : nullptr}});
+    if (gross) continue;
     n_values.push_back(n);
     seconds_values.push_back(seconds);
   }
