@@ -9,7 +9,6 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <functional>
 #include <utility>
 
@@ -346,14 +345,6 @@ std::vector<BearingProblem::BearingTermInfo> BearingProblem::BearingTerms() cons
     out.push_back(info);
   }
   return out;
-}
-
-std::string BearingLossStages(const BearingAdjustmentOptions& options) {
-  std::string text = RobustLossName(options.loss);
-  if (options.loss == RobustLoss::kNone || !(options.redescending_scale > 0.0)) return text;
-  char scale[32];
-  std::snprintf(scale, sizeof(scale), "%g", options.redescending_scale);
-  return text + ", then tukey (" + scale + ")";
 }
 
 }  // namespace calib

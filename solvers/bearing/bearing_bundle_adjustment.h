@@ -284,9 +284,6 @@ StatusOr<BearingEstimateCovariance> EstimateCovariance(const BearingProblem& pro
                                                        const BearingParams& at,
                                                        bool loss_correction = true);
 
-// The losses an adjustment with `options` ends with, e.g. "cauchy, then tukey (6)".
-std::string BearingLossStages(const BearingAdjustmentOptions& options);
-
 // The index in log.runs of the run the initial distance is given for (log.runs.size() without).
 size_t InitialDistanceRun(const BearingLog& log);
 

@@ -43,8 +43,8 @@ int CountedPeriods(const BearingClockRun& run, size_t k, double step_s, double s
   return static_cast<int>(whole);
 }
 
-// The chance that noise alone lifts a counted step of `stamp_periods` by one period or more:
-// its noise (σβ·√2) beyond (1 − kWholeTolerance) of one period's change.
+// The chance that noise alone lifts a counted step by one period or more: its noise (σβ·√2)
+// beyond (1 − kWholeTolerance) of one period's change.
 double FalseSkipChance(double change_rad, double sigma_rad) {
   return 0.5 * std::erfc((1.0 - kWholeTolerance) * std::abs(change_rad) / (2.0 * sigma_rad));
 }

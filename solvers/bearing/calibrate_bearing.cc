@@ -409,7 +409,7 @@ StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
     return Status::InvalidInput("the encoder noise K must be non-negative");
   }
   BearingCalibrationResult result;
-  result.loss = BearingLossStages(options.adjustment);
+  result.loss = LossStagesName(options.adjustment.loss, options.adjustment.redescending_scale);
   auto clock = std::chrono::steady_clock::now();
 
   // Bearings that disagree with their neighbours in time are left out of the seeds; the

@@ -1,5 +1,7 @@
 #include <calib/solvers/common/robust_loss.h>
 
+#include <cstdio>
+
 namespace calib {
 
 StatusOr<RobustLoss> ParseRobustLoss(const std::string& name) {
@@ -9,6 +11,14 @@ StatusOr<RobustLoss> ParseRobustLoss(const std::string& name) {
   if (name == "tukey") return RobustLoss::kTukey;
   return Status::InvalidInput("unknown loss '" + name +
                               "' (expected cauchy, huber, tukey or none)");
+}
+
+std::string LossStagesName(RobustLoss first, double redescending_scale) {
+  std::string text = RobustLossName(first);
+  if (first == RobustLoss::kNone || !(redescending_scale > 0.0)) return text;
+  char scale[32];
+  std::snprintf(scale, sizeof(scale), "%g", redescending_scale);
+  return text + ", then tukey (" + scale + ")";
 }
 
 std::string RobustLossName(RobustLoss loss) {

@@ -16,6 +16,9 @@ enum class RobustLoss { kCauchy, kHuber, kNone, kTukey };
 // "cauchy", "huber", "none", "tukey".
 StatusOr<RobustLoss> ParseRobustLoss(const std::string& name);
 std::string RobustLossName(RobustLoss loss);
+// The losses a fit ends with: `first`, then Tukey's biweight at `redescending_scale` when that is
+// positive and `first` robust, e.g. "cauchy, then tukey (6)".
+std::string LossStagesName(RobustLoss first, double redescending_scale);
 
 // The Ceres loss with the given scale on the whitened residual norm; null for kNone.
 std::unique_ptr<ceres::LossFunction> MakeLossFunction(RobustLoss loss, double scale);

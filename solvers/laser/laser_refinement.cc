@@ -130,11 +130,7 @@ void LaserProblem::Redescend() {
 }
 
 std::string LaserProblem::LossDescription() const {
-  std::string text = RobustLossName(options_.loss);
-  if (!redescends()) return text;
-  char scale[32];
-  std::snprintf(scale, sizeof(scale), "%g", options_.redescending_scale);
-  return text + ", then tukey (" + scale + ")";
+  return LossStagesName(options_.loss, redescends() ? options_.redescending_scale : 0.0);
 }
 
 LaserCalibration LaserProblem::calibration() const {

@@ -122,9 +122,7 @@ void Redescend(const StreamSamples& data, const LaserTimingOptions& options, Tim
     return;
   }
   *best = std::move(redescended);
-  char scale[32];
-  std::snprintf(scale, sizeof(scale), "%g", refinement.redescending_scale);
-  *loss += std::string(", then tukey (") + scale + ")";
+  *loss = LossStagesName(refinement.loss, refinement.redescending_scale);
 }
 
 void FillCalibration(const TimingModelFit& fit, const LaserCalibrationOptions& options,
