@@ -125,8 +125,8 @@ Status BandArrowProblem::Covariance(const std::vector<const double*>& blocks,
       } else if (latent[a] != latent[b]) {
         tangent_cov(a, b) = latent[a] ? -xs(ca, cb) : -xs(cb, ca);
       } else {
-        const int nb = static_cast<int>(std::find(latent_at.begin(), latent_at.end(), b) -
-                                        latent_at.begin());
+        const int nb =
+            static_cast<int>(std::find(latent_at.begin(), latent_at.end(), b) - latent_at.begin());
         tangent_cov(a, b) = a_inverse(ca, nb) + xs.row(ca).dot(x.row(cb));
       }
     }
@@ -146,8 +146,7 @@ Status BandArrowProblem::Covariance(const std::vector<const double*>& blocks,
     for (size_t b = 0; b < blocks.size(); ++b) {
       if (first[b] < 0) continue;
       covariance->block(ambient_first[a], ambient_first[b], sizes[a], sizes[b]) =
-          pa * tangent_cov.block(first[a], first[b], tangent[a], tangent[b]) *
-          lift(b).transpose();
+          pa * tangent_cov.block(first[a], first[b], tangent[a], tangent[b]) * lift(b).transpose();
     }
   }
   if (leverages == nullptr) return Status::Ok();

@@ -82,8 +82,8 @@ class BandArrowProblem {
   // ρ′·tr(J·Σ·Jᵀ) of every residual block in the problem's order. Fails with kNotObservable when
   // the information is singular.
   Status Covariance(const std::vector<const double*>& blocks, const std::vector<int>& sizes,
-                    int num_threads,
-                    Eigen::MatrixXd* covariance, std::vector<double>* leverages) const;
+                    int num_threads, Eigen::MatrixXd* covariance,
+                    std::vector<double>* leverages) const;
 
   int globals() const { return globals_; }
   int latents() const { return latent_columns_; }  // Tangent columns of the latent blocks.

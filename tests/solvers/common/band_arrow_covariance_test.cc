@@ -60,15 +60,15 @@ struct Chain {
     for (int i = 0; i < n; ++i) {
       double beta = std::atan2(truth[i].y(), truth[i].x()) - 0.02 + 0.01 * noise(rng);
       if (i % 29 == 3) beta += 0.3;  // Outliers.
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<BearingTerm, 1, 2, 1>(
-                                   new BearingTerm(beta)),
-                               &loss, p[i].data(), &offset);
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<BearingTerm, 1, 2, 1>(new BearingTerm(beta)), &loss,
+          p[i].data(), &offset);
       if (i > 0) {
         const Eigen::Vector2d u =
             (truth[i] - truth[i - 1]) / 1.1 + 0.002 * Eigen::Vector2d(noise(rng), noise(rng));
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<StepTerm, 2, 2, 2, 1>(
-                                     new StepTerm(u, 0.002)),
-                                 nullptr, p[i - 1].data(), p[i].data(), &scale);
+        problem.AddResidualBlock(
+            new ceres::AutoDiffCostFunction<StepTerm, 2, 2, 2, 1>(new StepTerm(u, 0.002)), nullptr,
+            p[i - 1].data(), p[i].data(), &scale);
       }
     }
     problem.SetManifold(p[0].data(), new ceres::SubsetManifold(2, {0}));
@@ -113,7 +113,8 @@ TEST(BandArrowCovarianceTest, BlockLatentsReachCeresOptimum) {
   EXPECT_NEAR(band.scale, reference.scale, 1e-8);
   EXPECT_NEAR(band.offset, reference.offset, 1e-8);
   EXPECT_EQ(band.p[0].x(), reference.p[0].x());  // Held by its manifold.
-  for (size_t i = 0; i < band.p.size(); ++i) EXPECT_NEAR((band.p[i] - reference.p[i]).norm(), 0, 1e-7);
+  for (size_t i = 0; i < band.p.size(); ++i)
+    EXPECT_NEAR((band.p[i] - reference.p[i]).norm(), 0, 1e-7);
 }
 
 TEST(BandArrowCovarianceTest, MatchesCeresCovarianceAndItsLeverages) {
@@ -130,7 +131,9 @@ TEST(BandArrowCovarianceTest, MatchesCeresCovarianceAndItsLeverages) {
   covariance_options.algorithm_type = ceres::SPARSE_QR;
   ceres::Covariance covariance(covariance_options);
   std::set<std::pair<const double*, const double*>> pairs;
-  const auto add = [&](const double* a, const double* b) { pairs.emplace(std::min(a, b), std::max(a, b)); };
+  const auto add = [&](const double* a, const double* b) {
+    pairs.emplace(std::min(a, b), std::max(a, b));
+  };
   for (size_t a = 0; a < blocks.size(); ++a) {
     for (size_t b = a; b < blocks.size(); ++b) add(blocks[a], blocks[b]);
   }
@@ -146,8 +149,8 @@ TEST(BandArrowCovarianceTest, MatchesCeresCovarianceAndItsLeverages) {
   Eigen::Matrix<double, 8, 8, Eigen::RowMajor> joint;
   ASSERT_TRUE(covariance.GetCovarianceMatrix(blocks, joint.data()));
   const double norm = joint.norm();
-  EXPECT_LT((ours->blocks - Eigen::MatrixXd(joint)).norm(), 1e-8 * norm)
-      << ours->blocks << "\n\n" << joint;
+  EXPECT_LT((ours->blocks - Eigen::MatrixXd(joint)).norm(), 1e-8 * norm) << ours->blocks << "\n\n"
+                                                                         << joint;
 
   // Leverages: ρ′·tr(J·C·Jᵀ) from Ceres' blocks, for every residual; they sum to the free
   // parameters (2 per point, 1 for the first, and the two globals).
@@ -208,9 +211,9 @@ TEST(BandArrowCovarianceTest, SingularInformationIsNotObservable) {
       chain.problem.RemoveResidualBlock(id);
     }
   }
-  chain.problem.AddResidualBlock(new ceres::AutoDiffCostFunction<BearingTerm, 1, 2, 1>(
-                                     new BearingTerm(0.1)),
-                                 nullptr, chain.p[3].data(), &chain.offset);
+  chain.problem.AddResidualBlock(
+      new ceres::AutoDiffCostFunction<BearingTerm, 1, 2, 1>(new BearingTerm(0.1)), nullptr,
+      chain.p[3].data(), &chain.offset);
   const StatusOr<BandArrowCovariance> singular =
       ComputeBandArrowCovariance(chain.Latents(), {&chain.offset}, true, 1, &chain.problem);
   EXPECT_EQ(singular.code(), StatusCode::kNotObservable) << singular.message();
