@@ -13,6 +13,8 @@
 #include <utility>
 #include <vector>
 
+#include "tests/solvers/common/band_arrow_test_options.h"
+
 namespace calib {
 namespace {
 
@@ -87,12 +89,7 @@ struct Chain {
 };
 
 void SolveWithCeres(ceres::Problem* problem) {
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  options.function_tolerance = 1e-15;
-  options.gradient_tolerance = 1e-14;
-  options.parameter_tolerance = 1e-15;
-  options.max_num_iterations = 500;
+  const ceres::Solver::Options options = band_arrow_test::TightCeresOptions();
   ceres::Solver::Summary summary;
   ceres::Solve(options, problem, &summary);
   ASSERT_TRUE(summary.IsSolutionUsable());
@@ -100,11 +97,7 @@ void SolveWithCeres(ceres::Problem* problem) {
 
 TEST(BandArrowCovarianceTest, BlockLatentsReachCeresOptimum) {
   Chain band(200), reference(200);
-  BandArrowOptions options;
-  options.function_tolerance = 1e-14;
-  options.gradient_tolerance = 1e-12;
-  options.parameter_tolerance = 1e-14;
-  options.max_iterations = 200;
+  const BandArrowOptions options = band_arrow_test::TightBandArrowOptions();
   BandArrowSummary summary;
   ASSERT_TRUE(SolveBandArrow(options, band.Latents(), "test", &band.problem, &summary).ok());
   EXPECT_TRUE(summary.converged);

@@ -6,6 +6,8 @@
 #include <random>
 #include <vector>
 
+#include "tests/solvers/common/band_arrow_test_options.h"
+
 namespace calib {
 namespace {
 
@@ -82,23 +84,14 @@ struct Problem {
 
 TEST(BandArrowSolverTest, ReachesCeresOptimum) {
   Problem band(300), reference(300);
-  BandArrowOptions options;
-  options.function_tolerance = 1e-14;
-  options.gradient_tolerance = 1e-12;
-  options.parameter_tolerance = 1e-14;
-  options.max_iterations = 200;
+  const BandArrowOptions options = band_arrow_test::TightBandArrowOptions();
   BandArrowSummary summary;
   ASSERT_TRUE(SolveBandArrow(options, band.Latents(), "test", &band.problem, &summary).ok());
   EXPECT_TRUE(summary.converged);
   EXPECT_EQ(summary.band_width, 1);
   EXPECT_LT(summary.final_cost, summary.initial_cost);
 
-  ceres::Solver::Options ceres_options;
-  ceres_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  ceres_options.function_tolerance = 1e-15;
-  ceres_options.gradient_tolerance = 1e-14;
-  ceres_options.parameter_tolerance = 1e-15;
-  ceres_options.max_num_iterations = 500;
+  const ceres::Solver::Options ceres_options = band_arrow_test::TightCeresOptions();
   ceres::Solver::Summary ceres_summary;
   ceres::Solve(ceres_options, &reference.problem, &ceres_summary);
   EXPECT_NEAR(summary.final_cost, ceres_summary.final_cost, 1e-8 * ceres_summary.final_cost);
