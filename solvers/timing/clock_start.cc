@@ -88,13 +88,34 @@ std::vector<int> MotionPeriods(const std::vector<double>& stamp_ratio,
   return periods;
 }
 
+// Whether `times`, counting whole periods between neighbours, stray from the best regular grid by
+// more than `spread_periods` periods (the spread of their central 98 %): steps that vary and add
+// up, as an irregular sampler's do, however small each step's variation.
+bool StrayFromEveryClock(const std::vector<double>& times, double period, double spread_periods) {
+  if (times.size() < 50 || !(period > 0.0)) return false;
+  std::vector<double> indices = {0.0};
+  for (size_t k = 1; k < times.size(); ++k) {
+    indices.push_back(indices.back() +
+                      std::max(1.0, std::round((times[k] - times[k - 1]) / period)));
+  }
+  const SampleClock clock = FitSampleClock(indices, times);
+  std::vector<double> residual;
+  for (size_t k = 0; k < times.size(); ++k) residual.push_back(times[k] - clock.Time(indices[k]));
+  const size_t low = residual.size() / 100, high = residual.size() - 1 - low;
+  std::nth_element(residual.begin(), residual.begin() + low, residual.end());
+  const double q_low = residual[low];
+  std::nth_element(residual.begin(), residual.begin() + high, residual.end());
+  return residual[high] - q_low > spread_periods * period;
+}
+
 // Stamps on a grid of the period (steps within 5 % of whole periods), that never repeat a
 // sample (a logger's pick-up does when its loop outruns the sensor) and whose steps the motion
 // confirms (a logger slower than the sensor skips samples: double motion in one stamp step) are
 // the sample times up to a small scatter. Their steps count the periods; the motion ratio of a
 // single interval (wheel angles interpolated between polls while the robot accelerates) would
 // only add errors. A logger slower than its sensor skips one sample in hundreds, too few for the
-// 5 % of disagreeing intervals, so the clear skips the motion counts are looked at too.
+// 5 % of disagreeing intervals, so the clear skips the motion counts are looked at too. And steps
+// near whole periods that add up (an irregular sampler's) stray from every grid.
 bool StampsCountPeriods(const StreamSamples& data, const IntervalMotion& m,
                         const std::vector<int>& motion_periods) {
   std::vector<double> off_grid;
@@ -111,7 +132,13 @@ bool StampsCountPeriods(const StreamSamples& data, const IntervalMotion& m,
     return false;
   }
   std::nth_element(off_grid.begin(), off_grid.begin() + off_grid.size() / 2, off_grid.end());
-  return 1.4826 * off_grid[off_grid.size() / 2] < 0.05;
+  if (!(1.4826 * off_grid[off_grid.size() / 2] < 0.05)) return false;
+  // Steps near whole periods do not make a clock when their variations add up: an irregular
+  // sampler's stamps wander from every grid. They name a clock's samples only within half a
+  // period of its grid (5 % steps from white scatter stay within about a sixth).
+  std::vector<double> stamps;
+  for (const StreamSample& sample : data.samples) stamps.push_back(sample.stamp_s);
+  return !StrayFromEveryClock(stamps, data.sensor_period_s, 0.5);
 }
 
 // The clock that names every sample from pick-up stamps: held repeats first, else skips the
@@ -154,25 +181,11 @@ bool StampsCountSensorPeriods(const StreamSamples& data, const LatentTimeState& 
 }
 
 bool TimesStrayFromEveryClock(const StreamSamples& data, const TimingModelFit& stamps) {
-  const double period = data.sensor_period_s;
-  const std::vector<double>& times = stamps.sample_time_s;
-  if (stamps.model != SensorClockModel::kStamps || times.size() < 50 || !(period > 0.0) ||
-      !(stamps.state.sensor_sigma_s < 0.1 * period)) {
+  if (stamps.model != SensorClockModel::kStamps ||
+      !(stamps.state.sensor_sigma_s < 0.1 * data.sensor_period_s)) {
     return false;
   }
-  std::vector<double> indices = {0.0};
-  for (size_t k = 1; k < times.size(); ++k) {
-    indices.push_back(indices.back() +
-                      std::max(1.0, std::round((times[k] - times[k - 1]) / period)));
-  }
-  const SampleClock clock = FitSampleClock(indices, times);
-  std::vector<double> residual;
-  for (size_t k = 0; k < times.size(); ++k) residual.push_back(times[k] - clock.Time(indices[k]));
-  const size_t low = residual.size() / 100, high = residual.size() - 1 - low;
-  std::nth_element(residual.begin(), residual.begin() + low, residual.end());
-  const double q_low = residual[low];
-  std::nth_element(residual.begin(), residual.begin() + high, residual.end());
-  return residual[high] - q_low > period;
+  return StrayFromEveryClock(stamps.sample_time_s, data.sensor_period_s, 1.0);
 }
 
 LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModelFit& stamps,

@@ -19,8 +19,9 @@ namespace calib {
 // caller asks only where no holds or counted skips named the clock's samples.)
 bool TimesStrayFromEveryClock(const StreamSamples& data, const TimingModelFit& stamps);
 
-// Whether the stamps count the sensor's periods: steps within 5 % of whole periods, no held
-// repeats, and the motion (wheels at `state`'s calibration against the measured motion) confirms
+// Whether the stamps count the sensor's periods: steps within 5 % of whole periods that stay
+// within half a period of one regular grid (an irregular sampler's steps near 1 period add up
+// and stray from it), no held repeats, and the motion (wheels at `state`'s calibration against the measured motion) confirms
 // the steps (no skipped samples, under 5 % of the intervals disagreeing). The clock's indices are
 // then the stamps' own, and the clock model needs no stamp model to start from.
 bool StampsCountSensorPeriods(const StreamSamples& data, const LatentTimeState& state);
