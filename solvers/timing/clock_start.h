@@ -21,9 +21,10 @@ bool TimesStrayFromEveryClock(const StreamSamples& data, const TimingModelFit& s
 
 // Whether the stamps count the sensor's periods: steps within 5 % of whole periods that stay
 // within half a period of one regular grid (an irregular sampler's steps near 1 period add up
-// and stray from it), no held repeats, and the motion (wheels at `state`'s calibration against the measured motion) confirms
-// the steps (no skipped samples, under 5 % of the intervals disagreeing). The clock's indices are
-// then the stamps' own, and the clock model needs no stamp model to start from.
+// and stray from it), no held repeats, and the motion (wheels at `state`'s calibration against
+// the measured motion) confirms the steps (no skipped samples, under 5 % of the intervals
+// disagreeing). The clock's indices are then the stamps' own, and the clock model needs no stamp
+// model to start from.
 bool StampsCountSensorPeriods(const StreamSamples& data, const LatentTimeState& state);
 
 // The clock model's starting point from a fit of the stamp model: whole periods per interval
