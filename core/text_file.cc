@@ -69,6 +69,25 @@ void MappedFile::Release(const char* before) const {
   released_ = end;
 }
 
+size_t CountByte(std::string_view text, char byte, const ReleaseText& release) {
+  const char* const end = text.data() + text.size();
+  const auto ahead = [end](const char* q) {
+    return static_cast<size_t>(end - q) > kReleaseTextBytes ? q + kReleaseTextBytes : end;
+  };
+  size_t count = 0;
+  const char* release_at = ahead(text.data());
+  for (const char* q = text.data(); q < end; ++count, ++q) {
+    q = static_cast<const char*>(std::memchr(q, byte, static_cast<size_t>(end - q)));
+    if (q == nullptr) break;
+    if (release && q >= release_at) {
+      release(q);
+      release_at = ahead(q);
+    }
+  }
+  if (release) release(end);
+  return count;
+}
+
 StatusOr<MappedFile> MappedFile::Open(const std::string& path) { return OpenImpl(path, false); }
 
 StatusOr<MappedFile> MappedFile::OpenText(const std::string& path) { return OpenImpl(path, true); }

@@ -4,6 +4,7 @@
 #include <calib/core/text_file.h>
 #include <calib/core/text_number.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <string_view>
@@ -29,6 +30,10 @@ StatusOr<LaserLog> ParseCsv(std::string_view text, const std::string& source,
                                                          {"sm_theta"},
                                                          {"t", /*required=*/false}}));
   LogBuilder builder(source);
+  // An exact reserve saves regrowing a large vector; a file of newlines must not reserve more
+  // records than its bytes can hold ("1,1,1,1,1,1" and its newline).
+  constexpr size_t kMinRecordBytes = 12;
+  builder.Reserve(std::min(CountByte(text, '\n', release), text.size() / kMinRecordBytes));
   size_t released = 0;
   while (true) {
     CALIB_ASSIGN_OR_RETURN(const bool more, csv.Next());

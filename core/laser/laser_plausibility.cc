@@ -33,6 +33,12 @@ std::array<double, kNumQuantities> Quantities(const LaserInterval& interval) {
           interval.sensor_motion.head<2>().norm()};
 }
 
+bool Absurd(const LaserInterval& i) {
+  return !(std::abs(i.duration_s) <= kAbsurdValue && std::abs(i.left_speed) <= kAbsurdValue &&
+           std::abs(i.right_speed) <= kAbsurdValue &&
+           i.sensor_motion.cwiseAbs().maxCoeff() <= kAbsurdValue);
+}
+
 std::string AbsurdField(const LaserInterval& i) {
   const std::pair<const char*, double> fields[] = {
       {"T", i.duration_s},          {"phi_l", i.left_speed},      {"phi_r", i.right_speed},
@@ -44,92 +50,115 @@ std::string AbsurdField(const LaserInterval& i) {
   return "";
 }
 
+// The implausible intervals and why the first of them is. Reasons are formatted only for the
+// intervals a rule breaks (at most `allowed` per rule): a long log's check is a few passes.
 struct Finding {
-  std::vector<std::string> why;  // Per interval: "" when plausible.
-  int count = 0;
+  std::vector<bool> implausible;  // Per interval.
+  size_t count = 0;
+  size_t first = 0;       // The first implausible interval (when count > 0).
+  std::string first_why;  // Its reason: the first rule it broke.
 };
 
-// The absurd values, and the kinds of implausibility a handful of intervals show (`allowed`).
-Finding Judge(const std::vector<LaserInterval>& intervals) {
-  const size_t n = intervals.size();
-  const size_t allowed = std::max<size_t>(2, n / 50);
-  Finding finding;
-  finding.why.assign(n, "");
-  std::vector<std::array<double, kNumQuantities>> values(n);
-  for (size_t k = 0; k < n; ++k) {
-    finding.why[k] = AbsurdField(intervals[k]);
-    values[k] = Quantities(intervals[k]);
-  }
-  // Each rule applies only when few intervals break it.
-  const auto apply = [&](const std::vector<size_t>& broken, const std::vector<std::string>& why) {
-    if (broken.empty() || broken.size() > allowed) return;
-    for (size_t i = 0; i < broken.size(); ++i) {
-      if (finding.why[broken[i]].empty()) finding.why[broken[i]] = why[i];
-    }
-  };
-  std::vector<size_t> broken;
-  std::vector<std::string> why;
-  for (size_t k = 0; k < n; ++k) {
-    const double theta = intervals[k].sensor_motion(2);
-    if (finding.why[k].empty() && std::abs(theta) > kTwoPi) {
-      broken.push_back(k);
-      why.push_back(Format("sm_theta = %.4g rad, more than a full turn in one interval", theta));
+class Judge {
+ public:
+  // One pass over the intervals (a long log's are far larger than the cache); the rules then read
+  // the quantities.
+  explicit Judge(const std::vector<LaserInterval>& intervals)
+      : intervals_(intervals), allowed_(std::max<size_t>(2, intervals.size() / 50)) {
+    finding_.implausible.assign(intervals.size(), false);
+    values_.resize(intervals.size());
+    turns_.resize(intervals.size());
+    for (size_t k = 0; k < intervals.size(); ++k) {
+      values_[k] = Quantities(intervals[k]);
+      turns_[k] = std::abs(intervals[k].sensor_motion(2)) > kTwoPi;
+      if (Absurd(intervals[k])) Mark(k, AbsurdField(intervals[k]));
     }
   }
-  apply(broken, why);
-  if (n <= allowed) return finding;
-  for (int q = 0; q < kNumQuantities; ++q) {
-    std::vector<double> column;
-    for (size_t k = 0; k < n; ++k) {
-      if (finding.why[k].empty()) column.push_back(values[k][q]);
-    }
-    if (column.size() <= allowed) continue;
-    std::nth_element(column.begin(), column.end() - 1 - allowed, column.end());
-    const double scale = *(column.end() - 1 - allowed);
-    if (!(scale > 0.0)) continue;
-    broken.clear();
-    why.clear();
-    for (size_t k = 0; k < n; ++k) {
-      if (finding.why[k].empty() && values[k][q] > kScaleFactor * scale) {
-        broken.push_back(k);
-        why.push_back(Format("%s = %.4g %s, %.3g times the log's typical value", kQuantityNames[q],
-                             values[k][q], kQuantityUnits[q], values[k][q] / scale));
+
+  // The absurd values, and the kinds of implausibility a handful of intervals show (`allowed`).
+  Finding Run() && {
+    const size_t n = intervals_.size();
+    Apply([&](size_t k) { return turns_[k]; },
+          [&](size_t k) {
+            return Format("sm_theta = %.4g rad, more than a full turn in one interval",
+                          intervals_[k].sensor_motion(2));
+          });
+    if (n <= allowed_) return std::move(finding_);
+    for (int q = 0; q < kNumQuantities; ++q) {
+      std::vector<double> column;
+      column.reserve(n);
+      for (size_t k = 0; k < n; ++k) {
+        if (!finding_.implausible[k]) column.push_back(values_[k][q]);
       }
+      if (column.size() <= allowed_) continue;
+      std::nth_element(column.begin(), column.end() - 1 - allowed_, column.end());
+      const double scale = *(column.end() - 1 - allowed_);
+      if (!(scale > 0.0)) continue;
+      Apply([&](size_t k) { return values_[k][q] > kScaleFactor * scale; },
+            [&](size_t k) {
+              const double value = values_[k][q];
+              return Format("%s = %.4g %s, %.3g times the log's typical value", kQuantityNames[q],
+                            value, kQuantityUnits[q], value / scale);
+            });
     }
-    apply(broken, why);
+    return std::move(finding_);
   }
-  for (const std::string& w : finding.why) finding.count += w.empty() ? 0 : 1;
-  return finding;
-}
+
+ private:
+  void Mark(size_t k, const std::string& why) {
+    if (finding_.count == 0 || k < finding_.first) {
+      finding_.first = k;
+      finding_.first_why = why;
+    }
+    finding_.implausible[k] = true;
+    ++finding_.count;
+  }
+
+  // A rule applies only when few intervals (not yet implausible) break it.
+  template <typename Breaks, typename Why>
+  void Apply(const Breaks& breaks, const Why& why) {
+    std::vector<size_t> broken;
+    for (size_t k = 0; k < intervals_.size() && broken.size() <= allowed_; ++k) {
+      if (!finding_.implausible[k] && breaks(k)) broken.push_back(k);
+    }
+    if (broken.size() > allowed_) return;
+    for (const size_t k : broken) Mark(k, why(k));
+  }
+
+  const std::vector<LaserInterval>& intervals_;
+  const size_t allowed_;
+  std::vector<std::array<double, kNumQuantities>> values_;
+  std::vector<bool> turns_;  // More than a full turn.
+  Finding finding_;
+};
 
 }  // namespace
 
 void DropImplausibleIntervals(LaserLog* log) {
-  const Finding finding = Judge(log->intervals);
+  const Finding finding = Judge(log->intervals).Run();
   if (finding.count == 0) return;
-  std::vector<LaserInterval> kept;
-  kept.reserve(log->intervals.size());
-  std::string first;
+  std::vector<LaserInterval>& intervals = log->intervals;
+  const LaserInterval& first = intervals[finding.first];
+  const std::string name = (first.record > 0 ? "record " + std::to_string(first.record)
+                                             : "interval " + std::to_string(finding.first + 1)) +
+                           (first.line > 0 ? " (line " + std::to_string(first.line) + ")" : "");
+  // In place: a long log is not copied.
+  size_t kept = 0;
   bool gap = false;
-  for (size_t k = 0; k < log->intervals.size(); ++k) {
-    LaserInterval& interval = log->intervals[k];
-    if (!finding.why[k].empty()) {
-      if (first.empty()) {
-        first = (interval.record > 0 ? "record " + std::to_string(interval.record)
-                                     : "interval " + std::to_string(k + 1)) +
-                (interval.line > 0 ? " (line " + std::to_string(interval.line) + ")" : "") + ": " +
-                finding.why[k];
-      }
+  for (size_t k = 0; k < intervals.size(); ++k) {
+    if (finding.implausible[k]) {
       gap = true;
       continue;
     }
-    interval.gap_before = interval.gap_before || (gap && !kept.empty());
+    intervals[k].gap_before = intervals[k].gap_before || (gap && kept > 0);
     gap = false;
-    kept.push_back(std::move(interval));
+    if (kept != k) intervals[kept] = std::move(intervals[k]);
+    ++kept;
   }
-  log->intervals = std::move(kept);
+  intervals.erase(intervals.begin() + static_cast<std::ptrdiff_t>(kept), intervals.end());
   log->warnings.push_back(log->source + ": " + std::to_string(finding.count) +
-                          " implausible record(s) dropped (first: " + first + ")");
+                          " implausible record(s) dropped (first: " + name + ": " +
+                          finding.first_why + ")");
 }
 
 }  // namespace calib

@@ -37,7 +37,7 @@ class TupleParser {
         source_(source),
         release_(release) {
     // A file of braces must not reserve more records than its bytes can hold.
-    builder_.Reserve(std::min(CountBraces(), text.size() / kMinRecordBytes));
+    builder_.Reserve(std::min(CountByte(text, '{', release), text.size() / kMinRecordBytes));
     next_release_ = Ahead(p_);
   }
 
@@ -65,23 +65,6 @@ class TupleParser {
   }
 
  private:
-  // An exact reserve saves regrowing a large vector; memchr is several times faster than
-  // std::count here.
-  size_t CountBraces() const {
-    size_t count = 0;
-    const char* release_at = Ahead(p_);
-    for (const char* q = p_; q < end_; ++count, ++q) {
-      q = static_cast<const char*>(std::memchr(q, '{', static_cast<size_t>(end_ - q)));
-      if (q == nullptr) break;
-      if (release_ && q >= release_at) {
-        release_(q);
-        release_at = Ahead(q);
-      }
-    }
-    if (release_) release_(end_);
-    return count;
-  }
-
   void SkipSpace() {
     while (p_ < end_) {
       const char c = *p_;
