@@ -2,6 +2,7 @@
 #include <calib/solvers/diagnosis/multiple_testing.h>
 #include <calib/solvers/laser/laser_consistency.h>
 #include <calib/solvers/laser/laser_consistency_terms.h>
+#include <calib/solvers/laser/laser_motion.h>
 
 #include <Eigen/Cholesky>
 #include <algorithm>
@@ -48,12 +49,12 @@ double EndsVariance(const LaserConsistencyOptions& options, const LogTerms& log,
     const long outside = counted(k) ? k - 1 : k;
     const bool continuous =
         outside >= 0 && outside < static_cast<long>(t.size()) && !in[std::max(k, 0L)].gap_before;
-    const auto rate = [&](long i) { return std::abs(predicted(t[i])) / t[i].duration_s; };
-    double period = t[inside].duration_s;
+    const auto rate = [&](long i) { return std::abs(predicted(t[i])) / in[i].duration_s; };
+    double period = in[inside].duration_s;
     double speed = rate(inside);
     if (continuous) {
       speed = std::min(speed, rate(outside));
-      period = (period + t[outside].duration_s) / 2.0;
+      period = (period + in[outside].duration_s) / 2.0;
     }
     const double sigma = options.end_timing_fraction * speed * period;
     variance += sigma * sigma;
@@ -170,8 +171,8 @@ LaserConsistencyWindow CheckWindow(const Context& rotation_context, const Contex
     const IntervalTerms& t = log.terms[k];
     if (!t.counted) continue;
     ++out.intervals;
-    wheel += t.wheel;
-    travel_gradient += t.travel_gradient;
+    wheel += IntervalWheelRotation(in[k]);
+    travel_gradient += t.travel_gradient.cast<double>();
     rotation += t.rotation_predicted;
   }
   // Gradients of the totals in (r_l, r_r, b, x, y, θ).

@@ -72,16 +72,16 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
           const LaserInterval& in = intervals[k];
           IntervalTerms& t = log.terms[k];
           t.counted = is_inlier.empty() || is_inlier[k];
-          t.duration_s = in.duration_s;
-          t.wheel = IntervalWheelRotation(in);
+          const Eigen::Vector2d wheel = IntervalWheelRotation(in);
           // r·Δφ summed over the steps is r·(total Δφ): the totals need no integration.
           t.rotation_predicted =
-              (odo.right_radius_m * t.wheel(1) - odo.left_radius_m * t.wheel(0)) / odo.wheelbase_m;
-          t.travel_predicted =
-              (odo.left_radius_m * t.wheel(0) + odo.right_radius_m * t.wheel(1)) / 2.0;
+              (odo.right_radius_m * wheel(1) - odo.left_radius_m * wheel(0)) / odo.wheelbase_m;
+          t.travel_predicted = (odo.left_radius_m * wheel(0) + odo.right_radius_m * wheel(1)) / 2.0;
           t.rotation_measured = in.sensor_motion(2);
-          t.travel_measured = ForwardTravel(in.sensor_motion, c.base_T_sensor, &t.travel_gradient);
-          t.still = t.wheel.cwiseAbs().sum() < 1e-6 ||
+          Eigen::Vector3d travel_gradient;
+          t.travel_measured = ForwardTravel(in.sensor_motion, c.base_T_sensor, &travel_gradient);
+          t.travel_gradient = travel_gradient.cast<float>();
+          t.still = wheel.cwiseAbs().sum() < 1e-6 ||
                     (std::abs(t.rotation_predicted) <= 0.5 * noise_sigma(2) &&
                      std::abs(t.travel_predicted) <= still_travel_m);
           if (!t.counted) continue;

@@ -23,15 +23,15 @@ using Vector6 = Eigen::Matrix<double, kNumLaserParams, 1>;
 double ForwardTravel(const Pose2d& sensor_motion, const Pose2d& base_T_sensor,
                      Eigen::Vector3d* gradient = nullptr);
 
-// What each interval adds to the totals and to the fit.
+// What each interval adds to the totals and to the fit. A million intervals hold one each: what
+// the interval itself gives (its T, its wheel rotation) is read from it, and the travel's gradient,
+// only summed over windows, is kept in single precision (88 bytes instead of 136).
 struct IntervalTerms {
   bool counted = false;  // Enters the sums: an inlier, or an outlier rescued as a timing artefact.
   bool still = false;    // The robot rests (wheel model and noise agree on no motion).
-  double duration_s = 0.0;
-  Eigen::Vector2d wheel = Eigen::Vector2d::Zero();  // Δφ_l, Δφ_r.
+  Eigen::Vector3f travel_gradient = Eigen::Vector3f::Zero();  // ∂travel_measured/∂ℓ.
   double rotation_predicted = 0.0, rotation_measured = 0.0;
   double travel_predicted = 0.0, travel_measured = 0.0;
-  Eigen::Vector3d travel_gradient = Eigen::Vector3d::Zero();  // ∂travel_measured/∂ℓ.
   // JᵀWe of the fit's inliers (0 otherwise); the check turns it into the influence
   // ψ = −H⁻¹JᵀWe, the interval's share of θ̂ − θ.
   Vector6 influence = Vector6::Zero();
