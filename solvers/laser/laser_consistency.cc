@@ -128,12 +128,12 @@ LaserConsistencyTotal Total(const Context& c, const LogTerms& log, const Window&
     total.predicted += predicted(t[k]);
     total.measured += predicted(t[k]) + h;
     v_hh += h * h;
-    v_psi_h += h * t[k].influence;
+    v_psi_h += h * t[k].Influence();
     for (int j = 1; j <= c.lag; ++j) {
       const double weight = Bartlett(j, c.lag);
       v_hh += 2.0 * weight * h * Term(t, w, k + j, difference);
-      if (k + j < n) v_psi_h += weight * h * t[k + j].influence;
-      if (k - j >= 0) v_psi_h += weight * h * t[k - j].influence;
+      if (k + j < n) v_psi_h += weight * h * t[k + j].Influence();
+      if (k - j >= 0) v_psi_h += weight * h * t[k - j].Influence();
     }
   }
   // d_k = 1[k∈w]·h_k + Gᵀψ_k sums to the difference; its long-run variance is the difference's.
@@ -284,7 +284,8 @@ LaserConsistency CheckLaserConsistencyJoint(
   }
   for (LogTerms& log : terms) {
     for (IntervalTerms& t : log.terms) {
-      t.influence = -ldlt.solve(t.influence.cwiseProduct(c.free));  // ψ_k: θ̂ − θ ≈ Σψ_k.
+      // ψ_k: θ̂ − θ ≈ Σψ_k.
+      t.influence = (-ldlt.solve(t.Influence().cwiseProduct(c.free))).cast<float>();
     }
   }
   // Each quantity with its own lag (Andrews) and the estimate's long-run covariance at it.

@@ -88,7 +88,7 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
           Eigen::Matrix<double, 3, kNumLaserParams> jacobian;
           Eigen::Vector3d e;
           LaserResidual::Linearize(in, identity, v.data(), v.data() + 3, &e, &jacobian);
-          t.influence = jacobian.transpose() * weight.asDiagonal() * e;
+          t.influence = (jacobian.transpose() * weight.asDiagonal() * e).cast<float>();
           hessians[chunk] += jacobian.transpose() * weight.asDiagonal() * jacobian;
         }
       });
@@ -109,12 +109,13 @@ LaserParamMatrix InfluenceLongRun(const std::vector<LogTerms>& logs, int lag, in
       LaserParamMatrix cross = LaserParamMatrix::Zero();
       LaserParamMatrix& sum = sums[chunk];
       for (size_t k = begin; k < end; ++k) {
-        sum.noalias() += t[k].influence * t[k].influence.transpose();
+        const Vector6 psi = t[k].Influence();
+        sum.noalias() += psi * psi.transpose();
         Vector6 ahead = Vector6::Zero();
         for (int j = 1; j <= lag && k + j < t.size(); ++j) {
-          ahead += Bartlett(j, lag) * t[k + j].influence;
+          ahead += Bartlett(j, lag) * t[k + j].Influence();
         }
-        cross.noalias() += t[k].influence * ahead.transpose();
+        cross.noalias() += psi * ahead.transpose();
       }
       sum += cross + cross.transpose();
     });
