@@ -12,7 +12,8 @@ namespace calib {
 namespace {
 
 using consistency_internal::AutomaticLag;
-using consistency_internal::Bartlett;
+using consistency_internal::BartlettAhead;
+using consistency_internal::BartlettCentred;
 using consistency_internal::ComputeTerms;
 using consistency_internal::InfluenceLongRun;
 using consistency_internal::IntervalTerms;
@@ -122,19 +123,21 @@ LaserConsistencyTotal Total(const Context& c, const LogTerms& log, const Window&
   LaserConsistencyTotal total;
   double v_hh = 0.0;
   Vector6 v_psi_h = Vector6::Zero();
-  for (long k = w.first; k <= w.last; ++k) {
-    const double h = Term(t, w, k, difference);
+  // h_k, 0 outside the window and where not counted; ψ_k over the whole log.
+  const auto h_at = [&](long k) { return Term(t, w, k, difference); };
+  const auto psi_at = [&](long k) {
+    return k >= 0 && k < n ? t[k].Influence() : Vector6::Zero().eval();
+  };
+  BartlettAhead<double, decltype(h_at)> h_ahead(h_at, c.lag, w.first);
+  BartlettCentred<Vector6, decltype(psi_at)> psi_around(psi_at, c.lag, w.first);
+  for (long k = w.first; k <= w.last; ++k, h_ahead.Advance(), psi_around.Advance()) {
     if (!t[k].counted) continue;
+    const double h = difference(t[k]);
     total.predicted += predicted(t[k]);
     total.measured += predicted(t[k]) + h;
-    v_hh += h * h;
-    v_psi_h += h * t[k].Influence();
-    for (int j = 1; j <= c.lag; ++j) {
-      const double weight = Bartlett(j, c.lag);
-      v_hh += 2.0 * weight * h * Term(t, w, k + j, difference);
-      if (k + j < n) v_psi_h += weight * h * t[k + j].Influence();
-      if (k - j >= 0) v_psi_h += weight * h * t[k - j].Influence();
-    }
+    // Σ_k h_k² + 2Σ_{j≥1} w_j h_k h_{k+j}, and Σ_k h_k Σ_{|j|≤L} w_j ψ_{k+j}.
+    v_hh += h * h + 2.0 * h * h_ahead.value();
+    v_psi_h += h * psi_around.value();
   }
   // d_k = 1[k∈w]·h_k + Gᵀψ_k sums to the difference; its long-run variance is the difference's.
   const Vector6 g = (g_meas - g_pred).cwiseProduct(c.free);

@@ -105,17 +105,17 @@ LaserParamMatrix InfluenceLongRun(const std::vector<LogTerms>& logs, int lag, in
                                        LaserParamMatrix::Zero());
     ParallelChunks(t.size(), num_threads, kMinChunk, [&](size_t chunk, size_t begin, size_t end) {
       // Σ_k ψ_kψ_kᵀ + C + Cᵀ with C = Σ_k ψ_k·(Σ_j w_j ψ_{k+j})ᵀ: one outer product per
-      // interval, the lags summed as vectors first.
+      // interval, the lags summed as a running vector.
       LaserParamMatrix cross = LaserParamMatrix::Zero();
       LaserParamMatrix& sum = sums[chunk];
-      for (size_t k = begin; k < end; ++k) {
+      const auto psi_at = [&](long k) {
+        return k < static_cast<long>(t.size()) ? t[k].Influence() : Vector6::Zero().eval();
+      };
+      BartlettAhead<Vector6, decltype(psi_at)> ahead(psi_at, lag, static_cast<long>(begin));
+      for (size_t k = begin; k < end; ++k, ahead.Advance()) {
         const Vector6 psi = t[k].Influence();
         sum.noalias() += psi * psi.transpose();
-        Vector6 ahead = Vector6::Zero();
-        for (int j = 1; j <= lag && k + j < t.size(); ++j) {
-          ahead += Bartlett(j, lag) * t[k + j].Influence();
-        }
-        cross.noalias() += psi * ahead.transpose();
+        cross.noalias() += psi * ahead.value().transpose();
       }
       sum += cross + cross.transpose();
     });

@@ -56,8 +56,57 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
                       const Eigen::Vector3d& noise_sigma, const std::vector<bool>& is_inlier,
                       LaserParamMatrix* hessian, int num_threads = 1);
 
-// Bartlett weight of lag j.
-inline double Bartlett(int j, int lag) { return 1.0 - static_cast<double>(j) / (lag + 1); }
+// Bartlett-weighted sums of a sequence x_i (0 outside the range `x` gives) at k = k0, k0 + 1, …:
+//   Centred: Σ_{|j|≤L} (1 − |j|/(L+1))·x_{k+j},   Ahead: Σ_{j=1..L} (1 − j/(L+1))·x_{k+j}.
+// A triangle is a running sum of running boxes: O(1) a step instead of O(L) (a window of a million
+// intervals at L ≈ 20). Unnormalised sums: T = Σ(L+1−|j|)x_{k+j}, R = Σ_{k+1}^{k+L+1} x,
+// B = Σ_{k−L}^{k} x; T_{k+1} = T_k + R_k − B_k. Ahead: U = Σ_{m=1..L}(L+1−m)x_{k+m},
+// S = Σ_{m=2..L+1} x_{k+m}; U_{k+1} = U_k − L·x_{k+1} + S_k.
+template <typename Value, typename X>
+class BartlettCentred {
+ public:
+  BartlettCentred(X x, int lag, long k0) : x_(x), lag_(lag), k_(k0) {
+    t_ = r_ = b_ = x_(k0) * 0.0;
+    for (long j = -lag; j <= lag; ++j) t_ += (lag + 1.0 - std::abs(j)) * x_(k0 + j);
+    for (long i = k0 + 1; i <= k0 + lag + 1; ++i) r_ += x_(i);
+    for (long i = k0 - lag; i <= k0; ++i) b_ += x_(i);
+  }
+  Value value() const { return t_ / (lag_ + 1.0); }
+  void Advance() {
+    t_ += r_ - b_;
+    r_ += x_(k_ + lag_ + 2) - x_(k_ + 1);
+    b_ += x_(k_ + 1) - x_(k_ - lag_);
+    ++k_;
+  }
+
+ private:
+  X x_;
+  int lag_;
+  long k_;
+  Value t_, r_, b_;
+};
+
+template <typename Value, typename X>
+class BartlettAhead {
+ public:
+  BartlettAhead(X x, int lag, long k0) : x_(x), lag_(lag), k_(k0) {
+    u_ = s_ = x_(k0) * 0.0;
+    for (long m = 1; m <= lag; ++m) u_ += (lag + 1.0 - m) * x_(k0 + m);
+    for (long m = 2; m <= lag + 1; ++m) s_ += x_(k0 + m);
+  }
+  Value value() const { return u_ / (lag_ + 1.0); }
+  void Advance() {
+    u_ += s_ - lag_ * x_(k_ + 1);
+    s_ += x_(k_ + lag_ + 2) - x_(k_ + 2);
+    ++k_;
+  }
+
+ private:
+  X x_;
+  int lag_;
+  long k_;
+  Value u_, s_;
+};
 
 // Andrews (1991) automatic Bartlett lag from an AR(1) fit to the counted series of every log:
 // 1.1447·(α·n)^{1/3}, α = 4ρ²/((1 − ρ)²(1 + ρ)²); at least 1, at most n/4. Negative correlation

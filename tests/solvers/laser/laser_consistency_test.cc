@@ -245,6 +245,31 @@ TEST(LaserConsistencyTest, ForwardTravelIsTheArcLength) {
 
 // The published recordings (tuples: independent scan matches). Reports what it sees; see the
 // closing note for l90/lmov.
+// The running Bartlett sums equal the direct ones, zeros beyond the sequence included.
+TEST(LaserConsistencyTest, RunningBartlettSumsEqualDirectSums) {
+  Random random(5);
+  std::vector<double> x(200);
+  for (double& v : x) v = random.Uniform(-1.0, 1.0);
+  const auto x_at = [&](long i) {
+    return i >= 0 && i < static_cast<long>(x.size()) ? x[static_cast<size_t>(i)] : 0.0;
+  };
+  for (const int lag : {1, 3, 17}) {
+    const long k0 = 5;
+    consistency_internal::BartlettCentred<double, decltype(x_at)> centred(x_at, lag, k0);
+    consistency_internal::BartlettAhead<double, decltype(x_at)> ahead(x_at, lag, k0);
+    for (long k = k0; k < 210; ++k, centred.Advance(), ahead.Advance()) {
+      double direct_centred = 0.0, direct_ahead = 0.0;
+      for (long j = -lag; j <= lag; ++j) {
+        const double w = 1.0 - static_cast<double>(std::abs(j)) / (lag + 1);
+        direct_centred += w * x_at(k + j);
+        if (j > 0) direct_ahead += w * x_at(k + j);
+      }
+      ASSERT_NEAR(centred.value(), direct_centred, 1e-12) << "lag " << lag << " k " << k;
+      ASSERT_NEAR(ahead.value(), direct_ahead, 1e-12) << "lag " << lag << " k " << k;
+    }
+  }
+}
+
 TEST(LaserConsistencyTest, CensiTupleLogs) {
   const std::string dir = CALIB_CENSI_DATA_DIR;
   if (!std::filesystem::exists(dir + "/l90.tuple")) GTEST_SKIP() << "no recordings at " << dir;
