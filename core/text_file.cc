@@ -69,23 +69,18 @@ void MappedFile::Release(const char* before) const {
   released_ = end;
 }
 
-size_t CountByte(std::string_view text, char byte, const ReleaseText& release) {
-  const char* const end = text.data() + text.size();
-  const auto ahead = [end](const char* q) {
-    return static_cast<size_t>(end - q) > kReleaseTextBytes ? q + kReleaseTextBytes : end;
-  };
+size_t EstimateByteCount(std::string_view text, char byte) {
+  constexpr size_t kSampleBytes = size_t{1} << 20;
+  const std::string_view sample = text.substr(0, kSampleBytes);
   size_t count = 0;
-  const char* release_at = ahead(text.data());
-  for (const char* q = text.data(); q < end; ++count, ++q) {
-    q = static_cast<const char*>(std::memchr(q, byte, static_cast<size_t>(end - q)));
+  for (const char* q = sample.data(); q < sample.data() + sample.size(); ++count, ++q) {
+    q = static_cast<const char*>(
+        std::memchr(q, byte, static_cast<size_t>(sample.data() + sample.size() - q)));
     if (q == nullptr) break;
-    if (release && q >= release_at) {
-      release(q);
-      release_at = ahead(q);
-    }
   }
-  if (release) release(end);
-  return count;
+  if (sample.size() == text.size()) return count;
+  const double per_byte = static_cast<double>(count) / static_cast<double>(sample.size());
+  return static_cast<size_t>(1.05 * per_byte * static_cast<double>(text.size())) + 16;
 }
 
 StatusOr<MappedFile> MappedFile::Open(const std::string& path) { return OpenImpl(path, false); }

@@ -73,10 +73,10 @@ class MappedFile {
   std::string owned_;            // The bytes of a file that could not be mapped.
 };
 
-// How many times `byte` occurs in `text` (memchr: several times faster than std::count), to
-// reserve a reader's records exactly. Calls `release`, when given, as it passes (and at the end,
-// which starts the parse's own pass from the text's start).
-size_t CountByte(std::string_view text, char byte, const ReleaseText& release = {});
+// About how many times `byte` occurs in `text`, to reserve a reader's records: exact within its
+// first MB, beyond that extrapolated from it with 5 % to spare (a capacity never filled costs
+// address space, not memory; a full count would read a long file twice).
+size_t EstimateByteCount(std::string_view text, char byte);
 
 // "FILE: not a text file: a NUL byte at byte N (binary data?)" when one appears in the first
 // kTextCheckBytes of `bytes`; OK otherwise.

@@ -30,10 +30,10 @@ StatusOr<LaserLog> ParseCsv(std::string_view text, const std::string& source,
                                                          {"sm_theta"},
                                                          {"t", /*required=*/false}}));
   LogBuilder builder(source);
-  // An exact reserve saves regrowing a large vector; a file of newlines must not reserve more
+  // A reserve saves regrowing a large vector; a file of newlines must not reserve more
   // records than its bytes can hold ("1,1,1,1,1,1" and its newline).
   constexpr size_t kMinRecordBytes = 12;
-  builder.Reserve(std::min(CountByte(text, '\n', release), text.size() / kMinRecordBytes));
+  builder.Reserve(std::min(EstimateByteCount(text, '\n'), text.size() / kMinRecordBytes));
   size_t released = 0;
   while (true) {
     CALIB_ASSIGN_OR_RETURN(const bool more, csv.Next());

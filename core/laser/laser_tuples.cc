@@ -37,7 +37,7 @@ class TupleParser {
         source_(source),
         release_(release) {
     // A file of braces must not reserve more records than its bytes can hold.
-    builder_.Reserve(std::min(CountByte(text, '{', release), text.size() / kMinRecordBytes));
+    builder_.Reserve(std::min(EstimateByteCount(text, '{'), text.size() / kMinRecordBytes));
     next_release_ = Ahead(p_);
   }
 
