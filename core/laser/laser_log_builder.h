@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <new>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -33,7 +35,15 @@ inline std::string Where(const std::string& source, int64_t line, int64_t record
 class LogBuilder {
  public:
   explicit LogBuilder(const std::string& source) { log_.source = source; }
-  void Reserve(size_t n) { log_.intervals.reserve(n); }
+  // An estimate (EstimateByteCount): when it asks for more memory than there is, the records
+  // grow as they come instead.
+  void Reserve(size_t n) {
+    try {
+      log_.intervals.reserve(n);
+    } catch (const std::bad_alloc&) {
+    } catch (const std::length_error&) {
+    }
+  }
   size_t size() const { return log_.intervals.size(); }
 
   // `interval.start_s` holds t when `has_t`; line and record are set.
