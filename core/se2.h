@@ -86,39 +86,62 @@ using Twist2d = Twist2<double>;
 // Below this |θ| the series replace the closed forms.
 inline constexpr double kSe2SmallAngle = 1e-2;
 
-// S = sin θ/θ and C = (1 − cos θ)/θ.
+// S = sin θ/θ and C = (1 − cos θ)/θ, from sin θ and cos θ when the caller has them (they are
+// not read below the series' cut-off).
 template <typename T>
-void ArcCoefficients(const T& angle, T* sin_over_angle, T* one_minus_cos_over_angle) {
+void ArcCoefficients(const T& angle, const T& sin_angle, const T& cos_angle, T* sin_over_angle,
+                     T* one_minus_cos_over_angle) {
   using std::abs;
-  using std::cos;
-  using std::sin;
   if (abs(angle) < T(kSe2SmallAngle)) {
     // S = 1 − θ²/6 + θ⁴/120, C = θ/2·(1 − θ²/12 + θ⁴/360).
     const T a2 = angle * angle;
     *sin_over_angle = T(1) - a2 / T(6) + a2 * a2 / T(120);
     *one_minus_cos_over_angle = angle / T(2) * (T(1) - a2 / T(12) + a2 * a2 / T(360));
   } else {
-    *sin_over_angle = sin(angle) / angle;
-    *one_minus_cos_over_angle = (T(1) - cos(angle)) / angle;
+    *sin_over_angle = sin_angle / angle;
+    *one_minus_cos_over_angle = (T(1) - cos_angle) / angle;
   }
 }
 
-// S' = dS/dθ = (θ cos θ − sin θ)/θ² and C' = dC/dθ = (θ sin θ − 1 + cos θ)/θ².
 template <typename T>
-void ArcCoefficientDerivatives(const T& angle, T* d_sin_over_angle, T* d_one_minus_cos_over_angle) {
+void ArcCoefficients(const T& angle, T* sin_over_angle, T* one_minus_cos_over_angle) {
   using std::abs;
   using std::cos;
   using std::sin;
+  if (abs(angle) < T(kSe2SmallAngle)) {
+    ArcCoefficients(angle, T(0), T(1), sin_over_angle, one_minus_cos_over_angle);
+  } else {
+    ArcCoefficients(angle, sin(angle), cos(angle), sin_over_angle, one_minus_cos_over_angle);
+  }
+}
+
+// S' = dS/dθ = (θ cos θ − sin θ)/θ² and C' = dC/dθ = (θ sin θ − 1 + cos θ)/θ², from sin θ and
+// cos θ when the caller has them.
+template <typename T>
+void ArcCoefficientDerivatives(const T& angle, const T& sin_angle, const T& cos_angle,
+                               T* d_sin_over_angle, T* d_one_minus_cos_over_angle) {
+  using std::abs;
   if (abs(angle) < T(kSe2SmallAngle)) {
     // S' = −θ/3·(1 − θ²/10 + θ⁴/280), C' = 1/2 − θ²/8 + θ⁴/144 − θ⁶/5760.
     const T a2 = angle * angle;
     *d_sin_over_angle = -angle / T(3) * (T(1) - a2 / T(10) + a2 * a2 / T(280));
     *d_one_minus_cos_over_angle = T(0.5) - a2 / T(8) + a2 * a2 / T(144) - a2 * a2 * a2 / T(5760);
   } else {
-    const T c = cos(angle);
-    const T s = sin(angle);
-    *d_sin_over_angle = (angle * c - s) / (angle * angle);
-    *d_one_minus_cos_over_angle = (angle * s - T(1) + c) / (angle * angle);
+    *d_sin_over_angle = (angle * cos_angle - sin_angle) / (angle * angle);
+    *d_one_minus_cos_over_angle = (angle * sin_angle - T(1) + cos_angle) / (angle * angle);
+  }
+}
+
+template <typename T>
+void ArcCoefficientDerivatives(const T& angle, T* d_sin_over_angle, T* d_one_minus_cos_over_angle) {
+  using std::abs;
+  using std::cos;
+  using std::sin;
+  if (abs(angle) < T(kSe2SmallAngle)) {
+    ArcCoefficientDerivatives(angle, T(0), T(1), d_sin_over_angle, d_one_minus_cos_over_angle);
+  } else {
+    ArcCoefficientDerivatives(angle, sin(angle), cos(angle), d_sin_over_angle,
+                              d_one_minus_cos_over_angle);
   }
 }
 

@@ -122,9 +122,10 @@ class LaserResidual {
     const double rl = odometry[0], rr = odometry[1], b = odometry[2];
     const double d = (rl * left + rr * right) / 2.0;
     const double a = (rr * right - rl * left) / b;
-    double s, c;
-    ArcCoefficients(a, &s, &c);
+    // One sine and cosine of the arc serve S, C, the turn and their derivatives.
     const double ca = std::cos(a), sa = std::sin(a);
+    double s, c;
+    ArcCoefficients(a, sa, ca, &s, &c);
     const double cl = std::cos(base_T_sensor[2]), sl = std::sin(base_T_sensor[2]);
     const Eigen::Matrix2d to_sensor = (Eigen::Matrix2d() << cl, sl, -sl, cl).finished();
     const Eigen::Vector2d mount(base_T_sensor[0], base_T_sensor[1]);
@@ -138,7 +139,7 @@ class LaserResidual {
                              WrapAngle(measured(2) - sensor_theta));
     if (ds_dp == nullptr) return;
     double ds, dc;
-    ArcCoefficientDerivatives(a, &ds, &dc);
+    ArcCoefficientDerivatives(a, sa, ca, &ds, &dc);
     Eigen::Vector3d by_d, by_a;
     by_d << to_sensor * Eigen::Vector2d(s, c), 0.0;
     by_a << to_sensor * (Eigen::Vector2d(ds, dc) * d + Eigen::Vector2d(-sa, ca) * mount(0) +
