@@ -259,8 +259,10 @@ py::dict IntervalResult(const std::string& source, const std::string& loss,
   log.stream_timing = timing;
   const StatusOr<CalibrationReport> report = [&]() -> StatusOr<CalibrationReport> {
     py::gil_scoped_release release;
+    LaserReportOptions report_options = ReportOptions(source, loss, options);
+    report_options.started_screen = StartLaserModelScreen(log.intervals, report_options);
     CALIB_ASSIGN_OR_RETURN(const LaserCalibrationResult result, CalibrateLaser(intervals, options));
-    return LaserIntervalReport(result, {&log}, ReportOptions(source, loss, options));
+    return LaserIntervalReport(result, {&log}, report_options);
   }();
   if (!report.ok()) Raise(report.status().Prefixed(source + ": "));
   return LaserResultToPython(*report);

@@ -161,12 +161,16 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
     return CalibrateLaserStreamLog(flags, logs.front(), options, clock);
   }
   options.interval_jitter = !streams;
+  LaserReportOptions report_options = ReportOptions(flags, options);
+  if (logs.size() == 1) {
+    report_options.started_screen = StartLaserModelScreen(logs.front().intervals, report_options);
+  }
   const StatusOr<LaserCalibrationResult> result = CalibrateLaserJoint(intervals, options);
   if (!result.ok()) return Fail(flags.input + ": " + result.message());
 
   std::vector<const LaserLog*> read;
   for (const LaserLog& log : logs) read.push_back(&log);
-  CalibrationReport report = LaserIntervalReport(*result, read, ReportOptions(flags, options));
+  CalibrationReport report = LaserIntervalReport(*result, read, report_options);
   report.json["seconds"]["total"] = clock.Seconds();
   const Status plotted = AddCalibrationPlots(
       flags, [&] { return LaserCalibrationPlots(intervals, *result); }, &report.json,

@@ -7,6 +7,7 @@
 #include <calib/tools/report/robot_log_report.h>
 #include <calib/tools/report/verdict.h>
 
+#include <system_error>
 #include <utility>
 
 namespace calib {
@@ -29,7 +30,9 @@ std::string ScreenModel(const std::vector<LaserInterval>& intervals,
     return "  model screen: " + note + "\n";
   }
   const StatusOr<LaserModelScreen> screen =
-      ScreenLaserModel(intervals, options.screen, sample_times_estimated);
+      options.started_screen.valid()
+          ? options.started_screen.get()
+          : ScreenLaserModel(intervals, options.screen, sample_times_estimated);
   nlohmann::ordered_json& out = (*json)["model_screen"];
   if (!screen.ok()) {
     out["error"] = screen.message();
@@ -69,6 +72,20 @@ std::string AddReaderWarnings(const std::vector<const LaserLog*>& logs, VerdictI
 }
 
 }  // namespace
+
+std::shared_future<StatusOr<LaserModelScreen>> StartLaserModelScreen(
+    const std::vector<LaserInterval>& intervals, const LaserReportOptions& options) {
+  if (!options.screen_model || static_cast<int>(intervals.size()) > options.screen_max_intervals) {
+    return {};
+  }
+  try {
+    return std::async(std::launch::async, [&intervals, screen = options.screen] {
+      return ScreenLaserModel(intervals, screen, false);
+    });
+  } catch (const std::system_error&) {  // No thread to be had: the report screens in turn.
+    return {};
+  }
+}
 
 CalibrationReport LaserIntervalReport(const LaserCalibrationResult& result,
                                       const std::vector<const LaserLog*>& logs,

@@ -7,9 +7,11 @@
 #include <calib/core/timing/stamp_timing.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
 #include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/solvers/laser/laser_model_screen.h>
 #include <calib/solvers/scan_matching/robot_bag_log.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 
+#include <future>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -34,7 +36,17 @@ struct LaserReportOptions {
   bool screen_model = true;
   int screen_max_intervals = 50000;  // Longer logs are not screened (say so; diagnose them).
   bool scan_points = false;          // The refinement on the scan points was asked for (bags).
+  // The screen started beside the calibration (StartLaserModelScreen); when not valid, the report
+  // runs it.
+  std::shared_future<StatusOr<LaserModelScreen>> started_screen;
 };
+
+// Starts the model screen of a log of intervals on a second thread: it needs the log only, so it
+// runs beside the calibration (on the real sets each takes about half of the time). Not valid when
+// the report would not screen that log (screen off, or longer than screen_max_intervals).
+// `intervals` must outlive the future.
+std::shared_future<StatusOr<LaserModelScreen>> StartLaserModelScreen(
+    const std::vector<LaserInterval>& intervals, const LaserReportOptions& options);
 
 // A calibration of intervals (tuples, CSV, streams with --timing off); `logs`: the logs it was
 // calibrated from (the screen runs on a single log only).

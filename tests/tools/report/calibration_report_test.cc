@@ -1,5 +1,5 @@
 // calibrate's report, one assembly for the command line and Python: the model screen runs on
-// logs up to its limit and says so beyond it.
+// logs up to its limit and says so beyond it; started beside the calibration, it reports the same.
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/tools/report/calibration_report.h>
 #include <gtest/gtest.h>
@@ -31,6 +31,34 @@ TEST(CalibrationReportTest, TheModelScreenRunsUpToItsLimitAndSaysSoBeyond) {
             std::string::npos)
       << report.summary;
   EXPECT_EQ(report.json["verdict"], "trusted");  // Not run is not a finding.
+}
+
+// l90's screen finds physics the base model leaves out: the report must say the same whether the
+// screen ran beside the calibration or after it.
+TEST(CalibrationReportTest, AScreenStartedBesideTheCalibrationReportsTheSame) {
+  const std::filesystem::path l90 = std::filesystem::path(CALIB_CENSI_DATA_DIR) / "l90.tuple";
+  if (!std::filesystem::exists(l90)) {
+    GTEST_SKIP() << "the published recordings are not at " << l90.parent_path()
+                 << " (they are not part of the repository)";
+  }
+  const StatusOr<LaserLog> log = ReadLaserLog(l90.string());
+  ASSERT_TRUE(log.ok()) << log.message();
+  LaserReportOptions options;
+  options.input = l90.string();
+  LaserReportOptions started = options;
+  started.started_screen = StartLaserModelScreen(log->intervals, started);
+  ASSERT_TRUE(started.started_screen.valid());
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(log->intervals);
+  ASSERT_TRUE(result.ok()) << result.message();
+  const CalibrationReport after = LaserIntervalReport(*result, {&*log}, options);
+  const CalibrationReport beside = LaserIntervalReport(*result, {&*log}, started);
+  EXPECT_TRUE(after.json["model_screen"]["flagged"].get<bool>());
+  EXPECT_EQ(beside.json.dump(), after.json.dump());
+  EXPECT_EQ(beside.summary, after.summary);
+
+  // Beyond the limit nothing is started: the report says it did not run.
+  options.screen_max_intervals = 100;
+  EXPECT_FALSE(StartLaserModelScreen(log->intervals, options).valid());
 }
 
 }  // namespace
