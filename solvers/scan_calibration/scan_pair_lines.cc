@@ -40,11 +40,12 @@ int BeamOf(const PairTimeline& timeline, const LaserScan& scan, double first_bea
 // noise the nearest point made the distances 30 % smaller than the noise). −1 when none.
 int ReturnAlongBeam(const ScanPoints& ref, double phi_rad) {
   const int n = ref.NumBeams();
-  const double k = std::round(WrapAngle(phi_rad - ref.angle_min_rad) / ref.angle_increment_rad);
+  // Beyond π from angle_min (a 270° scan's last third) the wrapped offset alone found no beam.
+  const int k = ref.NearestBeam(phi_rad);
   int best = -1;
   double best_delta = std::abs(ref.angle_increment_rad) * 2.5;
   for (int d = -2; d <= 2; ++d) {
-    int beam = static_cast<int>(k) + d;
+    int beam = k + d;
     if (ref.full_circle) beam = ((beam % n) + n) % n;
     if (beam < 0 || beam >= n || ref.point_of_beam[beam] < 0) continue;
     const double delta = std::abs(WrapAngle(ref.beam_angle_rad[beam] - phi_rad));

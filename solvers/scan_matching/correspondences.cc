@@ -87,17 +87,7 @@ int CorrespondenceSearch::Nearest(const Eigen::Vector2d& p) const {
   const ScanPoints& reference = reference_;
   const int n = reference.NumBeams();
   const double rho2 = p.squaredNorm();
-  const double phi_rad = FastAtan2(p.y(), p.x());
-  double start =
-      std::round(WrapAngle(phi_rad - reference.angle_min_rad) / reference.angle_increment_rad);
-  if (!reference.full_circle) {
-    // The unwrapped offset can land on either side of angle_min; pick the one inside the scan.
-    const double turn = 2.0 * M_PI / std::abs(reference.angle_increment_rad);
-    if (start < 0 && start + turn <= n - 1 + 0.5) start += turn;
-    if (start > n - 1 && start - turn >= -0.5) start -= turn;
-    start = std::clamp(start, 0.0, static_cast<double>(n - 1));
-  }
-  const int b0 = BeamInRange(reference, static_cast<int>(start));
+  const int b0 = reference.NearestBeam(FastAtan2(p.y(), p.x()));
   if (b0 < 0) return -1;
   const int max_steps = reference.full_circle ? n / 2 + 1 : n;
   double best_d2 = options_.max_distance_m * options_.max_distance_m;

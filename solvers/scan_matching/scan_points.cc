@@ -1,5 +1,6 @@
 #include <calib/solvers/scan_matching/scan_points.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -44,6 +45,20 @@ Status CheckScan(const LaserScan& scan, const ScanPointsOptions& options) {
 }
 
 }  // namespace
+
+int ScanPoints::NearestBeam(double phi_rad) const {
+  const int n = NumBeams();
+  if (n == 0) return -1;
+  if (angle_increment_rad == 0.0) return 0;
+  // The offset from angle_min wrapped into (−π, π]: on a scan spanning more than half a turn it
+  // may land a whole turn away from the beams.
+  double beam = std::round(WrapAngle(phi_rad - angle_min_rad) / angle_increment_rad);
+  if (full_circle) return ((static_cast<int>(beam) % n) + n) % n;
+  const double turn = 2.0 * M_PI / std::abs(angle_increment_rad);
+  if (beam < 0 && beam + turn <= n - 1 + 0.5) beam += turn;
+  if (beam > n - 1 && beam - turn >= -0.5) beam -= turn;
+  return static_cast<int>(std::clamp(beam, 0.0, static_cast<double>(n - 1)));
+}
 
 std::vector<Pose2d> SweepMotion::StampTSensor(const std::vector<double>& dt_s) const {
   std::vector<Pose2d> knots{Pose2d::Zero()};  // stamp_T_sensor at start_s[k].

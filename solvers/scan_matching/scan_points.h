@@ -30,6 +30,9 @@ struct ScanPoints {
 
   int NumBeams() const { return static_cast<int>(point_of_beam.size()); }
   int NumPoints() const { return static_cast<int>(points_m.size()); }
+  // The beam whose nominal angle is nearest to the polar angle phi_rad, for either sign of the
+  // increment and any span (a partial scan's beyond its ends: the end beam); −1 without beams.
+  int NearestBeam(double phi_rad) const;
 };
 
 // The sensor's motion during a sweep as a piecewise-constant body velocity (vx, vy, ω per second,

@@ -235,6 +235,32 @@ TEST(SweepMotionTest, PiecesComposeAndBadMotionsAreRefused) {
   EXPECT_TRUE(MakeScanPoints(scan, options).ok());
 }
 
+// Every beam's own angle finds that beam, on 270° scans (beyond π from angle_min the wrapped
+// offset alone had found none: a third of the beams), with either sign of the increment (a
+// mirrored scan's), and on a full circle; beyond a partial scan's ends, the end beam.
+TEST(ScanPointsTest, NearestBeamOfEveryBeamsAngleIsThatBeam) {
+  for (const double span_rad : {1.5 * M_PI, 2.0 * M_PI * 1080.0 / 1081.0, 0.5}) {
+    for (const double sign : {1.0, -1.0}) {
+      LaserScan scan;
+      scan.angle_min_rad = -sign * 0.5 * span_rad;
+      scan.angle_increment_rad = sign * span_rad / 1080.0;
+      scan.ranges_m.assign(1081, 2.0f);
+      scan.range_max_m = 10.0;
+      const StatusOr<ScanPoints> points = MakeScanPoints(scan);
+      ASSERT_TRUE(points.ok()) << points.message();
+      for (int b = 0; b < points->NumBeams(); ++b) {
+        ASSERT_EQ(points->NearestBeam(scan.BeamAngle(b) + 0.3 * scan.angle_increment_rad), b)
+            << "span " << span_rad << " sign " << sign;
+      }
+      if (span_rad < M_PI) {
+        EXPECT_EQ(points->NearestBeam(scan.BeamAngle(0) - sign * 0.2), 0);
+        EXPECT_EQ(points->NearestBeam(scan.BeamAngle(1080) + sign * 0.2), 1080);
+      }
+    }
+  }
+  EXPECT_EQ(ScanPoints().NearestBeam(0.0), -1);
+}
+
 // The trig-free search finds the same nearest point as brute force, the repeated search the same
 // as FindCorrespondences (every stride-th point with a stride), and each line straddles its
 // nearest point: one end on either side, at least min_segment_length_m / 2 from it.
