@@ -234,8 +234,9 @@ StatusOr<ScanSimulation> SimulateScans(const ScanSimOptions& options) {
   for (size_t k = 0; k < timing.sample_s.size(); ++k) {
     LaserScan scan;
     scan.stamp_s = scan.log_time_s = timing.stamps_s[k];
-    scan.angle_min_rad = -0.5 * options.field_of_view_rad;
-    scan.angle_increment_rad = increment;
+    const double turn = options.clockwise ? -1.0 : 1.0;
+    scan.angle_min_rad = -0.5 * turn * options.field_of_view_rad;
+    scan.angle_increment_rad = turn * increment;
     scan.time_increment_s = time_increment;
     scan.scan_time_s = options.laser.mean_interval_s;
     if (options.logging.has_value() && options.logging->sensor_period_s > 0.0) {

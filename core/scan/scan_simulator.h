@@ -61,7 +61,10 @@ struct ScanSimOptions {
   double missing_probability = 0.0;  // Returns dropped at random.
   bool missing_as_nan = false;       // No return: NaN instead of +inf.
   double sweep_s = 0.0;              // time_increment = sweep / beams; 0: instantaneous.
-  double encoder_rate_hz = 100.0;    // Without a logging model; 0: encoders at the scan times.
+  // The beams turn clockwise in the sensor frame (angle_min = +fov/2, a negative increment): how
+  // an upside-down lidar's sweep looks once its scans are mirrored into an upright frame.
+  bool clockwise = false;
+  double encoder_rate_hz = 100.0;  // Without a logging model; 0: encoders at the scan times.
   std::string frame_id = "laser";
   uint64_t seed = 1;  // Range noise, missing returns (the motion uses laser.seed).
 };

@@ -45,18 +45,9 @@ StatusOr<ScanPointCalibration> RefineRobotOnScanPoints(const RobotMessages& bag,
     const double t = it != time_of_line.end() ? it->second : scans[i].stamp_s + median_correction_s;
     // A scan the timing did not place may fall out of order with its timed neighbours.
     if (!input.first_beam_time_s.empty() && !(t > input.first_beam_time_s.back())) continue;
-    if (!log.mirrored) {
-      input.scans.push_back(&scans[i]);
-      input.first_beam_time_s.push_back(t);
-      continue;
-    }
-    // Mirrored, the beams keep their times: the first is the last measured.
-    const double sweep_s = scans[i].SweepSeconds();
-    mirrored.push_back(MirroredScan(scans[i]));
-    mirrored.back().time_increment_s = -scans[i].time_increment_s;
-    mirrored.back().stamp_s += sweep_s;
-    input.scans.push_back(&mirrored.back());
-    input.first_beam_time_s.push_back(t + sweep_s);
+    if (log.mirrored) mirrored.push_back(MirroredScan(scans[i]));
+    input.scans.push_back(log.mirrored ? &mirrored.back() : &scans[i]);
+    input.first_beam_time_s.push_back(t);
   }
   StatusOr<ScanPointCalibration> out =
       CalibrateOnScanPoints(input, timing.calibration.estimate, options);

@@ -109,15 +109,8 @@ Status CheckWheelReadings(const RobotBagLog& log) {
 
 LaserScan MirroredScan(const LaserScan& scan) {
   LaserScan out = scan;
-  const int n = static_cast<int>(scan.ranges_m.size());
-  const double last = scan.angle_min_rad + (n - 1) * scan.angle_increment_rad;
-  out.angle_min_rad = -last;
-  std::reverse(out.ranges_m.begin(), out.ranges_m.end());
-  std::reverse(out.intensities.begin(), out.intensities.end());
-  // The stamp stays the first measured beam's time (the sample time the calibration reads);
-  // beams in reversed order would need a negative time increment from the last beam's time, so
-  // a mirrored scan is taken as instantaneous (not de-skewed).
-  out.time_increment_s = 0.0;
+  out.angle_min_rad = -scan.angle_min_rad;
+  out.angle_increment_rad = -scan.angle_increment_rad;
   return out;
 }
 

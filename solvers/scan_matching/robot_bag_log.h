@@ -71,8 +71,9 @@ StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& bag,
                                                      const LaserTimingOptions& timing);
 
 // A laser scan seen from its mirror image (y → −y): the scans of a sensor mounted upside down,
-// in a frame whose z axis points up like the base's. Beams keep increasing angles (reversed
-// order); the scan keeps its stamp and is taken as instantaneous (time_increment_s = 0).
+// in a frame whose z axis points up like the base's. Every angle changes sign (the increment
+// too: the beams turn clockwise there); the beams keep their order, stamp and times, so that the
+// sweep is de-skewed as any other.
 LaserScan MirroredScan(const LaserScan& scan);
 
 }  // namespace calib

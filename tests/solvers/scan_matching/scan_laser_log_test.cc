@@ -217,7 +217,9 @@ TEST(ScanLaserLog, ASweepLongerThanThePeriodIsTakenAsInstantaneous) {
 // A lidar mounted upside down: its raw scans turn clockwise, and tf says so (the sensor's z axis
 // down). The scans are mirrored back and the calibration is right, with a warning.
 TEST(ScanLaserLog, AnUpsideDownLidarIsMirroredThroughTf) {
-  const StatusOr<ScanSimulation> sim = SimulateScans(Robot(400, 6));
+  ScanSimOptions options = Robot(400, 6);
+  options.clockwise = true;  // Upright; mirrored below into the lidar's own, counter-clockwise.
+  const StatusOr<ScanSimulation> sim = SimulateScans(options);
   ASSERT_TRUE(sim.ok()) << sim.message();
   RobotMessages bag = ScanSimulationMessages(*sim);
   bag.source = "upside_down.bag";
@@ -244,17 +246,23 @@ TEST(ScanLaserLog, AnUpsideDownLidarIsMirroredThroughTf) {
   EXPECT_TRUE(!wrong.ok() || WorstZ(wrong->calibration, sim->truth) > 10.0);
 }
 
-// A scan seen in a mirror: every return at the mirrored angle, same range.
+// A scan seen in a mirror: every return at the mirrored angle, same range, same time.
 TEST(ScanLaserLog, MirroredScanFlipsTheAngles) {
   LaserScan scan;
+  scan.stamp_s = 7.0;
   scan.angle_min_rad = -1.0;
   scan.angle_increment_rad = 0.25;
+  scan.time_increment_s = 1e-4;
   scan.ranges_m = {1.0f, 2.0f, 3.0f, 4.0f, 5.0f};
   const LaserScan m = MirroredScan(scan);
   for (int i = 0; i < 5; ++i) {
-    EXPECT_NEAR(m.BeamAngle(4 - i), -scan.BeamAngle(i), 1e-15);
-    EXPECT_EQ(m.ranges_m[4 - i], scan.ranges_m[i]);
+    EXPECT_NEAR(m.BeamAngle(i), -scan.BeamAngle(i), 1e-15);
+    EXPECT_EQ(m.ranges_m[i], scan.ranges_m[i]);
+    EXPECT_EQ(m.BeamTime(i), scan.BeamTime(i));
   }
+  const LaserScan back = MirroredScan(m);
+  EXPECT_EQ(back.angle_min_rad, scan.angle_min_rad);
+  EXPECT_EQ(back.angle_increment_rad, scan.angle_increment_rad);
 }
 
 TEST(ScanLaserLog, TooFewScansOrStampsOutOfOrderAreErrors) {
