@@ -230,13 +230,15 @@ StatusOr<ScanSimulation> SimulateScans(const ScanSimOptions& options) {
   const float no_return = options.missing_as_nan ? std::numeric_limits<float>::quiet_NaN()
                                                  : std::numeric_limits<float>::infinity();
   std::vector<double> beam_times(time_increment > 0.0 ? n : 1);
+  // Upside down, a beam at angle a in the lidar's frame looks along −a in the upright one.
+  const double mirror = options.upside_down ? -1.0 : 1.0;
+  truth.upside_down = options.upside_down;
   sim.scans.reserve(timing.sample_s.size());
   for (size_t k = 0; k < timing.sample_s.size(); ++k) {
     LaserScan scan;
     scan.stamp_s = scan.log_time_s = timing.stamps_s[k];
-    const double turn = options.clockwise ? -1.0 : 1.0;
-    scan.angle_min_rad = -0.5 * turn * options.field_of_view_rad;
-    scan.angle_increment_rad = turn * increment;
+    scan.angle_min_rad = -0.5 * options.field_of_view_rad;
+    scan.angle_increment_rad = increment;
     scan.time_increment_s = time_increment;
     scan.scan_time_s = options.laser.mean_interval_s;
     if (options.logging.has_value() && options.logging->sensor_period_s > 0.0) {
@@ -254,8 +256,8 @@ StatusOr<ScanSimulation> SimulateScans(const ScanSimOptions& options) {
     scan.ranges_m.resize(n);
     for (int i = 0; i < n; ++i) {
       const Pose2d sensor = Compose(bases[time_increment > 0.0 ? i : 0], truth.base_T_sensor);
-      double range =
-          sim.world.CastRay(sensor.head<2>(), sensor(2) + scan.BeamAngle(i), options.range_max_m);
+      double range = sim.world.CastRay(sensor.head<2>(), sensor(2) + mirror * scan.BeamAngle(i),
+                                       options.range_max_m);
       range += options.range_noise_sigma_m * noise.Normal();  // Drawn for every beam.
       const bool dropped = missing.Uniform() < options.missing_probability;
       const bool valid = !dropped && range >= options.range_min_m && range <= options.range_max_m;
@@ -312,6 +314,10 @@ RobotMessages ScanSimulationMessages(const ScanSimulation& simulation,
   const Pose2d& l = simulation.truth.base_T_sensor;
   mount.translation = Eigen::Vector3d(l(0), l(1), 0.0);
   mount.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(l(2), Eigen::Vector3d::UnitZ()));
+  if (simulation.truth.upside_down) {
+    mount.rotation =
+        mount.rotation * Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
+  }
   messages.tf_static.push_back(mount);
   for (const auto& [topic, list] : messages.scans) {
     messages.topics.push_back({topic, "sensor_msgs/LaserScan", static_cast<int64_t>(list.size())});

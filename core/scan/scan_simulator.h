@@ -61,9 +61,10 @@ struct ScanSimOptions {
   double missing_probability = 0.0;  // Returns dropped at random.
   bool missing_as_nan = false;       // No return: NaN instead of +inf.
   double sweep_s = 0.0;              // time_increment = sweep / beams; 0: instantaneous.
-  // The beams turn clockwise in the sensor frame (angle_min = +fov/2, a negative increment): how
-  // an upside-down lidar's sweep looks once its scans are mirrored into an upright frame.
-  bool clockwise = false;
+  // The lidar is mounted upside down (its z axis down): the scans are its own, counter-clockwise
+  // in its frame and so clockwise as seen from the base, and tf (ScanSimulationMessages) says so.
+  // base_T_sensor is the pose of the upright frame it is mirrored into.
+  bool upside_down = false;
   double encoder_rate_hz = 100.0;  // Without a logging model; 0: encoders at the scan times.
   std::string frame_id = "laser";
   uint64_t seed = 1;  // Range noise, missing returns (the motion uses laser.seed).
@@ -76,6 +77,7 @@ struct ScanSimTruth {
   std::vector<double> sweep_start_s;   // Per scan: the true time of beam 0 (odometry clock).
   std::vector<Pose2d> world_T_sensor;  // Per scan, at sweep_start_s.
   RobotPath path;
+  bool upside_down = false;  // The scans are an upside-down lidar's (ScanSimOptions).
 };
 
 struct ScanSimulation {

@@ -97,6 +97,7 @@ struct SimulateOptions {
   double missing_returns = 0.02;  // Share of beams without a return.
   double sweep = 0.0;             // Duration of one sweep (s); 0: instantaneous.
   std::string world = "mixed";    // rooms, corridor, clutter or mixed.
+  bool upside_down = false;       // The lidar mounted upside down (its own scans; tf says so).
 };
 int RunSimulate(const SimulateOptions& options);
 

@@ -171,6 +171,9 @@ DEFINE_double(missing_returns, kSimulate.missing_returns,
               "simulate (scans): share of beams without a return");
 DEFINE_double(sweep, kSimulate.sweep,
               "simulate (scans): duration of one sweep (s); each beam is cast at its own time");
+DEFINE_bool(upside_down, kSimulate.upside_down,
+            "simulate (scans): the lidar is mounted upside down (its scans turn clockwise seen "
+            "from the base; tf says so: OUT.json only)");
 DEFINE_string(world, kSimulate.world.c_str(),
               "simulate (scans): rooms, corridor, clutter or mixed");
 
@@ -260,6 +263,7 @@ SimulateOptions SimulateOptionsFromFlags() {
   options.missing_returns = FLAGS_missing_returns;
   options.sweep = FLAGS_sweep;
   options.world = FLAGS_world;
+  options.upside_down = FLAGS_upside_down;
   return options;
 }
 

@@ -39,6 +39,7 @@ StatusOr<ScanSimOptions> ScanOptions(const SimulateOptions& flags, const LaserSi
   o.range_noise_sigma_m = flags.range_noise;
   o.missing_probability = flags.missing_returns;
   o.sweep_s = flags.sweep;
+  o.upside_down = flags.upside_down;
   o.seed = flags.seed;
   return o;
 }
@@ -56,6 +57,7 @@ nlohmann::ordered_json ScanTruthJson(const ScanSimulation& sim, const SimulateOp
                         {"missing_returns", flags.missing_returns},
                         {"sweep", flags.sweep},
                         {"world", flags.world},
+                        {"upside_down", flags.upside_down},
                         {"seed", flags.seed},
                         {"trajectory", flags.trajectory}};
   return json;
@@ -74,6 +76,11 @@ int SimulateScanRobot(const SimulateOptions& flags, const LaserSimOptions& laser
   if (path.extension() == ".json") {
     written = WriteRobotMessagesJson(ScanSimulationMessages(*sim), flags.output);
   } else if (!path.has_extension()) {
+    if (flags.upside_down) {
+      return Fail(
+          "--upside_down needs OUT.json: the scans directory has no tf to say the lidar "
+          "is upside down, and its scans would be taken as an upright lidar's");
+    }
     written = WriteLaserStream(sim->encoders, {}, flags.output);
     if (written.ok()) {
       std::filesystem::remove(path / "sensor_poses.csv");

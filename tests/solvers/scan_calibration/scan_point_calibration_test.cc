@@ -166,15 +166,11 @@ TEST(ScanPointCalibration, ARobotAtRestIsRefused) {
 // its σ resting on a cluster sandwich over few blocks).
 TEST(ScanPointCalibration, RefinesABagOfAnUpsideDownLidar) {
   ScanSimOptions options = Robot(400, 0.01, 0.1, 7);
-  options.clockwise = true;
+  options.upside_down = true;
   const StatusOr<ScanSimulation> sim = SimulateScans(options);
   ASSERT_TRUE(sim.ok()) << sim.message();
   RobotMessages bag = ScanSimulationMessages(*sim);
   bag.source = "upside_down.bag";
-  for (LaserScan& scan : bag.scans.at("/scan")) scan = MirroredScan(scan);
-  TransformStamped& mount = bag.tf_static.front();
-  mount.rotation =
-      mount.rotation * Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
   const StatusOr<RobotBagCalibration> r = CalibrateWithScanPoints(bag);
   ASSERT_TRUE(r.ok()) << r.message();
   ASSERT_TRUE(r->scan_points.has_value()) << r->scan_point_warnings.front();

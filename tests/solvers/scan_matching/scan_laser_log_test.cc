@@ -214,20 +214,16 @@ TEST(ScanLaserLog, ASweepLongerThanThePeriodIsTakenAsInstantaneous) {
   EXPECT_EQ(log->failed_matches, 0);
 }
 
-// A lidar mounted upside down: its raw scans turn clockwise, and tf says so (the sensor's z axis
-// down). The scans are mirrored back and the calibration is right, with a warning.
+// A lidar mounted upside down: seen from the base its scans turn clockwise, and tf says so (the
+// sensor's z axis down). The scans are mirrored back and the calibration is right, with a warning.
 TEST(ScanLaserLog, AnUpsideDownLidarIsMirroredThroughTf) {
   ScanSimOptions options = Robot(400, 6);
-  options.clockwise = true;  // Upright; mirrored below into the lidar's own, counter-clockwise.
+  options.upside_down = true;  // Its own scans, and tf with its z axis down.
   const StatusOr<ScanSimulation> sim = SimulateScans(options);
   ASSERT_TRUE(sim.ok()) << sim.message();
   RobotMessages bag = ScanSimulationMessages(*sim);
   bag.source = "upside_down.bag";
-  for (LaserScan& scan : bag.scans.at("/scan")) scan = MirroredScan(scan);
   ASSERT_EQ(bag.tf_static.size(), 1u);
-  TransformStamped& mount = bag.tf_static.front();
-  mount.rotation =
-      mount.rotation * Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
   const StatusOr<RobotBagLog> log = LaserLogFromRobotMessages(bag);
   ASSERT_TRUE(log.ok()) << log.message();
   ASSERT_TRUE(log->nominal_mounting.has_value());
