@@ -19,6 +19,15 @@ using ::calib::testing::ReadFile;
 
 const fs::path kBags = fs::path(CALIB_SOURCE_DIR) / "data" / "bags";
 
+// Every parameter of calibrate's JSON within 3σ of the truth's "estimate".
+void ExpectWithinThreeSigma(const nlohmann::json& json, const nlohmann::json& truth) {
+  for (const auto& [name, value] : truth.items()) {
+    EXPECT_LT(std::abs(json["estimate"][name].get<double>() - value.get<double>()),
+              3.0 * json["stddev"][name].get<double>())
+        << name;
+  }
+}
+
 class BagCliTest : public ::testing::Test {
  protected:
   void SetUp() override { dir_ = ::calib::testing::MakeScratchDir("bag_cli_test_"); }
@@ -59,11 +68,7 @@ TEST_F(BagCliTest, BagsOfTheReferenceWritersCalibrateWithinThreeSigma) {
     const CliRun run = Calibrate(bag);
     ASSERT_EQ(run.exit_code, 0) << run.err;
     const nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
-    for (const auto& [name, value] : truth.items()) {
-      EXPECT_LT(std::abs(json["estimate"][name].get<double>() - value.get<double>()),
-                3.0 * json["stddev"][name].get<double>())
-          << name;
-    }
+    ExpectWithinThreeSigma(json, truth);
     const nlohmann::json& recording = json["recording"];
     EXPECT_EQ(recording["scan_topic"], "/scan");
     EXPECT_EQ(recording["scan_matching"]["failed"], 0);
@@ -82,11 +87,7 @@ TEST_F(BagCliTest, AnUpsideDownLidarsBagCalibratesWithinThreeSigma) {
   const CliRun run = Calibrate(kBags / "sim_robot_upside_down_zstd.mcap");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
-  for (const auto& [name, value] : truth.items()) {
-    EXPECT_LT(std::abs(json["estimate"][name].get<double>() - value.get<double>()),
-              3.0 * json["stddev"][name].get<double>())
-        << name;
-  }
+  ExpectWithinThreeSigma(json, truth);
   EXPECT_EQ(json["recording"]["scan_matching"]["passes"], 2);  // The sweeps are de-skewed.
   EXPECT_LT(std::abs(json["recording"]["mounting_minus_nominal"]["sensor_x"].get<double>()), 0.01);
   EXPECT_NE(json["warnings"].dump().find("upside down"), std::string::npos) << json["warnings"];
@@ -145,11 +146,7 @@ TEST_F(BagCliTest, AScansCsvDirectoryCalibratesWithinThreeSigma) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
   const nlohmann::json truth = nlohmann::json::parse(ReadFile(truth_path))["estimate"];
-  for (const auto& [name, value] : truth.items()) {
-    EXPECT_LT(std::abs(json["estimate"][name].get<double>() - value.get<double>()),
-              3.0 * json["stddev"][name].get<double>())
-        << name;
-  }
+  ExpectWithinThreeSigma(json, truth);
   EXPECT_EQ(json["recording"]["scan_topic"], "scans.csv");
   EXPECT_EQ(json["verdict"], "trusted") << json["warnings"];
   // A scans.csv cut short inside its third line (a range missing) is named.
