@@ -1,6 +1,7 @@
 #ifndef CALIB_CORE_LASER_LASER_LOG_BUILDER_H_
 #define CALIB_CORE_LASER_LASER_LOG_BUILDER_H_
 
+#include <calib/core/huge_pages.h>
 #include <calib/core/laser/laser_log.h>
 #include <calib/core/status.h>
 #include <calib/core/text_number.h>
@@ -8,8 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <new>
-#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -36,14 +35,8 @@ class LogBuilder {
  public:
   explicit LogBuilder(const std::string& source) { log_.source = source; }
   // An estimate (EstimateByteCount): when it asks for more memory than there is, the records
-  // grow as they come instead.
-  void Reserve(size_t n) {
-    try {
-      log_.intervals.reserve(n);
-    } catch (const std::bad_alloc&) {
-    } catch (const std::length_error&) {
-    }
-  }
+  // grow as they come instead. A long log's records go on 2 MB pages (huge_pages.h).
+  void Reserve(size_t n) { ReserveOnHugePages(&log_.intervals, n); }
   size_t size() const { return log_.intervals.size(); }
 
   // `interval.start_s` holds t when `has_t`; line and record are set.

