@@ -1,3 +1,4 @@
+#include <calib/core/huge_pages.h>
 #include <calib/core/laser/laser_plausibility.h>
 #include <calib/core/text_format.h>
 
@@ -66,6 +67,7 @@ class Judge {
   explicit Judge(const std::vector<LaserInterval>& intervals)
       : intervals_(intervals), allowed_(std::max<size_t>(2, intervals.size() / 50)) {
     finding_.implausible.assign(intervals.size(), false);
+    ReserveOnHugePages(&values_, intervals.size());
     values_.resize(intervals.size());
     turns_.resize(intervals.size());
     for (size_t k = 0; k < intervals.size(); ++k) {
@@ -86,7 +88,7 @@ class Judge {
     if (n <= allowed_) return std::move(finding_);
     for (int q = 0; q < kNumQuantities; ++q) {
       std::vector<double> column;
-      column.reserve(n);
+      ReserveOnHugePages(&column, n);
       for (size_t k = 0; k < n; ++k) {
         if (!finding_.implausible[k]) column.push_back(values_[k][q]);
       }
