@@ -103,16 +103,23 @@ void ArcCoefficients(const T& angle, const T& sin_angle, const T& cos_angle, T* 
   }
 }
 
+// sin θ and cos θ for the arc functions' callers without them; below kSe2SmallAngle their series
+// read neither, so none is computed.
 template <typename T>
-void ArcCoefficients(const T& angle, T* sin_over_angle, T* one_minus_cos_over_angle) {
+void ArcSinCos(const T& angle, T* sin_angle, T* cos_angle) {
   using std::abs;
   using std::cos;
   using std::sin;
-  if (abs(angle) < T(kSe2SmallAngle)) {
-    ArcCoefficients(angle, T(0), T(1), sin_over_angle, one_minus_cos_over_angle);
-  } else {
-    ArcCoefficients(angle, sin(angle), cos(angle), sin_over_angle, one_minus_cos_over_angle);
-  }
+  const bool small = abs(angle) < T(kSe2SmallAngle);
+  *sin_angle = small ? T(0) : sin(angle);
+  *cos_angle = small ? T(1) : cos(angle);
+}
+
+template <typename T>
+void ArcCoefficients(const T& angle, T* sin_over_angle, T* one_minus_cos_over_angle) {
+  T sin_angle, cos_angle;
+  ArcSinCos(angle, &sin_angle, &cos_angle);
+  ArcCoefficients(angle, sin_angle, cos_angle, sin_over_angle, one_minus_cos_over_angle);
 }
 
 // S' = dS/dθ = (θ cos θ − sin θ)/θ² and C' = dC/dθ = (θ sin θ − 1 + cos θ)/θ², from sin θ and
@@ -134,15 +141,10 @@ void ArcCoefficientDerivatives(const T& angle, const T& sin_angle, const T& cos_
 
 template <typename T>
 void ArcCoefficientDerivatives(const T& angle, T* d_sin_over_angle, T* d_one_minus_cos_over_angle) {
-  using std::abs;
-  using std::cos;
-  using std::sin;
-  if (abs(angle) < T(kSe2SmallAngle)) {
-    ArcCoefficientDerivatives(angle, T(0), T(1), d_sin_over_angle, d_one_minus_cos_over_angle);
-  } else {
-    ArcCoefficientDerivatives(angle, sin(angle), cos(angle), d_sin_over_angle,
-                              d_one_minus_cos_over_angle);
-  }
+  T sin_angle, cos_angle;
+  ArcSinCos(angle, &sin_angle, &cos_angle);
+  ArcCoefficientDerivatives(angle, sin_angle, cos_angle, d_sin_over_angle,
+                            d_one_minus_cos_over_angle);
 }
 
 // Exp(ξ) = (S·ρx − C·ρy, C·ρx + S·ρy, θ).
