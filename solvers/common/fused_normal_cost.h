@@ -115,31 +115,11 @@ class FusedNormalCost : public ceres::CostFunction {
   Sums Accumulate(const double* const* parameters, bool want_jacobian) const {
     std::vector<Sums> partial(ChunkCount(num_items_, num_threads_, min_chunk_));
     ParallelChunks(num_items_, num_threads_, min_chunk_, [&](size_t c, size_t begin, size_t end) {
-      Sums& sums = partial[c];
-      Residual r;
-      Jacobian j;
-      for (size_t k = begin; k < end; ++k) {
-        sums.ok = linearize_(k, parameters, &r, want_jacobian ? &j : nullptr);
-        if (!sums.ok) return;
-        const double s = r.squaredNorm();
-        double rho[3] = {s, 1.0, 0.0};
-        if (loss_ != nullptr) loss_->Evaluate(s, rho);
-        sums.rho += rho[0];
-        if (!want_jacobian || !(rho[1] > 0.0)) continue;
-        const double sqrt_rho1 = std::sqrt(rho[1]);
-        double scaling = sqrt_rho1;
-        if (s > 0.0 && rho[2] > 0.0) {
-          // Ceres' curvature correction: α the smaller root of ½α² − α − (ρ''/ρ')·s = 0.
-          const double alpha = 1.0 - std::sqrt(1.0 + 2.0 * s * rho[2] / rho[1]);
-          scaling = sqrt_rho1 / (1.0 - alpha);
-          j -= (alpha / s) * r * (r.transpose() * j);
-        }
-        const Jacobian corrected = sqrt_rho1 * j;
-        // A fixed-size product the compiler unrolls (Eigen's rank update of the upper triangle
-        // goes through its general kernel, several times slower at these sizes).
-        sums.hessian.noalias() += corrected.transpose() * corrected;
-        sums.gradient.noalias() += corrected.transpose() * (scaling * r);
-      }
+      // Summed on the thread's own stack and stored once: partial sums side by side in one
+      // vector share cache lines, and writing them per item made two threads slower than one.
+      Sums sums;
+      AccumulateRange(parameters, want_jacobian, begin, end, &sums);
+      partial[c] = sums;
     });
     for (size_t c = 1; c < partial.size(); ++c) {
       partial[0].hessian += partial[c].hessian;
@@ -148,6 +128,35 @@ class FusedNormalCost : public ceres::CostFunction {
       partial[0].ok = partial[0].ok && partial[c].ok;
     }
     return partial[0];
+  }
+
+  void AccumulateRange(const double* const* parameters, bool want_jacobian, size_t begin,
+                       size_t end, Sums* out) const {
+    Sums& sums = *out;
+    Residual r;
+    Jacobian j;
+    for (size_t k = begin; k < end; ++k) {
+      sums.ok = linearize_(k, parameters, &r, want_jacobian ? &j : nullptr);
+      if (!sums.ok) return;
+      const double s = r.squaredNorm();
+      double rho[3] = {s, 1.0, 0.0};
+      if (loss_ != nullptr) loss_->Evaluate(s, rho);
+      sums.rho += rho[0];
+      if (!want_jacobian || !(rho[1] > 0.0)) continue;
+      const double sqrt_rho1 = std::sqrt(rho[1]);
+      double scaling = sqrt_rho1;
+      if (s > 0.0 && rho[2] > 0.0) {
+        // Ceres' curvature correction: α the smaller root of ½α² − α − (ρ''/ρ')·s = 0.
+        const double alpha = 1.0 - std::sqrt(1.0 + 2.0 * s * rho[2] / rho[1]);
+        scaling = sqrt_rho1 / (1.0 - alpha);
+        j -= (alpha / s) * r * (r.transpose() * j);
+      }
+      const Jacobian corrected = sqrt_rho1 * j;
+      // A fixed-size product the compiler unrolls (Eigen's rank update of the upper triangle
+      // goes through its general kernel, several times slower at these sizes).
+      sums.hessian.noalias() += corrected.transpose() * corrected;
+      sums.gradient.noalias() += corrected.transpose() * (scaling * r);
+    }
   }
 
   size_t num_items_;

@@ -71,6 +71,8 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
                                          LaserParamMatrix::Zero());
   ParallelChunks(
       intervals.size(), num_threads, kMinChunk, [&](size_t chunk, size_t begin, size_t end) {
+        // On the thread's stack: side by side in `hessians` the sums would share cache lines.
+        LaserParamMatrix h = LaserParamMatrix::Zero();
         for (size_t k = begin; k < end; ++k) {
           const LaserInterval& in = intervals[k];
           IntervalTerms& t = log.terms[k];
@@ -92,8 +94,9 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
           Eigen::Vector3d e;
           LaserResidual::Linearize(in, identity, v.data(), v.data() + 3, &e, &jacobian);
           t.influence = (jacobian.transpose() * weight.asDiagonal() * e).cast<float>();
-          hessians[chunk] += jacobian.transpose() * weight.asDiagonal() * jacobian;
+          h += jacobian.transpose() * weight.asDiagonal() * jacobian;
         }
+        hessians[chunk] = h;
       });
   for (const LaserParamMatrix& h : hessians) *hessian += h;
   RescueTimingOutliers(intervals, noise_sigma, &log.terms);
@@ -110,7 +113,7 @@ LaserParamMatrix InfluenceLongRun(const std::vector<LogTerms>& logs, int lag, in
       // Σ_k ψ_kψ_kᵀ + C + Cᵀ with C = Σ_k ψ_k·(Σ_j w_j ψ_{k+j})ᵀ: one outer product per
       // interval, the lags summed as a running vector.
       LaserParamMatrix cross = LaserParamMatrix::Zero();
-      LaserParamMatrix& sum = sums[chunk];
+      LaserParamMatrix sum = LaserParamMatrix::Zero();  // Stored once (see ComputeTerms).
       const auto psi_at = [&](long k) {
         return k < static_cast<long>(t.size()) ? t[k].Influence() : Vector6::Zero().eval();
       };
@@ -120,7 +123,7 @@ LaserParamMatrix InfluenceLongRun(const std::vector<LogTerms>& logs, int lag, in
         sum.noalias() += psi * psi.transpose();
         cross.noalias() += psi * ahead.value().transpose();
       }
-      sum += cross + cross.transpose();
+      sums[chunk] = sum + cross + cross.transpose();
     });
     for (const LaserParamMatrix& sum : sums) s += sum;
   }

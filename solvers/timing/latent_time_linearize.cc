@@ -250,11 +250,14 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize(bool with_scores) con
     std::vector<char> ok(ChunkCount(count, options_.num_threads, kMinChunk), 1);
     ParallelChunks(
         count, options_.num_threads, kMinChunk, [&](int chunk, size_t begin, size_t end) {
-          for (size_t i = begin; i < end && ok[chunk]; ++i) {
-            ok[chunk] = EvaluateRobustRow(
+          // A local flag, stored once: the chunks' flags share a cache line.
+          bool evaluated = true;
+          for (size_t i = begin; i < end && evaluated; ++i) {
+            evaluated = EvaluateRobustRow(
                 *interval_functions_[first + i], interval_blocks_[first + i], column_of,
                 loss_.get(), odometry_, plus, with_scores && !encoder_rates_.empty(), &rows[i]);
           }
+          ok[chunk] = evaluated;
         });
     if (std::find(ok.begin(), ok.end(), 0) != ok.end()) {
       return Status::Internal("the timing-aware problem could not be evaluated");
