@@ -1,6 +1,8 @@
 #include <calib/core/huge_pages.h>
 
 #include <cstdint>
+#include <cstdlib>
+#include <new>
 
 #if defined(__linux__)
 #include <sys/mman.h>
@@ -18,6 +20,30 @@ void AdviseHugePages(const void* data, size_t bytes) {
 #else
   (void)data;
   (void)bytes;
+#endif
+}
+
+void* MapMemory(size_t bytes) {
+  if (bytes == 0) bytes = 1;
+#if defined(__linux__)
+  void* data = mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (data == MAP_FAILED) throw std::bad_alloc();
+  AdviseHugePages(data, bytes);
+  return data;
+#else
+  void* data = std::malloc(bytes);
+  if (data == nullptr) throw std::bad_alloc();
+  return data;
+#endif
+}
+
+void UnmapMemory(void* data, size_t bytes) {
+  if (data == nullptr) return;
+#if defined(__linux__)
+  munmap(data, bytes == 0 ? 1 : bytes);
+#else
+  (void)bytes;
+  std::free(data);
 #endif
 }
 

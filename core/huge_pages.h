@@ -32,6 +32,27 @@ void ReserveOnHugePages(std::vector<T>* v, size_t n) {
   AdviseHugePages(v->data() + v->size(), (v->capacity() - v->size()) * sizeof(T));
 }
 
+// Memory of its own mapping, given back to the kernel when freed, wherever malloc keeps freed
+// blocks for reuse (tools/process_memory.h): for a large temporary that would otherwise leave a
+// hole in the heap that later, larger blocks cannot use. Advised as above.
+void* MapMemory(size_t bytes);  // Throws std::bad_alloc.
+void UnmapMemory(void* data, size_t bytes);
+
+template <typename T>
+struct MappedAllocator {
+  using value_type = T;
+  MappedAllocator() = default;
+  template <typename U>
+  explicit MappedAllocator(const MappedAllocator<U>&) {}
+  T* allocate(size_t n) {
+    if (n > static_cast<size_t>(-1) / sizeof(T)) throw std::bad_alloc();
+    return static_cast<T*>(MapMemory(n * sizeof(T)));
+  }
+  void deallocate(T* data, size_t n) { UnmapMemory(data, n * sizeof(T)); }
+  bool operator==(const MappedAllocator&) const { return true; }
+  bool operator!=(const MappedAllocator&) const { return false; }
+};
+
 }  // namespace calib
 
 #endif  // CALIB_CORE_HUGE_PAGES_H_

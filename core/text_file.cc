@@ -40,7 +40,6 @@ MappedFile& MappedFile::operator=(MappedFile&& other) noexcept {
   owned_ = std::move(other.owned_);
   mapped_ = other.mapped_;
   size_ = other.size_;
-  released_ = other.released_;
   data_ = mapped_ ? other.data_ : owned_.data();
   other.data_ = nullptr;
   other.size_ = 0;
@@ -54,19 +53,17 @@ void MappedFile::Unmap() {
   if (mapped_ && data_ != nullptr) munmap(const_cast<char*>(data_), size_);
   data_ = nullptr;
   size_ = 0;
-  released_ = 0;
   mapped_ = false;
 }
 
-void MappedFile::Release(const char* before) const {
-  if (!mapped_ || before < data_ || before > data_ + size_) return;
+void MappedFile::Release(const char* begin, const char* end) const {
+  if (!mapped_ || begin < data_ || end > data_ + size_ || !(begin < end)) return;
   const size_t page = static_cast<size_t>(sysconf(_SC_PAGESIZE));
-  const size_t end = static_cast<size_t>(before - data_) / page * page;
-  if (end < released_) released_ = 0;  // A new pass over the text (its pages read back).
-  if (end <= released_) return;
+  const size_t first = (static_cast<size_t>(begin - data_) + page - 1) / page * page;
+  const size_t last = static_cast<size_t>(end - data_) / page * page;
+  if (last <= first) return;
   // The mapping is private and never written: dropped pages read back from the file.
-  madvise(const_cast<char*>(data_) + released_, end - released_, MADV_DONTNEED);
-  released_ = end;
+  madvise(const_cast<char*>(data_) + first, last - first, MADV_DONTNEED);
 }
 
 size_t EstimateByteCount(std::string_view text, char byte) {

@@ -23,11 +23,12 @@ constexpr size_t kMaxCsvColumns = 10000;
 // A NUL byte within this many leading bytes marks a binary file (checked before any parsing).
 constexpr size_t kTextCheckBytes = 64 * 1024;
 
-// A parser calls this with a pointer into its text when it will not read the bytes before it
-// again: a mapped file then drops their pages, so that a long log's parse keeps a window of the
-// file resident instead of all of it (a million intervals: 200 MB).
-using ReleaseText = std::function<void(const char* before)>;
-// Parsers call it at most this often.
+// A parser calls this with a range [begin, end) of its text that it will not read again: a mapped
+// file then drops those pages, so that a long log's parse keeps a window of the file resident
+// instead of all of it (a million intervals: 200 MB). Ranges of one parse do not overlap, and
+// threads parsing disjoint parts of a text may call it at once.
+using ReleaseText = std::function<void(const char* begin, const char* end)>;
+// Parsers call it at most this often (per thread, for kReleaseTextBytes / threads).
 constexpr size_t kReleaseTextBytes = size_t{16} << 20;
 
 // A file's bytes, read-only and owned: a regular file is mapped (MAP_PRIVATE, PROT_READ), so that
@@ -52,12 +53,11 @@ class MappedFile {
   const uint8_t* data() const { return reinterpret_cast<const uint8_t*>(data_); }
   uint64_t size() const { return size_; }
   const std::string& path() const { return path_; }
-  // Drops the resident pages wholly before `before` (a pointer into text()); they read back from
-  // the file if touched again. A pointer before the previous call's starts a new pass (from the
-  // text's start). No effect on a file read into memory.
-  void Release(const char* before) const;
+  // Drops the resident pages wholly inside [begin, end) (pointers into text()); they read back
+  // from the file if touched again. No effect on a file read into memory. Thread-safe.
+  void Release(const char* begin, const char* end) const;
   ReleaseText Releaser() const {
-    return [this](const char* before) { Release(before); };
+    return [this](const char* begin, const char* end) { Release(begin, end); };
   }
 
  private:
@@ -69,8 +69,7 @@ class MappedFile {
   const char* data_ = nullptr;
   size_t size_ = 0;
   bool mapped_ = false;
-  mutable size_t released_ = 0;  // Bytes dropped in this pass (a page multiple).
-  std::string owned_;            // The bytes of a file that could not be mapped.
+  std::string owned_;  // The bytes of a file that could not be mapped.
 };
 
 // About how many times `byte` occurs in `text`, to reserve a reader's records: exact within its

@@ -53,7 +53,7 @@ StatusOr<LaserLog> ParseCsv(std::string_view text, const std::string& source,
     CALIB_RETURN_IF_ERROR(builder.Add(std::move(interval), has_t));
     const size_t read = static_cast<size_t>(csv.position() - text.data());
     if (release && read >= released + kReleaseTextBytes) {
-      release(csv.position());
+      release(text.data() + released, csv.position());
       released = read;
     }
   }

@@ -7,9 +7,14 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <new>
+#include <optional>
 #include <string>
 #include <string_view>
+#include <system_error>
+#include <thread>
 #include <utility>
+#include <vector>
 
 namespace calib {
 namespace {
@@ -28,20 +33,43 @@ constexpr size_t kMinRecordBytes = 32;
 enum TupleKey { kKeyT, kKeyPhiL, kKeyPhiR, kKeySm, kKeyStart, kNumKeys };
 constexpr const char* kTupleKeyNames[kNumKeys] = {"T", "phi_l", "phi_r", "sm", "t"};
 
+// Records parsed without the checks across records (LogBuilder::Add), with whether each had t:
+// a part of a long text parsed on its own thread, its lines and records counted from the part's
+// start.
+struct RawRecords {
+  // Its own mapping: freed, it leaves no hole in the heap (a million intervals: +40 MB at peak).
+  std::vector<LaserInterval, MappedAllocator<LaserInterval>> intervals;
+  std::vector<bool> has_t;
+};
+
 class TupleParser {
  public:
-  TupleParser(std::string_view text, const std::string& source, const ReleaseText& release)
+  // `release_bytes`: how much text may stay resident between calls of `release`.
+  TupleParser(std::string_view text, const std::string& source, const ReleaseText& release,
+              size_t release_bytes = kReleaseTextBytes)
       : p_(text.data()),
         end_(text.data() + text.size()),
         builder_(source),
         source_(source),
-        release_(release) {
-    // A file of braces must not reserve more records than its bytes can hold.
-    builder_.Reserve(std::min(EstimateByteCount(text, '{'), text.size() / kMinRecordBytes));
+        release_(release),
+        release_bytes_(release_bytes) {
+    released_ = p_;
     next_release_ = Ahead(p_);
   }
 
+  // Room for the records of `text` (an estimate from its braces, bounded by its bytes).
+  void Reserve(std::string_view text) { builder_.Reserve(EstimateRecords(text)); }
+  static size_t EstimateRecords(std::string_view text) {
+    return std::min(EstimateByteCount(text, '{'), text.size() / kMinRecordBytes);
+  }
+
   StatusOr<LaserLog> Parse() {
+    CALIB_RETURN_IF_ERROR(ParseRecords(nullptr));
+    return Finish();
+  }
+
+  // Every record of the text into the log, or into *raw when given.
+  Status ParseRecords(RawRecords* raw) {
     SkipSpace();
     while (p_ < end_) {
       if (*p_ != '{') {
@@ -54,15 +82,36 @@ class TupleParser {
       LaserInterval interval;
       bool has_t = false;
       CALIB_RETURN_IF_ERROR(ParseBoundedRecord(&interval, &has_t));
-      CALIB_RETURN_IF_ERROR(builder_.Add(std::move(interval), has_t));
+      if (raw != nullptr) {
+        raw->intervals.push_back(std::move(interval));
+        raw->has_t.push_back(has_t);
+      } else {
+        CALIB_RETURN_IF_ERROR(builder_.Add(std::move(interval), has_t));
+      }
       SkipSpace();
       if (release_ && p_ >= next_release_) {
-        release_(p_);
+        release_(released_, p_);
+        released_ = p_;
         next_release_ = Ahead(p_);
       }
     }
-    return std::move(builder_).Finish("");
+    return Status::Ok();
   }
+
+  // Adds the records of the text that follows this parser's (parsed by ParseRecords into `raw`),
+  // numbering their lines and records on from this parser's.
+  Status AddFollowing(RawRecords raw) {
+    const int64_t lines_before = line_ - 1;
+    for (size_t k = 0; k < raw.intervals.size(); ++k) {
+      LaserInterval& interval = raw.intervals[k];
+      interval.line = SaturatedInt(interval.line + lines_before);
+      interval.record = SaturatedInt(interval.record + record_);
+      CALIB_RETURN_IF_ERROR(builder_.Add(std::move(interval), raw.has_t[k]));
+    }
+    return Status::Ok();
+  }
+
+  StatusOr<LaserLog> Finish() { return std::move(builder_).Finish(""); }
 
  private:
   void SkipSpace() {
@@ -235,11 +284,13 @@ class TupleParser {
   LogBuilder builder_;
   const std::string& source_;
   const ReleaseText& release_;
+  size_t release_bytes_;
+  const char* released_ = nullptr;  // The text before it was released.
   const char* next_release_ = nullptr;
 
-  // kReleaseTextBytes past q, or the end.
+  // release_bytes_ past q, or the end.
   const char* Ahead(const char* q) const {
-    return static_cast<size_t>(end_ - q) > kReleaseTextBytes ? q + kReleaseTextBytes : end_;
+    return static_cast<size_t>(end_ - q) > release_bytes_ ? q + release_bytes_ : end_;
   }
   // 64 bits: a file may hold more than 2^31 newlines.
   int64_t line_ = 1;
@@ -247,12 +298,78 @@ class TupleParser {
   int64_t record_line_ = 0;
 };
 
+// Below this size a text is parsed in one pass (a thread costs more than half its parse).
+constexpr size_t kParseInHalvesBytes = size_t{4} << 20;
+
+// Where a record starts on a line of its own near `at`: the start of the line after the first
+// newline from `at` whose next character after spaces is '{' (npos: none within a record's
+// bound). A record holds no '{' of its own, so when the text before parses whole, one starts here.
+size_t RecordBoundaryNear(std::string_view text, size_t at) {
+  const size_t stop = std::min(text.size(), at + kMaxLineBytes);
+  for (size_t i = text.find('\n', at); i < stop; i = text.find('\n', i + 1)) {
+    size_t j = i + 1;
+    while (j < text.size() && (text[j] == ' ' || text[j] == '\t' || text[j] == '\r')) ++j;
+    if (j < text.size() && text[j] == '{') return i + 1;
+    if (i == std::string_view::npos) break;
+  }
+  return std::string_view::npos;
+}
+
+// A long text parsed in two halves at once, the second on its own thread, its records then added
+// after the first's: the same log as one pass, in about half the time. Nothing when the text is
+// short, has no record boundary near its middle, a thread cannot start, or either half fails: the
+// caller then parses in one pass, which reports the first error with its line.
+std::optional<StatusOr<LaserLog>> ParseInHalves(std::string_view text, const std::string& source,
+                                                const ReleaseText& release) {
+  if (text.size() < kParseInHalvesBytes) return std::nullopt;
+  const size_t split = RecordBoundaryNear(text, text.size() / 2);
+  if (split == std::string_view::npos) return std::nullopt;
+  TupleParser first(text.substr(0, split), source, release, kReleaseTextBytes / 2);
+  TupleParser second(text.substr(split), source, release, kReleaseTextBytes / 2);
+  first.Reserve(text);
+  RawRecords raw;
+  const size_t second_records = TupleParser::EstimateRecords(text.substr(split));
+  raw.intervals.reserve(second_records);  // On 2 MB pages (MapMemory).
+  raw.has_t.reserve(second_records);
+  Status second_status = Status::Internal("not parsed");
+  std::thread thread;
+  try {
+    thread = std::thread([&] {
+      try {
+        second_status = second.ParseRecords(&raw);
+      } catch (const std::bad_alloc&) {
+        second_status = Status::Internal("out of memory");
+      }
+    });
+  } catch (const std::system_error&) {
+    return std::nullopt;
+  }
+  Status first_status;
+  try {
+    first_status = first.ParseRecords(nullptr);
+  } catch (...) {
+    thread.join();
+    throw;
+  }
+  thread.join();
+  if (!first_status.ok() || !second_status.ok()) return std::nullopt;
+  const Status added = first.AddFollowing(std::move(raw));
+  if (!added.ok()) return StatusOr<LaserLog>(added);
+  return first.Finish();
+}
+
 }  // namespace
 
 StatusOr<LaserLog> ParseLaserTuples(std::string_view text, const std::string& source,
                                     const ReleaseText& release) {
-  return GuardAllocation(source,
-                         [&] { return TupleParser(WithoutBom(text), source, release).Parse(); });
+  return GuardAllocation(source, [&]() -> StatusOr<LaserLog> {
+    const std::string_view body = WithoutBom(text);
+    std::optional<StatusOr<LaserLog>> halves = ParseInHalves(body, source, release);
+    if (halves) return std::move(*halves);
+    TupleParser parser(body, source, release);
+    parser.Reserve(body);
+    return parser.Parse();
+  });
 }
 
 Status WriteLaserTuples(const LaserLog& log, const std::string& path) {

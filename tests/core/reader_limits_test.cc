@@ -180,9 +180,9 @@ TEST(ReaderLimitsTest, ParsedBytesOfAMappedFileAreReleased) {
   ASSERT_TRUE(file.ok()) << file.message();
   std::vector<const char*> released;
   long most_resident_kb = 0;
-  const ReleaseText release = [&](const char* before) {
-    released.push_back(before);
-    file->Release(before);
+  const ReleaseText release = [&](const char* begin, const char* end) {
+    released.push_back(begin);
+    file->Release(begin, end);
     most_resident_kb = std::max(most_resident_kb, ResidentFileKb());
   };
   const StatusOr<LaserLog> windowed = ParseLaserTuples(file->text(), path, release);

@@ -837,5 +837,65 @@ TEST(LaserTuplesTest, ParsesManyRecordsQuickly) {
               text.size() / 1e6, seconds * 1e3, seconds * 1e3 * 1e6 / n);
 }
 
+// A long text (> 4 MB) is parsed in two halves at once: the log is the one a single pass reads,
+// with the lines and records of the second half numbered on from the first's, the checks across
+// records (duplicates, gaps) applied across the split, and an error in the second half reported
+// at its own line.
+double HalvesStart(int value) { return 0.5 * value + (value / 777) * 10.0; }
+
+std::string HalvesText(int n, int bad_record) {
+  std::string text;
+  for (int k = 1; k <= n; ++k) {
+    // Every 1000th record repeats the one before (dropped); every 3rd spans two lines; t jumps
+    // (a gap) every 777th.
+    const int value = k % 1000 == 0 ? k - 1 : k;
+    const std::string phi_l = k == bad_record ? "x" : std::to_string(1.0 + 1e-6 * value);
+    text += "{\"t\": " + std::to_string(HalvesStart(value)) + ", \"T\": 0.5," +
+            (k % 3 == 0 ? "\n" : " ") + "\"phi_l\": " + phi_l +
+            ", \"phi_r\": 1.2, \"sm\": [0.05, 0.001, 0.01]}\n";
+  }
+  return text;
+}
+
+TEST(LaserTuplesInHalvesTest, AreTheLogOfOnePass) {
+  const int n = 60000;  // About 6 MB.
+  const std::string text = HalvesText(n, 0);
+  ASSERT_GT(text.size(), size_t{4} << 20);
+  const StatusOr<LaserLog> log = ParseLaserTuples(text, "long.tuple");
+  ASSERT_TRUE(log.ok()) << log.message();
+  ASSERT_EQ(log->intervals.size(), static_cast<size_t>(n - n / 1000));
+  int line = 1, gaps = 0;
+  size_t i = 0;
+  double previous_end = 0.0;
+  for (int k = 1; k <= n; ++k) {
+    if (k % 1000 != 0) {
+      const LaserInterval& interval = log->intervals[i++];
+      ASSERT_EQ(interval.record, k);
+      ASSERT_EQ(interval.line, line);
+      ASSERT_DOUBLE_EQ(interval.left_speed, 1.0 + 1e-6 * k);
+      // A gap after each jump of t and after each dropped repeat.
+      ASSERT_EQ(interval.gap_before, k > 1 && HalvesStart(k) > previous_end + 1e-3) << k;
+      previous_end = HalvesStart(k) + 0.5;
+      gaps += interval.gap_before;
+    }
+    line += k % 3 == 0 ? 2 : 1;
+  }
+  EXPECT_GT(gaps, 100);
+  ASSERT_EQ(log->warnings.size(), 1u);
+  EXPECT_NE(log->warnings[0].find(std::to_string(n / 1000) +
+                                  " exact duplicate record(s) dropped (record 1000, 2000,"),
+            std::string::npos)
+      << log->warnings[0];
+}
+
+TEST(LaserTuplesInHalvesTest, AnErrorInTheSecondHalfNamesItsLine) {
+  const int n = 60000, bad = 45001;  // 45001 = 3·15000 + 1: lines 1 … 60000 before it.
+  const StatusOr<LaserLog> log = ParseLaserTuples(HalvesText(n, bad), "long.tuple");
+  ASSERT_FALSE(log.ok());
+  EXPECT_NE(log.message().find("long.tuple:60001: record 45001: "), std::string::npos)
+      << log.message();
+  EXPECT_NE(log.message().find("phi_l"), std::string::npos) << log.message();
+}
+
 }  // namespace
 }  // namespace calib
