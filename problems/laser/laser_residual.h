@@ -7,6 +7,7 @@
 #include <ceres/jet.h>
 
 #include <Eigen/Core>
+#include <cmath>
 
 namespace calib {
 
@@ -21,6 +22,17 @@ Eigen::Matrix<T, 3, 1> SensorMotionError(const Pose2<T>& predicted, const Pose2d
   return Eigen::Matrix<T, 3, 1>(T(measured(0)) - predicted(0), T(measured(1)) - predicted(1),
                                 WrapAngle(T(measured(2)) - predicted(2)));
 }
+
+// base_T_sensor = (x, y, θ) with the sine and cosine of θ: computed once per pass over the
+// intervals rather than once per interval (a tenth of the closed-form linearization's time).
+struct SensorMounting {
+  explicit SensorMounting(const double* base_T_sensor)
+      : pose(base_T_sensor),
+        cos_theta(std::cos(base_T_sensor[2])),
+        sin_theta(std::sin(base_T_sensor[2])) {}
+  const double* pose;
+  double cos_theta, sin_theta;
+};
 
 // Pose-composition residual of one laser interval (Censi eq. 9 as a measurement model):
 //   ŝ_pred = ℓ⁻¹ ∘ o(Δφ_l, Δφ_r; r_l, r_r, b) ∘ ℓ,   r = L·SensorMotionError(ŝ_pred, ŝ),
@@ -49,12 +61,16 @@ class LaserResidual {
   // Unwhitened error e for given parameters, for noise estimation and diagnostics.
   static Eigen::Vector3d Error(const LaserInterval& interval, const double* odometry,
                                const double* base_T_sensor) {
+    return Error(interval, odometry, SensorMounting(base_T_sensor));
+  }
+  static Eigen::Vector3d Error(const LaserInterval& interval, const double* odometry,
+                               const SensorMounting& mounting) {
     Eigen::Vector3d error;
     if (interval.steps.empty()) {
-      ConstantSpeedError(interval, odometry, base_T_sensor, &error, nullptr);
+      ConstantSpeedError(interval, odometry, mounting, &error, nullptr);
     } else {
       const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
-      LaserResidual(interval, &identity)(odometry, base_T_sensor, error.data());
+      LaserResidual(interval, &identity)(odometry, mounting.pose, error.data());
     }
     return error;
   }
@@ -63,12 +79,16 @@ class LaserResidual {
   // by the closed form below).
   static void Evaluate(const LaserInterval& interval, const Eigen::Matrix3d& sqrt_information,
                        const double* odometry, const double* base_T_sensor, Eigen::Vector3d* r) {
+    Evaluate(interval, sqrt_information, odometry, SensorMounting(base_T_sensor), r);
+  }
+  static void Evaluate(const LaserInterval& interval, const Eigen::Matrix3d& sqrt_information,
+                       const double* odometry, const SensorMounting& mounting, Eigen::Vector3d* r) {
     if (interval.steps.empty()) {
       Eigen::Vector3d error;
-      ConstantSpeedError(interval, odometry, base_T_sensor, &error, nullptr);
+      ConstantSpeedError(interval, odometry, mounting, &error, nullptr);
       *r = sqrt_information * error;
     } else {
-      LaserResidual(interval, &sqrt_information)(odometry, base_T_sensor, r->data());
+      LaserResidual(interval, &sqrt_information)(odometry, mounting.pose, r->data());
     }
   }
 
@@ -79,10 +99,16 @@ class LaserResidual {
   static void Linearize(const LaserInterval& interval, const Eigen::Matrix3d& sqrt_information,
                         const double* odometry, const double* base_T_sensor, Eigen::Vector3d* r,
                         Eigen::Matrix<double, 3, 6>* jacobian) {
+    Linearize(interval, sqrt_information, odometry, SensorMounting(base_T_sensor), r, jacobian);
+  }
+  static void Linearize(const LaserInterval& interval, const Eigen::Matrix3d& sqrt_information,
+                        const double* odometry, const SensorMounting& mounting, Eigen::Vector3d* r,
+                        Eigen::Matrix<double, 3, 6>* jacobian) {
+    const double* base_T_sensor = mounting.pose;
     if (interval.steps.empty()) {
       Eigen::Vector3d error;
       Eigen::Matrix<double, 3, 6> sensor_motion_jacobian;
-      ConstantSpeedError(interval, odometry, base_T_sensor, &error, &sensor_motion_jacobian);
+      ConstantSpeedError(interval, odometry, mounting, &error, &sensor_motion_jacobian);
       *r = sqrt_information * error;
       *jacobian = -sqrt_information * sensor_motion_jacobian;
       return;
@@ -115,8 +141,9 @@ class LaserResidual {
   //   ∂(d, a)/∂(r_l, r_r, b) = [[φ_l/2, φ_r/2, 0], [−φ_l/b, φ_r/b, −a/b]].
   // Fills e and, when `ds_dp` is not null, ∂s/∂(r_l, r_r, b, x, y, θ).
   static void ConstantSpeedError(const LaserInterval& interval, const double* odometry,
-                                 const double* base_T_sensor, Eigen::Vector3d* error,
+                                 const SensorMounting& mounting, Eigen::Vector3d* error,
                                  Eigen::Matrix<double, 3, 6>* ds_dp) {
+    const double* base_T_sensor = mounting.pose;
     const double left = interval.left_speed * interval.duration_s;
     const double right = interval.right_speed * interval.duration_s;
     const double rl = odometry[0], rr = odometry[1], b = odometry[2];
@@ -126,7 +153,7 @@ class LaserResidual {
     const double ca = std::cos(a), sa = std::sin(a);
     double s, c;
     ArcCoefficients(a, sa, ca, &s, &c);
-    const double cl = std::cos(base_T_sensor[2]), sl = std::sin(base_T_sensor[2]);
+    const double cl = mounting.cos_theta, sl = mounting.sin_theta;
     const Eigen::Matrix2d to_sensor = (Eigen::Matrix2d() << cl, sl, -sl, cl).finished();
     const Eigen::Vector2d mount(base_T_sensor[0], base_T_sensor[1]);
     const Eigen::Matrix2d turn = (Eigen::Matrix2d() << ca, -sa, sa, ca).finished();

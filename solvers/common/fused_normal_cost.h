@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <type_traits>
 #include <vector>
 
 namespace calib {
@@ -31,7 +32,9 @@ namespace calib {
 // The linearization is item k's whitened residual at the parameters (blocks as Ceres passes them)
 // and, when `jacobian` is not null, its derivative along the concatenated blocks; false: not
 // evaluable. Its type is a template parameter so that a lambda inlines into the pass (a
-// std::function call per item cost a tenth of a pass); NewFusedNormalCost deduces it.
+// std::function call per item cost a tenth of a pass); NewFusedNormalCost deduces it. It may
+// instead take the parameters alone and return the per-item function (k, r, jacobian) → bool,
+// so that what all items share (a sine of a parameter) is computed once per pass.
 template <int D, int N>
 using FusedLinearize =
     std::function<bool(size_t k, const double* const* parameters, Eigen::Matrix<double, D, 1>* r,
@@ -113,12 +116,23 @@ class FusedNormalCost : public ceres::CostFunction {
   };
 
   Sums Accumulate(const double* const* parameters, bool want_jacobian) const {
+    if constexpr (std::is_invocable_v<const F&, const double* const*>) {
+      return AccumulateItems(linearize_(parameters), want_jacobian);
+    } else {
+      return AccumulateItems(
+          [&](size_t k, Residual* r, Jacobian* j) { return linearize_(k, parameters, r, j); },
+          want_jacobian);
+    }
+  }
+
+  template <typename Item>
+  Sums AccumulateItems(const Item& item, bool want_jacobian) const {
     std::vector<Sums> partial(ChunkCount(num_items_, num_threads_, min_chunk_));
     ParallelChunks(num_items_, num_threads_, min_chunk_, [&](size_t c, size_t begin, size_t end) {
       // Summed on the thread's own stack and stored once: partial sums side by side in one
       // vector share cache lines, and writing them per item made two threads slower than one.
       Sums sums;
-      AccumulateRange(parameters, want_jacobian, begin, end, &sums);
+      AccumulateRange(item, want_jacobian, begin, end, &sums);
       partial[c] = sums;
     });
     for (size_t c = 1; c < partial.size(); ++c) {
@@ -130,13 +144,14 @@ class FusedNormalCost : public ceres::CostFunction {
     return partial[0];
   }
 
-  void AccumulateRange(const double* const* parameters, bool want_jacobian, size_t begin,
-                       size_t end, Sums* out) const {
+  template <typename Item>
+  void AccumulateRange(const Item& item, bool want_jacobian, size_t begin, size_t end,
+                       Sums* out) const {
     Sums& sums = *out;
     Residual r;
     Jacobian j;
     for (size_t k = begin; k < end; ++k) {
-      sums.ok = linearize_(k, parameters, &r, want_jacobian ? &j : nullptr);
+      sums.ok = item(k, &r, want_jacobian ? &j : nullptr);
       if (!sums.ok) return;
       const double s = r.squaredNorm();
       double rho[3] = {s, 1.0, 0.0};

@@ -3,7 +3,6 @@
 #include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/laser/laser_consistency_terms.h>
 #include <calib/solvers/laser/laser_motion.h>
-#include <ceres/jet.h>
 
 #include <algorithm>
 #include <cmath>
@@ -13,17 +12,6 @@ namespace {
 
 // Below this many intervals per chunk a thread costs more than it saves.
 constexpr size_t kMinChunk = 5000;
-
-template <typename T>
-T Travel(const Pose2d& sensor_motion, const Pose2<T>& base_T_sensor) {
-  using std::cos;
-  using std::sin;
-  const Pose2<T> o =
-      Compose(Compose(base_T_sensor, Pose2<T>(sensor_motion.cast<T>())), Inverse(base_T_sensor));
-  const T half = o(2) / T(2);
-  const T sinc = ceres::abs(half) < T(1e-4) ? T(1) - half * half / T(6) : sin(half) / half;
-  return (o(0) * cos(half) + o(1) * sin(half)) / sinc;
-}
 
 // Rescues the fit's outliers that are timing artefacts (see ComputeTerms).
 void RescueTimingOutliers(const std::vector<LaserInterval>& intervals,
@@ -48,12 +36,29 @@ void RescueTimingOutliers(const std::vector<LaserInterval>& intervals,
 
 double ForwardTravel(const Pose2d& sensor_motion, const Pose2d& base_T_sensor,
                      Eigen::Vector3d* gradient) {
-  using Jet3 = ceres::Jet<double, 3>;
-  const Pose2<Jet3> mounting(Jet3(base_T_sensor(0), 0), Jet3(base_T_sensor(1), 1),
-                             Jet3(base_T_sensor(2), 2));
-  const Jet3 travel = Travel(sensor_motion, mounting);
-  if (gradient != nullptr) *gradient = travel.v;
-  return travel.a;
+  return ForwardTravel(sensor_motion, SensorMounting(base_T_sensor.data()), gradient);
+}
+
+// With ℓ = (p, θ_ℓ), s = (t, φ): o = ℓ ∘ s ∘ ℓ⁻¹ = (R(θ_ℓ)·t + (I − R(φ))·p, φ), and with
+// u = (cos(φ/2), sin(φ/2)) / sinc(φ/2) the travel is uᵀo_xy; ∂/∂p = (I − R(φ))ᵀu and
+// ∂/∂θ_ℓ = uᵀR'(θ_ℓ)·t. One sine and cosine per interval, of φ/2.
+double ForwardTravel(const Pose2d& sensor_motion, const SensorMounting& mounting,
+                     Eigen::Vector3d* gradient) {
+  const double half = sensor_motion(2) / 2.0;
+  const double sh = std::sin(half), ch = std::cos(half);
+  const double sinc = std::abs(half) < 1e-4 ? 1.0 - half * half / 6.0 : sh / half;
+  const Eigen::Vector2d u = Eigen::Vector2d(ch, sh) / sinc;
+  const double cf = 1.0 - 2.0 * sh * sh, sf = 2.0 * sh * ch;  // cos φ, sin φ.
+  const double cl = mounting.cos_theta, sl = mounting.sin_theta;
+  const double tx = sensor_motion(0), ty = sensor_motion(1);
+  const double px = mounting.pose[0], py = mounting.pose[1];
+  const Eigen::Vector2d o(cl * tx - sl * ty + (1.0 - cf) * px + sf * py,
+                          sl * tx + cl * ty - sf * px + (1.0 - cf) * py);
+  if (gradient != nullptr) {
+    *gradient << (1.0 - cf) * u(0) - sf * u(1), sf * u(0) + (1.0 - cf) * u(1),
+        u.dot(Eigen::Vector2d(-sl * tx - cl * ty, cl * tx - sl * ty));
+  }
+  return u.dot(o);
 }
 
 LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCalibration& c,
@@ -64,6 +69,7 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
   const double still_travel_m = 0.5 * std::min(noise_sigma(0), noise_sigma(1));
   const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
   const LaserParamVector v = c.ToVector();
+  const SensorMounting mounting(v.data() + 3);
   LogTerms log{&intervals, {}};
   ReserveOnHugePages(&log.terms, intervals.size());
   log.terms.resize(intervals.size());
@@ -84,7 +90,7 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
           t.travel_predicted = (odo.left_radius_m * wheel(0) + odo.right_radius_m * wheel(1)) / 2.0;
           t.rotation_measured = in.sensor_motion(2);
           Eigen::Vector3d travel_gradient;
-          t.travel_measured = ForwardTravel(in.sensor_motion, c.base_T_sensor, &travel_gradient);
+          t.travel_measured = ForwardTravel(in.sensor_motion, mounting, &travel_gradient);
           t.travel_gradient = travel_gradient.cast<float>();
           t.still = wheel.cwiseAbs().sum() < 1e-6 ||
                     (std::abs(t.rotation_predicted) <= 0.5 * noise_sigma(2) &&
@@ -92,7 +98,7 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
           if (!t.counted) continue;
           Eigen::Matrix<double, 3, kNumLaserParams> jacobian;
           Eigen::Vector3d e;
-          LaserResidual::Linearize(in, identity, v.data(), v.data() + 3, &e, &jacobian);
+          LaserResidual::Linearize(in, identity, v.data(), mounting, &e, &jacobian);
           t.influence = (jacobian.transpose() * weight.asDiagonal() * e).cast<float>();
           h += jacobian.transpose() * weight.asDiagonal() * jacobian;
         }

@@ -11,6 +11,10 @@
 
 // The per-interval pieces of the consistency check (laser_consistency.h) and the long-run
 // variances it sums them with. Internal to the check; exposed for its tests.
+namespace calib {
+struct SensorMounting;  // problems/laser/laser_residual.h
+}  // namespace calib
+
 namespace calib::consistency_internal {
 
 using Vector6 = Eigen::Matrix<double, kNumLaserParams, 1>;
@@ -22,6 +26,9 @@ using Vector6 = Eigen::Matrix<double, kNumLaserParams, 1>;
 // it. Also gives ∂travel/∂ℓ.
 double ForwardTravel(const Pose2d& sensor_motion, const Pose2d& base_T_sensor,
                      Eigen::Vector3d* gradient = nullptr);
+// The same with the mounting's sine and cosine computed once for all intervals.
+double ForwardTravel(const Pose2d& sensor_motion, const SensorMounting& mounting,
+                     Eigen::Vector3d* gradient);
 
 // What each interval adds to the totals and to the fit. A million intervals hold one each: what
 // the interval itself gives (its T, its wheel rotation) is read from it, and the vectors that are

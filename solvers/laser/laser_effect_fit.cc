@@ -61,17 +61,19 @@ namespace {
 // form; the block then spans (r_l, r_r, b) and the mounting only.
 auto BaseLinearization(const LaserEffectData& data, const std::vector<size_t>& fitted) {
   using Cost = FusedNormalCost<3, kNumLaserParams>;
-  return [&data, fitted](size_t i, const double* const* parameters, Cost::Residual* r,
-                         Cost::Jacobian* j) {
-    const size_t k = fitted[i];
-    const LaserInterval& interval = data.intervals()[k];
-    if (j != nullptr) {
-      LaserResidual::Linearize(interval, data.sqrt_information(k), parameters[0], parameters[1], r,
-                               j);
+  // Per pass: the mounting's sine and cosine (FusedNormalCost); per interval, the rest.
+  return [&data, fitted](const double* const* parameters) {
+    return [&data, &fitted, odometry = parameters[0], mounting = SensorMounting(parameters[1])](
+               size_t i, Cost::Residual* r, Cost::Jacobian* j) {
+      const size_t k = fitted[i];
+      const LaserInterval& interval = data.intervals()[k];
+      if (j != nullptr) {
+        LaserResidual::Linearize(interval, data.sqrt_information(k), odometry, mounting, r, j);
+      } else {
+        LaserResidual::Evaluate(interval, data.sqrt_information(k), odometry, mounting, r);
+      }
       return true;
-    }
-    LaserResidual::Evaluate(interval, data.sqrt_information(k), parameters[0], parameters[1], r);
-    return true;
+    };
   };
 }
 

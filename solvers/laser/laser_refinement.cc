@@ -76,18 +76,21 @@ void LaserProblem::AddResidualBlocks(ceres::LossFunction* block_loss) {
 
 void LaserProblem::AddFusedBlock(ceres::LossFunction* block_loss) {
   using Cost = FusedNormalCost<3, kNumLaserParams>;
-  const auto linearize = [this](size_t i, const double* const* parameters, Cost::Residual* r,
-                                Cost::Jacobian* j) {
-    const size_t d = DatasetOf(i);
-    const size_t k = i - dataset_begin_[d];
-    const LaserInterval& interval = (*datasets_[d].intervals)[k];
-    const Eigen::Matrix3d& root = IntervalSqrtInformation(d, k);
-    if (j != nullptr) {
-      LaserResidual::Linearize(interval, root, parameters[0], parameters[1], r, j);
-    } else {
-      LaserResidual::Evaluate(interval, root, parameters[0], parameters[1], r);
-    }
-    return true;
+  // Per pass: the mounting's sine and cosine; per interval, the rest.
+  const auto linearize = [this](const double* const* parameters) {
+    return [this, odometry = parameters[0], mounting = SensorMounting(parameters[1])](
+               size_t i, Cost::Residual* r, Cost::Jacobian* j) {
+      const size_t d = DatasetOf(i);
+      const size_t k = i - dataset_begin_[d];
+      const LaserInterval& interval = (*datasets_[d].intervals)[k];
+      const Eigen::Matrix3d& root = IntervalSqrtInformation(d, k);
+      if (j != nullptr) {
+        LaserResidual::Linearize(interval, root, odometry, mounting, r, j);
+      } else {
+        LaserResidual::Evaluate(interval, root, odometry, mounting, r);
+      }
+      return true;
+    };
   };
   problem_->AddResidualBlock(
       NewFusedNormalCost<3, kNumLaserParams>({3, 3}, num_intervals(), linearize, block_loss,
@@ -95,10 +98,10 @@ void LaserProblem::AddFusedBlock(ceres::LossFunction* block_loss) {
       nullptr, odometry_, base_T_sensor_);
 }
 
-void LaserProblem::Linearize(size_t d, size_t k, Eigen::Vector3d* r,
+void LaserProblem::Linearize(size_t d, size_t k, const SensorMounting& mounting, Eigen::Vector3d* r,
                              Eigen::Matrix<double, 3, 6>* j) const {
   LaserResidual::Linearize((*datasets_[d].intervals)[k], IntervalSqrtInformation(d, k), odometry_,
-                           base_T_sensor_, r, j);
+                           mounting, r, j);
 }
 
 LaserProblem::~LaserProblem() = default;
@@ -166,10 +169,11 @@ Status LaserProblem::SetIntervalSqrtInformation(size_t dataset,
 std::vector<Eigen::Vector3d> LaserProblem::Errors(size_t dataset) const {
   const std::vector<LaserInterval>& intervals = *datasets_[dataset].intervals;
   std::vector<Eigen::Vector3d> errors(intervals.size());
+  const SensorMounting mounting(base_T_sensor_);
   ParallelChunks(intervals.size(), options_.num_threads, kMinChunk,
                  [&](size_t, size_t begin, size_t end) {
                    for (size_t k = begin; k < end; ++k) {
-                     errors[k] = LaserResidual::Error(intervals[k], odometry_, base_T_sensor_);
+                     errors[k] = LaserResidual::Error(intervals[k], odometry_, mounting);
                    }
                  });
   return errors;
@@ -213,6 +217,7 @@ StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::SandwichCovariance
   const int threads = std::max(1, options_.num_threads);
   std::vector<SandwichSums<kNumLaserParams>> sums(threads);
   std::atomic<bool> failed{false};
+  const SensorMounting mounting(base_T_sensor_);
   ParallelChunks(num_intervals(), threads, kMinChunk, [&](size_t chunk, size_t begin, size_t end) {
     Eigen::Matrix<double, 3, kNumLaserParams> j;
     Eigen::Vector3d r;
@@ -220,7 +225,7 @@ StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::SandwichCovariance
     SandwichSums<kNumLaserParams> own;
     for (size_t i = begin; i < end; ++i) {
       const size_t d = DatasetOf(i);
-      Linearize(d, i - dataset_begin_[d], &r, &j);
+      Linearize(d, i - dataset_begin_[d], mounting, &r, &j);
       if (!r.allFinite() || !j.allFinite()) {
         failed = true;
         return;
@@ -247,10 +252,11 @@ StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::CorrelatedSandwich
   Eigen::Matrix<double, 3, kNumLaserParams> j, j_previous;
   Eigen::Vector3d r;
   double weight_previous = 0.0;
+  const SensorMounting mounting(base_T_sensor_);
   for (size_t i = 0; i < num_intervals(); ++i) {
     const size_t d = DatasetOf(i);
     const size_t k = i - dataset_begin_[d];
-    Linearize(d, k, &r, &j);
+    Linearize(d, k, mounting, &r, &j);
     if (!r.allFinite() || !j.allFinite()) {
       return Status::Internal("a residual could not be evaluated at the estimate");
     }

@@ -19,6 +19,8 @@
 // (Levenberg–Marquardt, robust loss instead of the paper's trimming).
 namespace calib {
 
+struct SensorMounting;  // problems/laser/laser_residual.h
+
 struct LaserRefinementOptions {
   RobustLoss loss = RobustLoss::kCauchy;
   // Scale of the loss on the norm of the whitened 3-vector residual: Gaussian inliers
@@ -130,7 +132,8 @@ class LaserProblem {
                                dataset_begin_.begin() - 1);
   }
   // r and J of interval k of dataset d at the current parameters.
-  void Linearize(size_t d, size_t k, Eigen::Vector3d* r, Eigen::Matrix<double, 3, 6>* j) const;
+  void Linearize(size_t d, size_t k, const SensorMounting& mounting, Eigen::Vector3d* r,
+                 Eigen::Matrix<double, 3, 6>* j) const;
   void AddResidualBlocks(ceres::LossFunction* block_loss);
   void AddFusedBlock(ceres::LossFunction* block_loss);
   const Eigen::Matrix3d& IntervalSqrtInformation(size_t dataset, size_t k) const {

@@ -243,6 +243,27 @@ TEST(LaserConsistencyTest, ForwardTravelIsTheArcLength) {
               -0.2, 1e-12);
 }
 
+// ∂travel/∂ℓ in closed form against central differences, turning both ways and near straight.
+TEST(LaserConsistencyTest, ForwardTravelGradientMatchesNumericDifferences) {
+  const Pose2d mounting(0.12, -0.05, 2.3);
+  for (const double turn : {0.7, -1.9, 3e-5, 0.0}) {
+    const Pose2d sm = SensorMotionFromRobotMotion(mounting, ArcDisplacement(0.25, turn));
+    Eigen::Vector3d gradient;
+    const double travel = consistency_internal::ForwardTravel(sm, mounting, &gradient);
+    EXPECT_NEAR(travel, 0.25, 1e-12) << turn;
+    for (int i = 0; i < 3; ++i) {
+      constexpr double kStep = 1e-6;
+      Pose2d plus = mounting, minus = mounting;
+      plus(i) += kStep;
+      minus(i) -= kStep;
+      const double numeric = (consistency_internal::ForwardTravel(sm, plus) -
+                              consistency_internal::ForwardTravel(sm, minus)) /
+                             (2.0 * kStep);
+      EXPECT_NEAR(gradient(i), numeric, 1e-8) << "turn " << turn << ", parameter " << i;
+    }
+  }
+}
+
 // The published recordings (tuples: independent scan matches). Reports what it sees; see the
 // closing note for l90/lmov.
 // The running Bartlett sums equal the direct ones, zeros beyond the sequence included.
