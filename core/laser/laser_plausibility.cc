@@ -1,5 +1,6 @@
 #include <calib/core/huge_pages.h>
 #include <calib/core/laser/laser_plausibility.h>
+#include <calib/core/order_statistic.h>
 #include <calib/core/text_format.h>
 
 #include <algorithm>
@@ -93,8 +94,7 @@ class Judge {
         if (!finding_.implausible[k]) column.push_back(values_[k][q]);
       }
       if (column.size() <= allowed_) continue;
-      std::nth_element(column.begin(), column.end() - 1 - allowed_, column.end());
-      const double scale = *(column.end() - 1 - allowed_);
+      const double scale = KthSmallest(&column, column.size() - 1 - allowed_);
       if (!(scale > 0.0)) continue;
       Apply([&](size_t k) { return values_[k][q] > kScaleFactor * scale; },
             [&](size_t k) {

@@ -1,3 +1,4 @@
+#include <calib/core/order_statistic.h>
 #include <calib/solvers/common/outlier_share.h>
 
 #include <algorithm>
@@ -13,8 +14,7 @@ double GrossOutlierShare(const Eigen::MatrixXd& residuals, const OutlierShareOpt
   for (Eigen::Index c = 0; c < residuals.cols(); ++c) {
     std::vector<double> a(static_cast<size_t>(n));
     for (Eigen::Index i = 0; i < n; ++i) a[static_cast<size_t>(i)] = std::abs(residuals(i, c));
-    std::nth_element(a.begin(), a.begin() + static_cast<long>(a.size() / 5), a.end());
-    const double sigma = a[a.size() / 5] / kQ20OfAbsGaussian;
+    const double sigma = KthSmallest(&a, a.size() / 5) / kQ20OfAbsGaussian;
     limit(c) = std::max(options.cut * sigma, options.floor);
   }
   Eigen::Index gross = 0;

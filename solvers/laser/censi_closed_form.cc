@@ -1,3 +1,4 @@
+#include <calib/core/order_statistic.h>
 #include <calib/core/se2.h>
 #include <calib/solvers/laser/censi_closed_form.h>
 #include <calib/solvers/laser/censi_closed_form_internal.h>
@@ -162,8 +163,7 @@ StatusOr<TrimmedClosedFormResult> CensiClosedFormTrimmed(
     }
     const auto quantile = [&](std::vector<double> v) {
       const size_t n = static_cast<size_t>(std::floor((1.0 - options.fraction) * (v.size() - 1)));
-      std::nth_element(v.begin(), v.begin() + n, v.end());
-      return v[n];
+      return KthSmallest(&v, n);
     };
     const double xy_limit = quantile(kept_xy), theta_limit = quantile(kept_theta);
     for (size_t k = 0; k < intervals.size(); ++k) {

@@ -1,4 +1,5 @@
 #include <calib/core/laser/laser_log_io.h>
+#include <calib/core/order_statistic.h>
 #include <calib/core/se2.h>
 #include <calib/core/text_format.h>
 #include <calib/solvers/laser/censi_closed_form.h>
@@ -26,11 +27,7 @@ struct Fit {
   LaserCalibration calibration;
 };
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
+double Median(std::vector<double> v) { return UpperMedian(&v); }
 
 Fit FitClosedForm(const std::vector<LaserInterval>& intervals) {
   // Screened, so that a handful of glitches cannot make a log look like another reading.

@@ -1,3 +1,4 @@
+#include <calib/core/order_statistic.h>
 #include <calib/problems/laser/laser_residual.h>
 #include <calib/problems/positive_manifold.h>
 #include <calib/solvers/common/fused_normal_cost.h>
@@ -346,13 +347,10 @@ Eigen::Vector3d RobustNoiseSigma(const std::vector<Eigen::Vector3d>& errors) {
   std::vector<double> values(errors.size());
   for (int j = 0; j < 3; ++j) {
     for (size_t k = 0; k < errors.size(); ++k) values[k] = errors[k](j);
-    const size_t mid = values.size() / 2;
-    std::nth_element(values.begin(), values.begin() + mid, values.end());
-    const double median = values[mid];
+    const double median = UpperMedian(&values);
     for (double& v : values) v = std::abs(v - median);
-    std::nth_element(values.begin(), values.begin() + mid, values.end());
     // Floor: 1e-12 m or rad keeps noise-free data well-posed without affecting real data.
-    sigma(j) = std::max(1.4826 * values[mid], 1e-12);
+    sigma(j) = std::max(1.4826 * UpperMedian(&values), 1e-12);
   }
   return sigma;
 }

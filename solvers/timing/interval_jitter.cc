@@ -1,3 +1,4 @@
+#include <calib/core/order_statistic.h>
 #include <calib/core/se2.h>
 #include <calib/core/whitening.h>
 #include <calib/problems/laser/laser_residual.h>
@@ -245,8 +246,7 @@ IntervalJitterEstimate EstimateIntervalJitter(
     relative.push_back(term.gram[0] / theta(0) + term.gram[3] / theta(1) + term.gram[5] / theta(2));
   }
   if (relative.size() < 2) return estimate;
-  std::nth_element(relative.begin(), relative.begin() + relative.size() / 2, relative.end());
-  const double median = relative[relative.size() / 2];
+  const double median = UpperMedian(&relative);
   if (!(median > 0.0) || !std::isfinite(median)) return estimate;
   const double scale = 1.0 / std::sqrt(median);
 

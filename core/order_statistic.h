@@ -1,0 +1,22 @@
+#ifndef CALIB_CORE_ORDER_STATISTIC_H_
+#define CALIB_CORE_ORDER_STATISTIC_H_
+
+#include <cstddef>
+#include <vector>
+
+namespace calib {
+
+// The k-th smallest of `values` (k < size, 0-based): the value std::nth_element leaves at
+// values[k]. Exact. Medians of a million residuals are taken several times per calibration, and
+// nth_element's partitioning passes cost ~8 ms each there: on long arrays a sorted sample of 4096
+// values brackets the k-th one, a single pass counts the values below the bracket and gathers the
+// few inside it, and only those are selected. When the bracket misses (or values are NaN), it
+// falls back to nth_element over all values. The values may be reordered.
+double KthSmallest(std::vector<double>* values, size_t k);
+
+// The upper median, values[size / 2] after nth_element (KthSmallest); 0 for no values.
+double UpperMedian(std::vector<double>* values);
+
+}  // namespace calib
+
+#endif  // CALIB_CORE_ORDER_STATISTIC_H_

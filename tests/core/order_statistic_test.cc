@@ -1,0 +1,55 @@
+#include <calib/core/order_statistic.h>
+#include <calib/core/random.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace calib {
+namespace {
+
+double NthElement(std::vector<double> v, size_t k) {
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+  return v[k];
+}
+
+// Equal to nth_element's value for every kind of array: short and long, heavy tails, many ties,
+// sorted either way, and k at the ends and in between.
+TEST(OrderStatisticTest, KthSmallestEqualsNthElement) {
+  Random random(11);
+  for (const size_t n : {size_t{1}, size_t{7}, size_t{1000}, size_t{70000}, size_t{300001}}) {
+    std::vector<std::vector<double>> arrays(5, std::vector<double>(n));
+    for (size_t i = 0; i < n; ++i) {
+      arrays[0][i] = random.Normal();
+      arrays[1][i] = random.Normal() / std::max(1e-3, std::abs(random.Normal()));  // Cauchy.
+      arrays[2][i] = std::floor(random.Uniform(0.0, 5.0));  // Five values, many ties.
+      arrays[3][i] = static_cast<double>(i);
+      arrays[4][i] = -static_cast<double>(i);
+    }
+    for (const std::vector<double>& array : arrays) {
+      for (const size_t k : {size_t{0}, n / 5, n / 2, n - n / 7 - 1, n - 1}) {
+        std::vector<double> copy = array;
+        EXPECT_EQ(KthSmallest(&copy, k), NthElement(array, k)) << "n " << n << ", k " << k;
+      }
+    }
+  }
+}
+
+// A NaN among the values takes the fallback and does not crash; medians of finite values are
+// exact.
+TEST(OrderStatisticTest, NaNFallsBackAndMedianIsUpper) {
+  std::vector<double> v(100000);
+  for (size_t i = 0; i < v.size(); ++i) v[i] = static_cast<double>((i * 7919) % v.size());
+  std::vector<double> copy = v;
+  EXPECT_EQ(UpperMedian(&copy), 50000.0);
+  v[123] = std::numeric_limits<double>::quiet_NaN();
+  copy = v;
+  EXPECT_NO_FATAL_FAILURE(KthSmallest(&copy, 500));
+  std::vector<double> empty;
+  EXPECT_EQ(UpperMedian(&empty), 0.0);
+}
+
+}  // namespace
+}  // namespace calib
