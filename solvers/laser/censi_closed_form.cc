@@ -1,5 +1,6 @@
 #include <calib/core/order_statistic.h>
 #include <calib/core/se2.h>
+#include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/laser/censi_closed_form.h>
 #include <calib/solvers/laser/censi_closed_form_internal.h>
 #include <calib/solvers/laser/censi_consensus.h>
@@ -26,9 +27,25 @@ double ScaledConditionNumber(const Eigen::MatrixXd& a) {
 
 TranslationRows TranslationEquations(const LaserInterval& interval, double j21, double j22) {
   // The robot displacement per unit wheelbase (b = 1): o = (b·c_x, b·c_y, o_θ), eqs. 12–13 and
-  // §II-D, with r_l = −J21, r_r = J22.
-  const Pose2d c = IntervalRobotMotion(-j21, j22, 1.0, interval);
-  const double co = std::cos(c(2)), so = std::sin(c(2));
+  // §II-D, with r_l = −J21, r_r = J22. At constant speed, one sine and cosine of the arc's angle
+  // serve the arc and the rows.
+  Pose2d c;
+  double co, so;
+  if (interval.steps.empty()) {
+    const double left = interval.left_speed * interval.duration_s;
+    const double right = interval.right_speed * interval.duration_s;
+    const double distance = (-j21 * left + j22 * right) / 2.0;
+    const double angle = j22 * right - (-j21) * left;
+    so = std::sin(angle);
+    co = std::cos(angle);
+    double s_over, c_over;
+    ArcCoefficients(angle, so, co, &s_over, &c_over);
+    c = Pose2d(s_over * distance, c_over * distance, angle);
+  } else {
+    c = IntervalRobotMotion(-j21, j22, 1.0, interval);
+    co = std::cos(c(2));
+    so = std::sin(c(2));
+  }
   const Pose2d& s = interval.sensor_motion;
   TranslationRows l;
   l << -c(0), 1.0 - co, so, s(0), -s(1),  //
@@ -69,6 +86,31 @@ StatusOr<Vector5d> SolveTranslation(const Matrix5d& m, const CensiClosedFormOpti
 
 }  // namespace censi_internal
 
+namespace {
+
+// Below this many intervals per chunk a thread costs more than it saves (and short logs, the
+// published recordings among them, keep the one sum in order).
+constexpr size_t kMinChunk = 50000;
+
+// Σ term(interval) over the intervals with use[k] (all when `use` is null), in parallel chunks
+// summed on each thread's stack.
+template <typename M, typename F>
+M SumOverUsed(const std::vector<LaserInterval>& intervals, const std::vector<bool>* use,
+              int threads, const F& term) {
+  std::vector<M> partial(ChunkCount(intervals.size(), threads, kMinChunk), M::Zero());
+  ParallelChunks(intervals.size(), threads, kMinChunk, [&](size_t c, size_t begin, size_t end) {
+    M sum = M::Zero();
+    for (size_t k = begin; k < end; ++k) {
+      if (use == nullptr || (*use)[k]) sum += term(intervals[k]);
+    }
+    partial[c] = sum;
+  });
+  for (size_t c = 1; c < partial.size(); ++c) partial[0] += partial[c];
+  return partial[0];
+}
+
+}  // namespace
+
 StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>& intervals,
                                                 const std::vector<bool>* use,
                                                 const CensiClosedFormOptions& options) {
@@ -76,15 +118,16 @@ StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>
   const std::string missing = DescribeMissingLaserMotion(census);
   if (!missing.empty()) return Status::NotObservable(missing);
 
-  // §II-B: [Δφ_l Δφ_r] [J21 J22]ᵀ = ŝ_θ, by linear least squares.
-  Eigen::Matrix2d ata = Eigen::Matrix2d::Zero();
-  Eigen::Vector2d atb = Eigen::Vector2d::Zero();
-  for (size_t k = 0; k < intervals.size(); ++k) {
-    if (use != nullptr && !(*use)[k]) continue;
-    const Eigen::Vector2d a = IntervalWheelRotation(intervals[k]);
-    ata += a * a.transpose();
-    atb += a * intervals[k].sensor_motion(2);
-  }
+  // §II-B: [Δφ_l Δφ_r] [J21 J22]ᵀ = ŝ_θ, by linear least squares: [AᵀA | Aᵀb].
+  const Eigen::Matrix<double, 2, 3> normal = SumOverUsed<Eigen::Matrix<double, 2, 3>>(
+      intervals, use, options.num_threads, [&](const LaserInterval& interval) {
+        const Eigen::Vector2d a = IntervalWheelRotation(interval);
+        Eigen::Matrix<double, 2, 3> term;
+        term << a * a.transpose(), a * interval.sensor_motion(2);
+        return term;
+      });
+  const Eigen::Matrix2d ata = normal.leftCols<2>();
+  const Eigen::Vector2d atb = normal.col(2);
   CensiClosedFormResult result;
   result.samples_used = census.total;
   // Condition number of the stacked system itself is the square root of that of AᵀA.
@@ -100,13 +143,12 @@ StatusOr<CensiClosedFormResult> CensiClosedForm(const std::vector<LaserInterval>
   result.j22 = j(1);
 
   // §II-C: eq. 16 stacked into M = Σ L_kᵀ L_k over x = [b, ℓx, ℓy, cos ℓθ, sin ℓθ].
-  censi_internal::Matrix5d m = censi_internal::Matrix5d::Zero();
-  for (size_t k = 0; k < intervals.size(); ++k) {
-    if (use != nullptr && !(*use)[k]) continue;
-    const censi_internal::TranslationRows l =
-        censi_internal::TranslationEquations(intervals[k], result.j21, result.j22);
-    m += l.transpose() * l;
-  }
+  const censi_internal::Matrix5d m = SumOverUsed<censi_internal::Matrix5d>(
+      intervals, use, options.num_threads, [&](const LaserInterval& interval) {
+        const censi_internal::TranslationRows l =
+            censi_internal::TranslationEquations(interval, result.j21, result.j22);
+        return (l.transpose() * l).eval();
+      });
   CALIB_ASSIGN_OR_RETURN(const censi_internal::Vector5d x,
                          censi_internal::SolveTranslation(m, options, &result.lambda));
   // r_l = −b·J21 and r_r = +b·J22 (the paper's final formulas print the signs the wrong way).

@@ -13,6 +13,8 @@ namespace calib {
 struct CensiClosedFormOptions {
   // Above this condition number the linear systems are treated as degenerate.
   double max_condition_number = 1e7;
+  // On long logs the sums over the intervals run in this many chunks at once.
+  int num_threads = 2;
 };
 
 struct CensiClosedFormResult {
