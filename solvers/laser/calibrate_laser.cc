@@ -111,6 +111,10 @@ Status ClosedFormWithoutGross(const std::vector<LaserInterval>& intervals,
                               ConsensusScreen* screen_out, LaserCalibrationResult* result) {
   ConsensusScreen& screen = *screen_out;
   const StatusOr<CensiClosedFormResult> screened = CensiClosedFormScreened(intervals, &screen);
+  if (screened.ok() && screen.outliers() == 0) {
+    result->closed_form = *screened;  // Every interval kept: the closed form on all of them.
+    return Status::Ok();
+  }
   if (!screened.ok() || screen.outliers() == 0) {
     CALIB_ASSIGN_OR_RETURN(result->closed_form, CensiClosedForm(intervals));
     return Status::Ok();

@@ -1,4 +1,5 @@
 #include <calib/core/random.h>
+#include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/laser/censi_closed_form_internal.h>
 #include <calib/solvers/laser/censi_consensus.h>
 #include <calib/solvers/laser/laser_motion.h>
@@ -42,6 +43,17 @@ bool MedianBelow(size_t n, double bound, const F& value) {
     if (below + (n - end) < needed) return false;
   }
   return false;
+}
+
+// pred(k) for k in [0, n), in parallel chunks on long logs (pred only reads).
+constexpr size_t kMinChunk = 50000;
+template <typename F>
+std::vector<char> Flags(size_t n, int threads, const F& pred) {
+  std::vector<char> flags(n);
+  ParallelChunks(n, threads, kMinChunk, [&](size_t, size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k) flags[k] = pred(k);
+  });
+  return flags;
 }
 
 // Up to `count` indices evenly spread over `from`.
@@ -116,8 +128,11 @@ std::optional<Eigen::Vector2d> RotationConsensus(const std::vector<LaserInterval
   }
   if (!best) return std::nullopt;
   const double cut = options.cut * kMadToSigma * best_score + 1e-12;
+  const std::vector<char> gross =
+      Flags(intervals.size(), options.closed_form.num_threads,
+            [&](size_t k) { return std::abs(RotationResidual(intervals[k], *best)) > cut; });
   for (size_t k = 0; k < intervals.size(); ++k) {
-    if (std::abs(RotationResidual(intervals[k], *best)) > cut) {
+    if (gross[k]) {
       screen->kept[k] = false;
       ++screen->rotation_outliers;
     }
@@ -189,10 +204,14 @@ void TranslationConsensus(const std::vector<LaserInterval>& intervals, const Eig
   }
   if (!best) return;
   const double cut = options.cut * kMadToSigma * best_score + 1e-12;
+  const std::vector<char> gross =
+      Flags(intervals.size(), options.closed_form.num_threads, [&](size_t k) {
+        if (!screen->kept[k]) return false;
+        const TranslationRows l = censi_internal::TranslationEquations(intervals[k], j(0), j(1));
+        return !((l * *best).norm() <= cut);
+      });
   for (size_t k = 0; k < intervals.size(); ++k) {
-    if (!screen->kept[k]) continue;
-    const TranslationRows l = censi_internal::TranslationEquations(intervals[k], j(0), j(1));
-    if (!((l * *best).norm() <= cut)) {
+    if (gross[k]) {
       screen->kept[k] = false;
       ++screen->translation_outliers;
     }
