@@ -326,16 +326,18 @@ std::optional<StatusOr<LaserLog>> ParseInHalves(std::string_view text, const std
   if (split == std::string_view::npos) return std::nullopt;
   TupleParser first(text.substr(0, split), source, release, kReleaseTextBytes / 2);
   TupleParser second(text.substr(split), source, release, kReleaseTextBytes / 2);
-  first.Reserve(text);
   RawRecords raw;
-  const size_t second_records = TupleParser::EstimateRecords(text.substr(split));
-  raw.intervals.reserve(second_records);  // On 2 MB pages (MapMemory).
-  raw.has_t.reserve(second_records);
   Status second_status = Status::Internal("not parsed");
+  // Started before the log's records are reserved: a process's first thread leaves a small block
+  // on top of the heap, and started after the reserve it kept the memory freed below it from
+  // rejoining the top (measured: a million intervals peaked 18 MB higher).
   std::thread thread;
   try {
     thread = std::thread([&] {
       try {
+        const size_t second_records = TupleParser::EstimateRecords(text.substr(split));
+        raw.intervals.reserve(second_records);  // On 2 MB pages (MapMemory).
+        raw.has_t.reserve(second_records);
         second_status = second.ParseRecords(&raw);
       } catch (const std::bad_alloc&) {
         second_status = Status::Internal("out of memory");
@@ -346,6 +348,7 @@ std::optional<StatusOr<LaserLog>> ParseInHalves(std::string_view text, const std
   }
   Status first_status;
   try {
+    first.Reserve(text);
     first_status = first.ParseRecords(nullptr);
   } catch (...) {
     thread.join();
