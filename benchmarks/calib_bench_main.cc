@@ -128,7 +128,10 @@ int Main(int argc, char** argv) {
   config.quick = FLAGS_quick;
   config.seeds = FLAGS_seeds;
   config.threads = std::max(1, FLAGS_threads);
-  config.censi_dir = FLAGS_censi_dir;
+  // Absolute: the speed section's child processes run in folders of their own.
+  std::error_code absolute_error;
+  config.censi_dir = std::filesystem::absolute(FLAGS_censi_dir, absolute_error).string();
+  if (absolute_error || FLAGS_censi_dir.empty()) config.censi_dir = FLAGS_censi_dir;
   config.calib_cli = FLAGS_calib_cli;
   config.calib_args = FLAGS_calib_args;
   config.peer_solver = FLAGS_peer_solver;
