@@ -43,7 +43,7 @@ double KthSmallest(std::vector<double>* values, size_t k) {
       ++below;
     } else if (x <= hi) {
       inside.push_back(x);
-    } else {
+    } else if (x > hi) {
       ++above;
     }
   }

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <new>
+#include <exception>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -311,7 +311,6 @@ size_t RecordBoundaryNear(std::string_view text, size_t at) {
     size_t j = i + 1;
     while (j < text.size() && (text[j] == ' ' || text[j] == '\t' || text[j] == '\r')) ++j;
     if (j < text.size() && text[j] == '{') return i + 1;
-    if (i == std::string_view::npos) break;
   }
   return std::string_view::npos;
 }
@@ -340,7 +339,7 @@ std::optional<StatusOr<LaserLog>> ParseInHalves(std::string_view text, const std
         raw.intervals.reserve(second_records);
         raw.has_t.reserve(second_records);
         second_status = second.ParseRecords(&raw);
-      } catch (const std::bad_alloc&) {
+      } catch (const std::exception&) {  // Out of memory: the one pass then reports it.
         second_status = Status::Internal("out of memory");
       }
     });
