@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -68,11 +70,81 @@ StatusOr<ScanPointCalibration> RefineRobotOnScanPoints(const RobotMessages& bag,
       }
     }
   }
-  if (out.ok() && !timed) {
+  if (out.ok() && !timed && two_stage.two_stage_failed.empty()) {
     out->warnings.push_back("the scan timing of the two-stage route is undetermined (offset σ " +
                             Num(std::round(1e3 * timing.time_offset_stddev_s)) +
                             " ms): the scan points started from the stamps");
   }
+  return out;
+}
+
+namespace {
+
+// The scan points' result in the two-stage result's place, so that reports and deployment read
+// it as they read a refinement: the same estimate, the start as its "closed form", the stamps as
+// the sample times (the refinement's offset δ is the timing).
+LaserTimingResult ScanPointsInTwoStagePlace(const ScanPointCalibration& refined,
+                                            const LaserCalibration& start,
+                                            const std::string& warning) {
+  LaserTimingResult out;
+  LaserCalibrationResult& c = out.calibration;
+  c.estimate = refined.estimate;
+  c.covariance = refined.covariance;
+  c.stddev = refined.stddev;
+  c.closed_form.calibration = start;
+  c.closed_form_trimmed.calibration = start;
+  c.samples = refined.pairs;
+  c.inliers = static_cast<int>(std::lround(refined.inlier_fraction * refined.pairs));
+  c.converged = refined.converged;
+  c.loss = "scan points";
+  c.warnings.push_back(warning);
+  c.observability.weakest_description =
+      "not analysed (the intervals of the two-stage route are too few)";
+  c.consistency.note = "not checked (it reads the two-stage route's intervals, too few here)";
+  out.stamps_as_truth = c;
+  out.sensor_clock = "stamps";
+  out.warnings.push_back(warning);
+  return out;
+}
+
+}  // namespace
+
+StatusOr<RobotBagCalibration> CalibrateOnScanPointsAlone(const RobotMessages& bag,
+                                                         const RobotBagOptions& options,
+                                                         RobotBagLog log, const Status& why) {
+  if (!options.scan_points) return why;
+  if (!(options.nominal_wheel_radius_m > 0.0 && options.nominal_wheelbase_m > 0.0)) {
+    return Status(why.code(), why.message() +
+                                  "; the refinement on the scan points could start without the "
+                                  "two-stage route from the nominal wheels (give "
+                                  "--nominal_wheel_radius and --nominal_wheelbase)");
+  }
+  LaserCalibration start;
+  start.odometry = {options.nominal_wheel_radius_m, options.nominal_wheel_radius_m,
+                    options.nominal_wheelbase_m};
+  start.base_T_sensor =
+      log.nominal_mounting ? log.nominal_mounting->base_T_sensor : Pose2d(Pose2d::Zero());
+  RobotBagCalibration out;
+  out.log = std::move(log);
+  out.two_stage_failed = why.message();
+  out.result.calibration.estimate = start;
+  // An undetermined two-stage timing: the refinement starts from the stamps.
+  out.result.time_offset_stddev_s = std::numeric_limits<double>::infinity();
+  StatusOr<ScanPointCalibration> refined = RefineRobotOnScanPoints(bag, out, *options.scan_points);
+  if (!refined.ok()) {
+    return Status(why.code(), why.message() +
+                                  "; the refinement on the scan points from the "
+                                  "nominal wheels failed too (" +
+                                  refined.message() + ")");
+  }
+  const std::string warning =
+      "the two-stage route could not calibrate this recording (" + why.message() +
+      "): the result is the refinement on the scan points alone, started from the nominal wheels" +
+      (out.log.nominal_mounting ? " and tf's mounting" : " and a zero mounting") +
+      " (shown as its closed form)";
+  out.result = ScanPointsInTwoStagePlace(*refined, start, warning);
+  refined->warnings.insert(refined->warnings.begin(), warning);
+  out.scan_points = std::move(refined).value();
   return out;
 }
 

@@ -16,6 +16,15 @@ StatusOr<ScanPointCalibration> RefineRobotOnScanPoints(const RobotMessages& bag,
                                                        const RobotBagCalibration& two_stage,
                                                        const ScanPointOptions& options);
 
+// When the two-stage route cannot calibrate the bag (`why`: e.g. a featureless corridor, whose
+// matches are degenerate, a gap each, leaving too few intervals), the scan points still constrain
+// what the walls show in every pair: the refinement starts from the nominal wheels and tf's
+// mounting (zero without tf) at the scans' stamps, and its result stands alone. `log` is the
+// bag's matched log. Fails, saying why and what would help, without nominal wheels.
+StatusOr<RobotBagCalibration> CalibrateOnScanPointsAlone(const RobotMessages& bag,
+                                                         const RobotBagOptions& options,
+                                                         RobotBagLog log, const Status& why);
+
 }  // namespace calib
 
 #endif  // CALIB_SOLVERS_SCAN_CALIBRATION_ROBOT_SCAN_POINTS_H_

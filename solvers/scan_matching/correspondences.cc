@@ -61,11 +61,18 @@ CorrespondenceSearch::CorrespondenceSearch(const ScanPoints& reference,
 // min_segment_length_m from a (or the last before a depth jump or a gap of 30 beams). At 1081
 // beams over 270° with 1 cm of noise this halved the displacement errors of consecutive scans
 // and took a −2σ bias off the radii of a 600-scan calibration.
+// The line's ends are the first beams whose arc at a's range, k·|Δ|·ρ_a, reaches
+// min_segment_length_m / 2: chosen by the beams, not by the measured distances, which would pick
+// the candidate whose noise lengthens the segment (and tilt the line with it). On a 30-minute
+// dense log that choice alone was a bias of 5σ in the lateral mounting.
 void CorrespondenceSearch::Walk(int a, int side) {
   const double max_segment2 = options_.max_segment_length_m * options_.max_segment_length_m;
   const double min_segment2 = options_.min_segment_length_m * options_.min_segment_length_m;
+  const double arc_per_beam_m =
+      std::abs(reference_.angle_increment_rad) * reference_.points_m[a].norm();
   const int beam = reference_.beams[a];
   const int step = side == 0 ? -1 : 1;
+  bool segment_done = false;
   for (int k = 1; k < 30; ++k) {
     const int far_beam = BeamInRange(reference_, beam + step * k);
     if (far_beam < 0) break;
@@ -74,9 +81,12 @@ void CorrespondenceSearch::Walk(int a, int side) {
     const double d2 = (reference_.points_m[c] - reference_.points_m[a]).squaredNorm();
     if (d2 > max_segment2) break;
     if (k == 1) neighbour_[a][side] = c;
-    segment_end_[a][side] = c;
-    if (half_end_[a][side] < 0 && 4.0 * d2 >= min_segment2) half_end_[a][side] = c;
-    if (d2 >= min_segment2) break;
+    if (!segment_done) segment_end_[a][side] = c;
+    segment_done = segment_done || d2 >= min_segment2;
+    if (half_end_[a][side] < 0 && 2.0 * k * arc_per_beam_m >= options_.min_segment_length_m) {
+      half_end_[a][side] = c;
+    }
+    if (segment_done && half_end_[a][side] >= 0) break;
   }
 }
 

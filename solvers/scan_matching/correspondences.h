@@ -17,8 +17,9 @@ struct Correspondence {
   int current = -1;      // Index into the current scan's points.
   int reference_a = -1;  // The nearest reference point.
   int reference_b = -1;  // Its beam neighbour: the segment is (a, b).
-  // The line to hold the point to: through the first points at least min_segment_length_m / 2
-  // from a on either side of it, or (a, b) when a side has none (a depth jump, the scan's end).
+  // The line to hold the point to: through the first points on either side of a whose beams'
+  // arc at a's range reaches min_segment_length_m / 2, or (a, b) when a side has none (a depth
+  // jump, the scan's end).
   // It leaves a out: a is the point nearest to the current point, so its range noise is biased
   // towards it (on dense scans markedly), and so would be the residual.
   int line_a = -1;
@@ -49,8 +50,8 @@ class CorrespondenceSearch {
   std::vector<Eigen::Vector2d> computed_units_;  // When the reference has no beam_unit.
   const std::vector<Eigen::Vector2d>* units_ = nullptr;
   // Per reference point and side (0: beam − 1, 1: beam + 1): the adjacent beam's point when
-  // within max_segment_length_m, the end of the segment walked from it, and the first point at
-  // least min_segment_length_m / 2 away; −1 for none.
+  // within max_segment_length_m, the end of the segment walked from it, and the first point whose
+  // beams' arc reaches min_segment_length_m / 2 (the line's end); −1 for none.
   std::vector<std::array<int, 2>> neighbour_, segment_end_, half_end_;
 };
 

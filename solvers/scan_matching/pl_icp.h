@@ -65,6 +65,9 @@ struct PlIcpOptions {
   double trim_fraction = 0.0;
   double settle_step_m = 1e-3;
   double settle_step_rad = 1e-3;
+  // Removes from the final pose the bias that the reference's range noise puts in the
+  // point-to-line estimate (errors in variables; see NoiseGradientBias in pl_icp.cc).
+  bool correct_noise_bias = true;
   // Quality checks.
   int min_correspondences = 20;
   double min_matched_fraction = 0.25;  // Of the current scan's returns.

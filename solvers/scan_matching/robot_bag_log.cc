@@ -127,6 +127,7 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
   const StatusOr<PlanarMounting> mounting = MountingFromTf(bag, out.base_frame, out.sensor_frame);
   ScanLogOptions scan_options;
   scan_options.matching = options.matching;
+  scan_options.keep_unmatched = options.keep_unmatched;
   if (mounting.ok()) {
     out.nominal_mounting = *mounting;
     scan_options.nominal_base_T_sensor = mounting->base_T_sensor;
@@ -160,13 +161,16 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
   return out;
 }
 
+namespace {
+
 // The first pass of a long log, which only has to de-skew the second, is calibrated on this
 // many scans from its start (300 s at 10 Hz).
 constexpr size_t kFirstPassScans = 3000;
 
-StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& bag,
-                                                     const RobotBagOptions& options,
-                                                     const LaserTimingOptions& timing) {
+// The matching and the two-stage calibration (two passes where the scans sweep).
+StatusOr<RobotBagCalibration> CalibrateTwoStage(const RobotMessages& bag,
+                                                const RobotBagOptions& options,
+                                                const LaserTimingOptions& timing) {
   CALIB_ASSIGN_OR_RETURN(const PickedTopics topics, PickRobotTopics(bag, options.topics));
   const std::vector<LaserScan>& scans = bag.scans.at(topics.scan_topic);
   bool sweeps = false;
@@ -194,6 +198,34 @@ StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& bag,
     CALIB_ASSIGN_OR_RETURN(out.result, CalibrateLaserStreams(out.log.scans.log.streams, timing));
     out.log.matching_passes = 2;
   }
+  return out;
+}
+
+// The two-stage route failed on `why`: the scan points alone, from the bag's matched log (kept
+// however few its matches) and the nominal wheels.
+StatusOr<RobotBagCalibration> ScanPointsAlone(const RobotMessages& bag,
+                                              const RobotBagOptions& options, const Status& why) {
+  RobotBagOptions keep = options;
+  keep.keep_unmatched = true;
+  StatusOr<RobotBagLog> log = LaserLogFromRobotMessages(bag, keep);
+  if (!log.ok()) return why;
+  CALIB_RETURN_IF_ERROR(CheckWheelReadings(*log));
+  return CalibrateOnScanPointsAlone(bag, options, std::move(log).value(), why);
+}
+
+}  // namespace
+
+StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& bag,
+                                                     const RobotBagOptions& options,
+                                                     const LaserTimingOptions& timing) {
+  StatusOr<RobotBagCalibration> two_stage = CalibrateTwoStage(bag, options, timing);
+  if (!two_stage.ok()) {
+    const StatusCode code = two_stage.status().code();
+    const bool data_short = code == StatusCode::kInvalidInput || code == StatusCode::kNotObservable;
+    if (!options.scan_points || !data_short) return two_stage.status();
+    return ScanPointsAlone(bag, options, two_stage.status());
+  }
+  RobotBagCalibration out = std::move(two_stage).value();
   if (const std::optional<std::string> units = WheelUnitWarning(out.result.calibration)) {
     out.log.warnings.push_back(*units);
   }

@@ -34,8 +34,11 @@ struct RobotBagOptions {
   // A calibration of this robot (a first pass): the matcher's guesses and the de-skewing of each
   // sweep then go through it instead of the nominal values.
   std::optional<LaserCalibration> calibrated;
-  // When set, the calibration is refined against the scan points after the two-stage route.
+  // When set, the calibration is refined against the scan points after the two-stage route; and
+  // where that route cannot calibrate (too few matches), the scan points calibrate alone from
+  // the nominal wheels (CalibrateOnScanPointsAlone).
   std::optional<ScanPointOptions> scan_points;
+  bool keep_unmatched = false;  // ScanLogOptions::keep_unmatched, for the scan points alone.
 };
 
 struct RobotBagLog {
@@ -61,6 +64,9 @@ struct RobotBagCalibration {
   // scan_point_warnings says why).
   std::optional<ScanPointCalibration> scan_points;
   std::vector<std::string> scan_point_warnings;
+  // Why the two-stage route could not calibrate the bag ("" when it did): `result` then holds the
+  // scan points' result alone (CalibrateOnScanPointsAlone).
+  std::string two_stage_failed;
 };
 
 // The bag's laser calibration, with its timing. Where the scans sweep (beams at their own times),

@@ -243,10 +243,26 @@ StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
     if (r.keyframe_of[d] >= 0) keyframes.insert(r.keyframe_of[d]);
     poses.push_back(p);
   }
+  const auto unmatched = [&](const Status& why) -> StatusOr<ScanLog> {
+    if (!options.keep_unmatched) return why;
+    out.log.source = source;
+    out.log.streams.odometry = encoders;
+    out.unmatched = why.message();
+    return out;
+  };
   if (keyframes.empty()) {  // No scan was matched against another.
-    return Status::InvalidInput(scans_name +
-                                ": no two scans could be matched: " + FailureSummary(r) +
-                                "; are the ranges valid (within range_min and range_max)?");
+    int degenerate = 0;
+    for (const int i : r.failed) {
+      degenerate += i < static_cast<int>(r.matches.size()) &&
+                    r.matches[i].quality == ScanMatchQuality::kDegenerate;
+    }
+    const std::string hint =
+        2 * degenerate > static_cast<int>(r.failed.size())
+            ? "the walls leave a direction of motion unconstrained (a featureless corridor, an "
+              "open space)"
+            : "are the ranges valid (within range_min and range_max)?";
+    return unmatched(Status::InvalidInput(
+        scans_name + ": no two scans could be matched: " + FailureSummary(r) + "; " + hint));
   }
   out.segments = static_cast<int>(segments.size());
   out.keyframes = static_cast<int>(keyframes.size());
@@ -255,8 +271,10 @@ StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
     out.warnings.push_back("the scan matching lost its track " + std::to_string(out.segments - 1) +
                            " time(s) and restarted: no interval spans a restart");
   }
-  CALIB_ASSIGN_OR_RETURN(out.log, LaserLogFromStreams(encoders, poses, source, wheels_name,
-                                                      scans_name + " (scan-matched poses)"));
+  StatusOr<LaserLog> log = LaserLogFromStreams(encoders, poses, source, wheels_name,
+                                               scans_name + " (scan-matched poses)");
+  if (!log.ok()) return unmatched(log.status());
+  out.log = std::move(log).value();
   return out;
 }
 

@@ -32,6 +32,10 @@ struct ScanLogOptions {
   // the stamps) cannot be, e.g. a time_increment in ms: such scans are taken as instantaneous,
   // with a warning.
   double max_sweep_periods = 1.5;
+  // When the matches give no pose stream (no two scans matched, or too few poses), return the log
+  // anyway, with the wheel angles, the matching and `unmatched` saying why (for a calibration on
+  // the scan points alone) instead of failing.
+  bool keep_unmatched = false;
 };
 
 struct ScanLog {
@@ -41,6 +45,8 @@ struct ScanLog {
   int failed_matches = 0, segments = 0, keyframes = 0;
   double matching_seconds = 0.0;
   std::vector<std::string> warnings;
+  std::string
+      unmatched;  // With keep_unmatched: why the matches gave no pose stream ("" if they did).
 };
 
 // The names of the input and its two streams in messages ("run.bag", "run.bag /joint_states",

@@ -153,8 +153,8 @@ CalibrationReport LaserTimingReport(const LaserTimingResult& result, const Laser
   report.summary = LaserResultSummary(calibration, options.input, options.loss, log.stream_timing) +
                    (recording ? RobotLogSummary(*recording, calibration, nominal) : "") +
                    (bag && options.scan_points ? ScanPointSummary(*bag) : "") +
-                   LatentTimingSummary(result) + read + DriftSummary(drift) + screened +
-                   verdict_line;
+                   (bag && !bag->two_stage_failed.empty() ? "" : LatentTimingSummary(result)) +
+                   read + DriftSummary(drift) + screened + verdict_line;
   return report;
 }
 

@@ -87,23 +87,28 @@ nlohmann::ordered_json ScanPointJson(const RobotBagCalibration& bag) {
   const LaserCalibrationResult& two_stage = bag.result.calibration;
   const LaserParamVector moved =
       (r.estimate.ToVector() - two_stage.estimate.ToVector()).cwiseQuotient(two_stage.stddev);
-  return {{"refined", true},
-          {"estimate", LaserParamJson(r.estimate.ToVector())},
-          {"stddev", LaserParamJson(r.stddev)},
-          {"two_stage_estimate", LaserParamJson(two_stage.estimate.ToVector())},
-          {"two_stage_stddev", LaserParamJson(two_stage.stddev)},
-          {"moved_in_two_stage_sigmas", LaserParamJson(moved)},
-          {"time_offset", r.time_offset_s},
-          {"time_offset_stddev", r.time_offset_stddev_s},
-          {"pairs", r.pairs},
-          {"lines", r.lines},
-          {"rounds", r.rounds},
-          {"converged", r.converged},
-          {"range_sigma", r.range_sigma_m},
-          {"inlier_fraction", r.inlier_fraction},
-          {"correlation_inflation", r.correlation_inflation},
-          {"seconds", r.seconds},
-          {"warnings", r.warnings}};
+  nlohmann::ordered_json json = {{"refined", true},
+                                 {"estimate", LaserParamJson(r.estimate.ToVector())},
+                                 {"stddev", LaserParamJson(r.stddev)}};
+  if (!bag.two_stage_failed.empty()) {
+    json["two_stage_failed"] = bag.two_stage_failed;  // The result is the scan points' alone.
+  } else {
+    json["two_stage_estimate"] = LaserParamJson(two_stage.estimate.ToVector());
+    json["two_stage_stddev"] = LaserParamJson(two_stage.stddev);
+    json["moved_in_two_stage_sigmas"] = LaserParamJson(moved);
+  }
+  json.update(nlohmann::ordered_json{{"time_offset", r.time_offset_s},
+                                     {"time_offset_stddev", r.time_offset_stddev_s},
+                                     {"pairs", r.pairs},
+                                     {"lines", r.lines},
+                                     {"rounds", r.rounds},
+                                     {"converged", r.converged},
+                                     {"range_sigma", r.range_sigma_m},
+                                     {"inlier_fraction", r.inlier_fraction},
+                                     {"correlation_inflation", r.correlation_inflation},
+                                     {"seconds", r.seconds},
+                                     {"warnings", r.warnings}});
+  return json;
 }
 
 std::string ScanPointSummary(const RobotBagCalibration& bag) {
@@ -121,11 +126,16 @@ std::string ScanPointSummary(const RobotBagCalibration& bag) {
       " scan pairs, " + std::to_string(r.lines) + " point-to-line distances" +
       Format(", σ̂ %.1f mm, %.0f %% inliers, %.1f s;", 1e3 * r.range_sigma_m,
              100.0 * r.inlier_fraction, r.seconds) +
-      Format(" the beams' times %+.2f ± %.2f ms beyond the timing's;", 1e3 * r.time_offset_s,
+      Format(" the beams' times %+.2f ± %.2f ms beyond the ", 1e3 * r.time_offset_s,
              1e3 * r.time_offset_stddev_s) +
-      " moved from the two-stage estimate by";
-  for (int i = 0; i < kNumLaserParams; ++i) {
-    out += (i ? ", " : " ") + kLaserParamNames[i] + Format(" %+.1fσ", moved(i));
+      (bag.two_stage_failed.empty() ? "timing's;" : "stamps;");
+  if (bag.two_stage_failed.empty()) {
+    out += " moved from the two-stage estimate by";
+    for (int i = 0; i < kNumLaserParams; ++i) {
+      out += (i ? ", " : " ") + kLaserParamNames[i] + Format(" %+.1fσ", moved(i));
+    }
+  } else {
+    out += " the two-stage route could not calibrate, the result is the scan points' alone";
   }
   out += "\n";
   for (const std::string& w : r.warnings) out += "  warning: " + w + "\n";
