@@ -128,6 +128,17 @@ int CorrespondenceSearch::Nearest(const Eigen::Vector2d& p) const {
   return best;
 }
 
+// A current point beyond the reference's field of view (the robot turned) finds its nearest point
+// among the reference's end beams, on a surface the reference may not show there: on a 0.1 rad
+// turn of a 270° scan of 1081 beams such pairs pulled the pose by −0.3 mm in y and +0.2 mrad in
+// θ on average (PlIcpTest.ScanEndsAreNoNearestPoints).
+bool CorrespondenceSearch::AtScanEnd(int a) const {
+  if (reference_.full_circle) return false;
+  const int beam = reference_.beams[a];
+  const int ends = options_.scan_end_beams;
+  return beam < ends || beam >= reference_.NumBeams() - ends;
+}
+
 void CorrespondenceSearch::Find(const std::vector<Eigen::Vector2d>& current_in_reference_m,
                                 int stride, std::vector<Correspondence>* out) const {
   out->clear();
@@ -137,7 +148,7 @@ void CorrespondenceSearch::Find(const std::vector<Eigen::Vector2d>& current_in_r
   for (int i = 0; i < static_cast<int>(current_in_reference_m.size()); i += stride) {
     const Eigen::Vector2d& p = current_in_reference_m[i];
     const int a = Nearest(p);
-    if (a < 0) continue;
+    if (a < 0 || AtScanEnd(a)) continue;
     // The side of a's nearer beam neighbour (within max_segment_length_m).
     const std::array<int, 2>& neighbours = neighbour_[a];
     auto distance2 = [&](int j) {

@@ -30,6 +30,8 @@ struct CorrespondenceOptions {
   double max_distance_m = 0.5;        // Farther nearest points are no correspondence.
   double max_segment_length_m = 0.5;  // Longer segments span a depth jump.
   double min_segment_length_m = 0.1;  // Shorter ones go on along the beams (dense scans).
+  // A partial scan's first and last this many beams are no nearest point (see AtScanEnd).
+  int scan_end_beams = 3;
 };
 
 // The search against one reference scan, repeated (ICP iterations): the segments of every
@@ -43,6 +45,7 @@ class CorrespondenceSearch {
 
  private:
   int Nearest(const Eigen::Vector2d& p) const;
+  bool AtScanEnd(int a) const;
   void Walk(int a, int side);
 
   const ScanPoints& reference_;

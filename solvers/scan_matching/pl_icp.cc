@@ -1,3 +1,4 @@
+#include <calib/solvers/scan_matching/line_noise_bias.h>
 #include <calib/solvers/scan_matching/pl_icp.h>
 
 #include <Eigen/Eigenvalues>
@@ -242,15 +243,7 @@ Eigen::Matrix3d CensiCovariance(const ScanPoints& reference, const ScanPoints& c
   return sigma_m * sigma_m * h_inverse * m * h_inverse;
 }
 
-// E[Σᵢ Jᵢ rᵢ] at the true pose, to second order in the range noise σ: the part of the gradient
-// that the noise itself puts there (errors in variables), which the least-squares pose follows
-// by H⁻¹·E[Σ J r]. A reference range z_k tilts the line (∂n/∂z_k = ∓(n·u_k) τ/ℓ) and moves the
-// residual (∂r/∂z_k), so J and r share its noise; r is also curved in z_k (∂²r/∂z_b² =
-// 2α(n·u_b)(τ·u_b)/ℓ, and −2(1 − α)(n·u_a)(τ·u_a)/ℓ for a), so E[r] ≠ 0; and the current point's
-// range moves both r and J_θ. Per pair, with s_b = α, s_a = −(1 − α), T = (τ, τ·(R p)^⊥):
-//   E[J r] = σ²/ℓ Σ_k s_k (n·u_k) [(n·u_k) T + (τ·u_k) J] + σ² (n·R u_p)(0, 0, τ·R u_p).
-// On dense scans with cm of noise (lines of a few cm) this bias is ~0.1 mm per match and follows
-// the turn, which a calibration over thousands of matches reads as a lateral mounting offset.
+// Σ E[J r] over the inlier pairs (line_noise_bias.h).
 Eigen::Vector3d NoiseGradientBias(const ScanPoints& reference, const ScanPoints& current,
                                   const Pose2d& pose, const std::vector<LinePair>& pairs,
                                   double sigma_m) {
@@ -259,24 +252,13 @@ Eigen::Vector3d NoiseGradientBias(const ScanPoints& reference, const ScanPoints&
   Eigen::Vector3d bias = Eigen::Vector3d::Zero();
   for (const LinePair& pair : pairs) {
     if (!pair.inlier) continue;
-    const Eigen::Vector2d& qa = reference.points_m[pair.c.line_a];
-    const Eigen::Vector2d& qb = reference.points_m[pair.c.line_b];
-    const double length = (qb - qa).norm();
-    const Eigen::Vector2d& n = pair.normal;
-    const Eigen::Vector2d tau(n.y(), -n.x());  // (q_b − q_a)/ℓ.
-    const Eigen::Vector2d rp = Rotate(c, s, current.points_m[pair.c.current]);
-    const Eigen::Vector2d rp_perp(-rp.y(), rp.x());
-    const Eigen::Vector3d j = ResidualJacobian(pair, rp);
-    const Eigen::Vector3d t(tau.x(), tau.y(), tau.dot(rp_perp));
-    const auto term = [&](const Eigen::Vector2d& u, double weight) {
-      return weight * n.dot(u) * (n.dot(u) * t + tau.dot(u) * j);
-    };
-    bias += term(reference.directions[pair.c.line_b], pair.alpha) / length +
-            term(reference.directions[pair.c.line_a], -(1.0 - pair.alpha)) / length;
-    const Eigen::Vector2d up = Rotate(c, s, current.directions[pair.c.current]);
-    bias(2) += n.dot(up) * tau.dot(up);
+    bias += LineNoiseGradientBias(
+        reference.points_m[pair.c.line_a], reference.points_m[pair.c.line_b],
+        reference.directions[pair.c.line_a], reference.directions[pair.c.line_b], pair.alpha,
+        Rotate(c, s, current.points_m[pair.c.current]),
+        Rotate(c, s, current.directions[pair.c.current]), sigma_m);
   }
-  return sigma_m * sigma_m * bias;
+  return bias;
 }
 
 // λmin/λmax of S H S with S = diag(1, 1, 1/L), L the inliers' RMS range, so that a rotation
@@ -312,7 +294,8 @@ uint64_t PairsHash(const std::vector<LinePair>& pairs) {
 
 Status CheckOptions(const PlIcpOptions& o) {
   const bool ok = o.correspondence.max_distance_m > 0 &&
-                  o.correspondence.max_segment_length_m > 0 && o.max_iterations > 0 &&
+                  o.correspondence.max_segment_length_m > 0 &&
+                  o.correspondence.scan_end_beams >= 0 && o.max_iterations > 0 &&
                   o.outlier_sigmas > 0 && o.trim_fraction >= 0 && o.trim_fraction < 1 &&
                   o.min_correspondences >= 3 && std::isfinite(o.max_rms_residual_m) &&
                   std::isfinite(o.min_information_ratio) && std::isfinite(o.step_tolerance_m) &&
