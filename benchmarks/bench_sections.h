@@ -42,7 +42,7 @@ int RunSpeedChild(const std::string& path, int64_t intervals);
 
 // Section scans: the scan matcher's speed and accuracy (360 and 1081 beams), the two-stage
 // calibration's coverage over seeds, and a long recording (18 000 scans; 1200 with quick) end to
-// end in process.
+// end in process, with its errors in σ (where a matcher's bias shows first).
 nlohmann::ordered_json RunScansBench(const BenchConfig& config);
 // Part of it: the two-stage route against the refinement on the scan points.
 nlohmann::ordered_json RunScanPointComparison(const BenchConfig& config);
