@@ -65,8 +65,8 @@ struct PlIcpOptions {
   double trim_fraction = 0.0;
   double settle_step_m = 1e-3;
   double settle_step_rad = 1e-3;
-  // Removes from the final pose the bias that the reference's range noise puts in the
-  // point-to-line estimate (errors in variables; see NoiseGradientBias in pl_icp.cc).
+  // Removes from the final pose the second-order bias that the range noise of both scans puts in
+  // the point-to-line estimate (errors in variables; line_noise_bias.h).
   bool correct_noise_bias = true;
   // Quality checks.
   int min_correspondences = 20;

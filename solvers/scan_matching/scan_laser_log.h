@@ -45,8 +45,8 @@ struct ScanLog {
   int failed_matches = 0, segments = 0, keyframes = 0;
   double matching_seconds = 0.0;
   std::vector<std::string> warnings;
-  std::string
-      unmatched;  // With keep_unmatched: why the matches gave no pose stream ("" if they did).
+  // With keep_unmatched: why the matches gave no pose stream ("" when they did).
+  std::string unmatched;
 };
 
 // The names of the input and its two streams in messages ("run.bag", "run.bag /joint_states",
