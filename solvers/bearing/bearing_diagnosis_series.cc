@@ -132,16 +132,19 @@ CovariateProfile Profile(size_t which, const BearingSeries& before, const Bearin
   };
   // Both fits binned by the baseline's covariate.
   const std::vector<double>& covariate = Covariate(before, which);
-  const BinnedMeans b = BinByCovariate(covariate, values(before), Column(before.weight), bins);
-  const BinnedMeans a = BinByCovariate(covariate, values(after), Column(after.weight), bins);
+  const std::vector<size_t> order = CovariateOrder(covariate);
+  const BinnedMeans b =
+      BinByCovariate(covariate, order, values(before), Column(before.weight), bins);
+  const BinnedMeans a = BinByCovariate(covariate, order, values(after), Column(after.weight), bins);
   profile.center = b.center;
   profile.before_mean = b.mean;
   profile.before_stderr = b.standard_error;
   profile.after_mean = a.mean;
   profile.after_stderr = a.standard_error;
   const BinnedMeans be =
-      BinByCovariate(covariate, Column(before.error), Column(before.weight), bins);
-  const BinnedMeans ae = BinByCovariate(covariate, Column(after.error), Column(after.weight), bins);
+      BinByCovariate(covariate, order, Column(before.error), Column(before.weight), bins);
+  const BinnedMeans ae =
+      BinByCovariate(covariate, order, Column(after.error), Column(after.weight), bins);
   profile.before_statistic = be.statistic;
   profile.after_statistic = ae.statistic;
   profile.before_p_value = be.p_value;

@@ -333,6 +333,7 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   result.estimate = problem.calibration();
   result.refinement_seconds = SecondsSince(start);
   ClassifyInliers(problem, options.inlier_chi2, &result);
+  if (options.estimate_only) return result;
 
   start = std::chrono::steady_clock::now();
   // The fused problem hands ceres::Covariance a 7×6 Jacobian whatever N: one pass, no switch to

@@ -40,6 +40,10 @@ struct LaserCalibrationOptions {
   // latent-time calibration models their timing). Not significant: the result is the base fit's.
   bool interval_jitter = true;
   IntervalJitterOptions jitter;
+  // Only the estimate is wanted (the seed of another fit, as the diagnosis's base fit): stop
+  // after the refinement and the inliers, without the covariance, the jitter treatment and the
+  // checks (the result's other members keep their defaults).
+  bool estimate_only = false;
   // Called with a line of progress for long runs; may be empty.
   std::function<void(const std::string&)> progress;
 };

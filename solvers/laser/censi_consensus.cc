@@ -28,11 +28,21 @@ double Median(std::vector<double> v) {
 
 // Whether Median of value(0 … n−1) is below `bound`, i.e. at least n/2 + 1 values are: a count
 // that stops as soon as it is decided, where most candidates of a consensus search lose (the
-// same answer as Median(…) < bound without the selection). It counts in blocks, each a tight
-// loop the compiler vectorizes, and decides between blocks: a loser is still only known after
-// about n/2 values, so the count's speed is what matters.
+// same answer as Median(…) < bound without the selection, but for the pretest). A loser is only
+// known after about n/2 values, so every 8th value is counted first: a candidate with fewer than
+// half of those below, by 4 binomial σ, is dropped (a winner is, with a chance below 10⁻⁴; the
+// search then keeps a slightly worse candidate). The count runs in blocks, each a tight loop the
+// compiler vectorizes, and decides between blocks.
 template <typename F>
 bool MedianBelow(size_t n, double bound, const F& value) {
+  constexpr size_t kPretestStride = 8;
+  const size_t sampled = n / kPretestStride;
+  if (sampled >= 64) {
+    size_t below = 0;
+    for (size_t i = 0; i < sampled; ++i) below += value(i * kPretestStride) < bound;
+    if (static_cast<double>(below) < 0.5 * sampled - 2.0 * std::sqrt(static_cast<double>(sampled)))
+      return false;
+  }
   constexpr size_t kBlock = 128;
   const size_t needed = n / 2 + 1;
   size_t below = 0;

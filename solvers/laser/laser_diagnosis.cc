@@ -293,6 +293,7 @@ StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& interva
   base_options.interval_jitter = false;
   // Only a seed of the effect fits below, which use the problem's own loss.
   base_options.refinement.redescending_scale = 0.0;
+  base_options.estimate_only = true;  // Its estimate seeds the effect fits; nothing else is read.
   CALIB_ASSIGN_OR_RETURN(const LaserCalibrationResult base,
                          CalibrateLaser(intervals, base_options));
   LaserEffectData data(intervals, SqrtInformation(intervals, base.estimate, options),

@@ -17,10 +17,11 @@ CovariateProfile Profile(const std::string& name, const std::string& unit,
   CovariateProfile profile;
   profile.name = name;
   profile.unit = unit;
-  const BinnedMeans b = BinByCovariate(covariate, before, before_weight, bins);
-  const BinnedMeans a = BinByCovariate(covariate, after, after_weight, bins);
-  const BinnedMeans b3 = BinByCovariate(covariate, before.leftCols(3), before_weight, bins);
-  const BinnedMeans a3 = BinByCovariate(covariate, after.leftCols(3), after_weight, bins);
+  const std::vector<size_t> order = CovariateOrder(covariate);
+  const BinnedMeans b = BinByCovariate(covariate, order, before, before_weight, bins);
+  const BinnedMeans a = BinByCovariate(covariate, order, after, after_weight, bins);
+  const BinnedMeans b3 = BinByCovariate(covariate, order, before.leftCols(3), before_weight, bins);
+  const BinnedMeans a3 = BinByCovariate(covariate, order, after.leftCols(3), after_weight, bins);
   profile.center = b.center;
   profile.before_mean = b.mean;
   profile.before_stderr = b.standard_error;

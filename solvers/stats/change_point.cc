@@ -94,17 +94,30 @@ double ConstantMeanPValue(const Eigen::MatrixXd& series, double trim, size_t* sp
   return best.p_value;
 }
 
+std::vector<size_t> CovariateOrder(const std::vector<double>& covariate) {
+  // The keys beside their rows: the sort reads them in place instead of through the index.
+  std::vector<std::pair<double, size_t>> keyed(covariate.size());
+  for (size_t k = 0; k < covariate.size(); ++k) keyed[k] = {covariate[k], k};
+  std::stable_sort(keyed.begin(), keyed.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<size_t> order(keyed.size());
+  for (size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
+  return order;
+}
+
 BinnedMeans BinByCovariate(const std::vector<double>& covariate, const Eigen::MatrixXd& values,
                            const Eigen::VectorXd& weights, int bins) {
+  return BinByCovariate(covariate, CovariateOrder(covariate), values, weights, bins);
+}
+
+BinnedMeans BinByCovariate(const std::vector<double>& covariate, const std::vector<size_t>& order,
+                           const Eigen::MatrixXd& values, const Eigen::VectorXd& weights,
+                           int bins) {
   BinnedMeans result;
   const size_t n = covariate.size();
   const Eigen::Index d = values.cols();
   bins = std::max(1, std::min<int>(bins, static_cast<int>(n / 4)));
   if (n == 0) return result;
-  std::vector<size_t> order(n);
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](size_t a, size_t b) { return covariate[a] < covariate[b]; });
   double total = 0.0, explained = 0.0;
   for (size_t k = 0; k < n; ++k) total += weights(k) * values.row(k).squaredNorm();
   for (int b = 0; b < bins; ++b) {

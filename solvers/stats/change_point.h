@@ -45,6 +45,12 @@ struct BinnedMeans {
 };
 BinnedMeans BinByCovariate(const std::vector<double>& covariate, const Eigen::MatrixXd& values,
                            const Eigen::VectorXd& weights, int bins);
+// The rows in the covariate's ascending order (ties in row order): the sort BinByCovariate does,
+// computed once where one covariate bins several series.
+std::vector<size_t> CovariateOrder(const std::vector<double>& covariate);
+// BinByCovariate with `order` = CovariateOrder(covariate).
+BinnedMeans BinByCovariate(const std::vector<double>& covariate, const std::vector<size_t>& order,
+                           const Eigen::MatrixXd& values, const Eigen::VectorXd& weights, int bins);
 
 // Where a finding's mismatch lives.
 struct MismatchLocation {

@@ -16,7 +16,6 @@ namespace calib {
 namespace {
 
 using jitter_internal::JitterData;
-using jitter_internal::JitterTerm;
 using jitter_internal::JointMaximum;
 using jitter_internal::kGridTolerance;
 using jitter_internal::kMinVariance;
@@ -229,12 +228,13 @@ IntervalJitterEstimate EstimateIntervalJitter(
   for (size_t k : JitterSampleIndices(n, is_inlier, options.max_intervals)) {
     const IntervalTimeSensitivity& g = sensitivities[k];
     const Eigen::Matrix3d gram = g.start * g.start.transpose() + g.end * g.end.transpose();
-    data.terms.push_back(
-        {{errors[k](0), errors[k](1), errors[k](2)},
-         {gram(0, 0), gram(0, 1), gram(0, 2), gram(1, 1), gram(1, 2), gram(2, 2)}});
+    const double error[3] = {errors[k](0), errors[k](1), errors[k](2)};
+    const double packed[6] = {gram(0, 0), gram(0, 1), gram(0, 2),
+                              gram(1, 1), gram(1, 2), gram(2, 2)};
+    data.Add(error, packed);
   }
   IntervalJitterEstimate estimate;
-  estimate.intervals_used = static_cast<int>(data.terms.size());
+  estimate.intervals_used = static_cast<int>(data.size());
   Eigen::Vector3d theta = noise_sigma.cwiseAbs2().cwiseMax(kMinVariance);
   estimate.log_likelihood_without_jitter =
       ProfileLogLikelihood(data, 0.0, options.estimate_noise, &theta);
@@ -242,8 +242,9 @@ IntervalJitterEstimate EstimateIntervalJitter(
   estimate.log_likelihood = estimate.log_likelihood_without_jitter;
   // The jitter that doubles a typical interval's variance sets the grid's scale.
   std::vector<double> relative;
-  for (const JitterTerm& term : data.terms) {
-    relative.push_back(term.gram[0] / theta(0) + term.gram[3] / theta(1) + term.gram[5] / theta(2));
+  for (size_t k = 0; k < data.size(); ++k) {
+    relative.push_back(data.gram[0][k] / theta(0) + data.gram[3][k] / theta(1) +
+                       data.gram[5][k] / theta(2));
   }
   if (relative.size() < 2) return estimate;
   const double median = UpperMedian(&relative);

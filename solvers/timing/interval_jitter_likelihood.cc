@@ -1,12 +1,19 @@
 #include <calib/solvers/timing/interval_jitter_likelihood.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
 
 namespace calib::jitter_internal {
+
+void JitterData::Add(const double error_k[3], const double gram_k[6]) {
+  for (int i = 0; i < 3; ++i) error[i].push_back(error_k[i]);
+  for (int i = 0; i < 6; ++i) gram[i].push_back(gram_k[i]);
+}
+
 namespace {
 
 // Σ = diag(θ) + s·G, packed.
@@ -70,53 +77,119 @@ class LogSum {
   int count_ = 0;
 };
 
+// The joint score's terms are taken in chunks whose columns stay in the first-level cache;
+// Eigen's array expressions run them on SIMD packets (twice as fast as a term at a time).
+constexpr int kChunk = 128;
+using Column = Eigen::Array<double, Eigen::Dynamic, 1, 0, kChunk, 1>;
+
+// One chunk's errors e_k, Σ_k⁻¹ (packed, by cofactors), det Σ_k and w_k = Σ_k⁻¹e_k, at
+// Σ_k = diag(θ) + s·G_k.
+struct Chunk {
+  // False when some det Σ_k is not > 0 (Σ is a positive diagonal plus a positive semi-definite
+  // term, so only a broken θ or s gives that).
+  bool Compute(const JitterData& data, size_t begin, Eigen::Index n, const Eigen::Vector3d& theta,
+               double s) {
+    const auto column = [&](const std::vector<double>& v) {
+      return Eigen::Map<const Eigen::ArrayXd>(v.data() + begin, n);
+    };
+    for (int i = 0; i < 3; ++i) e[i] = column(data.error[i]);
+    const Column m0 = theta(0) + s * column(data.gram[0]), m1 = s * column(data.gram[1]),
+                 m2 = s * column(data.gram[2]), m3 = theta(1) + s * column(data.gram[3]),
+                 m4 = s * column(data.gram[4]), m5 = theta(2) + s * column(data.gram[5]);
+    const Column c00 = m3 * m5 - m4.square(), c01 = m2 * m4 - m1 * m5, c02 = m1 * m4 - m2 * m3;
+    det = m0 * c00 + m1 * c01 + m2 * c02;
+    if (!(det > 0.0).all()) return false;
+    const Column r = det.inverse();
+    inverse[0] = c00 * r, inverse[1] = c01 * r, inverse[2] = c02 * r;
+    inverse[3] = (m0 * m5 - m2.square()) * r;
+    inverse[4] = (m1 * m2 - m0 * m4) * r;
+    inverse[5] = (m0 * m3 - m1.square()) * r;
+    w[0] = inverse[0] * e[0] + inverse[1] * e[1] + inverse[2] * e[2];
+    w[1] = inverse[1] * e[0] + inverse[3] * e[1] + inverse[4] * e[2];
+    w[2] = inverse[2] * e[0] + inverse[4] * e[1] + inverse[5] * e[2];
+    return true;
+  }
+  // Entry (a, b) of a packed symmetric matrix.
+  static constexpr int kPacked[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+  Column e[3], inverse[6], det, w[3];
+};
+
+// Runs `f` on each chunk of the terms; false as soon as a chunk's Σ is not positive definite.
+template <typename F>
+bool ForEachChunk(const JitterData& data, const Eigen::Vector3d& theta, double s, const F& f) {
+  Chunk chunk;
+  const size_t n = data.size();
+  for (size_t begin = 0; begin < n; begin += kChunk) {
+    const Eigen::Index length = static_cast<Eigen::Index>(std::min<size_t>(kChunk, n - begin));
+    if (!chunk.Compute(data, begin, length, theta, s)) return false;
+    f(chunk, begin, length);
+  }
+  return true;
+}
+
 // The score and Fisher information of the log-likelihood in φ = (θ, s = σ_j²):
 // u_a = ½Σ[wᵀA_a w − tr(Σ⁻¹A_a)], I_ab = ½Σ tr(Σ⁻¹A_a Σ⁻¹A_b), w = Σ⁻¹e, A_θi = E_ii, A_s = G_k.
+// With M = Σ⁻¹G: I_θi,s = ½(MΣ⁻¹)_ii, I_ss = ½tr(M²), u_s = ½[wᵀGw − tr M].
 bool JointScore(const JitterData& data, const Eigen::Vector4d& phi, Eigen::Vector4d* score,
                 Eigen::Matrix4d* fisher) {
-  score->setZero();
-  fisher->setZero();
-  for (const JitterTerm& term : data.terms) {
-    double sigma[6], packed[6];
-    Covariance(phi.head<3>(), phi(3), term.gram, sigma);
-    if (!(InverseOfSymmetric(sigma, packed) > 0.0)) return false;
-    const auto unpack = [](const double p[6]) {
-      return (Eigen::Matrix3d() << p[0], p[1], p[2], p[1], p[3], p[4], p[2], p[4], p[5]).finished();
-    };
-    const Eigen::Matrix3d inverse = unpack(packed), g = unpack(term.gram);
-    const Eigen::Vector3d w =
-        inverse * Eigen::Vector3d(term.error[0], term.error[1], term.error[2]);
-    const Eigen::Matrix3d m = inverse * g;  // Σ⁻¹G.
-    score->head<3>() += 0.5 * (w.cwiseAbs2() - inverse.diagonal());
-    (*score)(3) += 0.5 * (w.dot(g * w) - m.trace());
-    fisher->topLeftCorner<3, 3>() += 0.5 * inverse.cwiseAbs2();
-    const Eigen::Vector3d cross = 0.5 * (m * inverse).diagonal();
-    fisher->block<3, 1>(0, 3) += cross;
-    fisher->block<1, 3>(3, 0) += cross.transpose();
-    (*fisher)(3, 3) += 0.5 * (m * m).trace();
-  }
+  constexpr auto& p = Chunk::kPacked;
+  Eigen::Vector4d u = Eigen::Vector4d::Zero();
+  Eigen::Matrix4d f = Eigen::Matrix4d::Zero();
+  const bool ok =
+      ForEachChunk(data, phi.head<3>(), phi(3), [&](const Chunk& c, size_t begin, Eigen::Index n) {
+        const auto g = [&](int a, int b) {
+          return Eigen::Map<const Eigen::ArrayXd>(data.gram[p[a][b]].data() + begin, n);
+        };
+        Column m[3][3];
+        for (int a = 0; a < 3; ++a) {
+          for (int b = 0; b < 3; ++b) {
+            m[a][b] = c.inverse[p[a][0]] * g(0, b) + c.inverse[p[a][1]] * g(1, b) +
+                      c.inverse[p[a][2]] * g(2, b);
+          }
+        }
+        Column gw[3];
+        for (int a = 0; a < 3; ++a) gw[a] = g(a, 0) * c.w[0] + g(a, 1) * c.w[1] + g(a, 2) * c.w[2];
+        for (int a = 0; a < 3; ++a) {
+          u(a) += (c.w[a].square() - c.inverse[p[a][a]]).sum();
+          f(a, 3) += (m[a][0] * c.inverse[p[0][a]] + m[a][1] * c.inverse[p[1][a]] +
+                      m[a][2] * c.inverse[p[2][a]])
+                         .sum();
+          for (int b = a; b < 3; ++b) f(a, b) += c.inverse[p[a][b]].square().sum();
+        }
+        u(3) +=
+            (c.w[0] * gw[0] + c.w[1] * gw[1] + c.w[2] * gw[2] - m[0][0] - m[1][1] - m[2][2]).sum();
+        Column trace_m2 = m[0][0].square() + m[1][1].square() + m[2][2].square();
+        trace_m2 += 2.0 * (m[0][1] * m[1][0] + m[0][2] * m[2][0] + m[1][2] * m[2][1]);
+        f(3, 3) += trace_m2.sum();
+      });
+  if (!ok) return false;
+  *score = 0.5 * u;
+  const Eigen::Matrix4d symmetric = f.selfadjointView<Eigen::Upper>();
+  *fisher = 0.5 * symmetric;
   return true;
 }
 
 }  // namespace
 
 // −½Σ[log det Σ_k + e_kᵀΣ_k⁻¹e_k] at variances θ; fills the score and Fisher information in θ.
-// Packed cofactors and one logarithm per 32 intervals: this loop runs for every interval at
-// every step of the searches (it was most of a calibration's time on real logs).
+// Packed cofactors and one logarithm per 32 intervals, a term at a time (faster here than the
+// chunks' SIMD packets, whose temporaries cost more than this loop's few operations).
 double LogLikelihood(const JitterData& data, const Eigen::Vector3d& theta, double jitter2,
                      Eigen::Vector3d* score, Eigen::Matrix3d* fisher) {
   double quadratic = 0.0;
   LogSum log_det;
   double u[3] = {0.0, 0.0, 0.0}, f[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
-  for (const JitterTerm& term : data.terms) {
-    double sigma[6], inverse[6], w[3];
-    Covariance(theta, jitter2, term.gram, sigma);
+  for (size_t k = 0; k < data.size(); ++k) {
+    const double error[3] = {data.error[0][k], data.error[1][k], data.error[2][k]};
+    double gram[6], sigma[6], inverse[6], w[3];
+    for (int i = 0; i < 6; ++i) gram[i] = data.gram[i][k];
+    Covariance(theta, jitter2, gram, sigma);
     const double det = InverseOfSymmetric(sigma, inverse);
     // Σ is a positive diagonal plus a positive semi-definite term, so det Σ > 0.
     if (!(det > 0.0)) return -std::numeric_limits<double>::infinity();
-    MultiplySymmetric(inverse, term.error, w);
+    MultiplySymmetric(inverse, error, w);
     log_det.Add(det);
-    quadratic += term.error[0] * w[0] + term.error[1] * w[1] + term.error[2] * w[2];
+    quadratic += error[0] * w[0] + error[1] * w[1] + error[2] * w[2];
     if (score == nullptr) continue;
     u[0] += w[0] * w[0] - inverse[0], u[1] += w[1] * w[1] - inverse[3];
     u[2] += w[2] * w[2] - inverse[5];

@@ -8,14 +8,15 @@
 // noise variances θ and σ_j²: the inner loops of EstimateIntervalJitter.
 namespace calib::jitter_internal {
 
-// Σ_k = diag(θ) + σ_j²·G_k over the inliers, and the profile likelihood's pieces. Symmetric
-// 3×3 matrices are packed as (00, 01, 02, 11, 12, 22).
-struct JitterTerm {
-  double error[3];
-  double gram[6];  // G_k = g_s g_sᵀ + g_e g_eᵀ.
-};
+// Σ_k = diag(θ) + σ_j²·G_k over the inliers, and the profile likelihood's pieces, one column per
+// entry (the loops over them run on SIMD packets). Symmetric 3×3 matrices are packed as
+// (00, 01, 02, 11, 12, 22).
 struct JitterData {
-  std::vector<JitterTerm> terms;
+  // Appends an interval: its error e_k and G_k = g_s g_sᵀ + g_e g_eᵀ, packed.
+  void Add(const double error_k[3], const double gram_k[6]);
+  size_t size() const { return error[0].size(); }
+  std::vector<double> error[3];
+  std::vector<double> gram[6];
 };
 
 // Floor of the noise variances: σ = 1e-12 m or rad, as RobustNoiseSigma.
