@@ -139,19 +139,29 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   if (IsRobotInput(flags.input)) {
     return CalibrateRobotBag(flags, options, clock);
   }
-  StatusOr<std::vector<LaserLog>> checked = ReadCheckedLaserLogs(flags, *format);
-  if (!checked.ok()) return Fail(checked.message());
-  const std::vector<LaserLog>& logs = *checked;
+  StatusOr<std::vector<LaserLog>> read_logs = ReadLaserLogs(flags, *format);
+  if (!read_logs.ok()) return Fail(read_logs.message());
+  const std::vector<LaserLog>& logs = *read_logs;
   std::vector<const std::vector<LaserInterval>*> intervals;
   bool streams = false;
   for (const LaserLog& log : logs) {
     intervals.push_back(&log.intervals);
     streams = streams || !log.streams.sensor_poses.empty();
   }
+  options.interval_jitter = !streams;
+  LaserReportOptions report_options = ReportOptions(flags, options);
+  // The screen needs the log only: its thread starts before the input checks (on a log they
+  // refuse, its result is waited for and dropped).
+  const bool latent_timing = streams && flags.timing != "off";
+  if (logs.size() == 1 && !latent_timing) {
+    report_options.started_screen = StartLaserModelScreen(logs.front().intervals, report_options);
+  }
+  const Status checked = CheckLaserLogs(logs);
+  if (!checked.ok()) return Fail(checked.message());
 
   // Raw streams carry their own timing: the latent-time calibration models it (one log), and
   // otherwise the interval-jitter treatment for tuples does not apply to them.
-  if (streams && flags.timing != "off") {
+  if (latent_timing) {
     if (logs.size() != 1) {
       return Fail("raw-stream logs are calibrated one at a time with their timing (--timing " +
                   flags.timing +
@@ -159,11 +169,6 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
                   "sample times");
     }
     return CalibrateLaserStreamLog(flags, logs.front(), options, clock);
-  }
-  options.interval_jitter = !streams;
-  LaserReportOptions report_options = ReportOptions(flags, options);
-  if (logs.size() == 1) {
-    report_options.started_screen = StartLaserModelScreen(logs.front().intervals, report_options);
   }
   const StatusOr<LaserCalibrationResult> result = CalibrateLaserJoint(intervals, options);
   if (!result.ok()) return Fail(flags.input + ": " + result.message());

@@ -10,6 +10,12 @@ namespace calib::cli {
 
 StatusOr<std::vector<LaserLog>> ReadCheckedLaserLogs(const CalibrateOptions& flags,
                                                      LaserFormat format) {
+  CALIB_ASSIGN_OR_RETURN(std::vector<LaserLog> logs, ReadLaserLogs(flags, format));
+  CALIB_RETURN_IF_ERROR(CheckLaserLogs(logs));
+  return logs;
+}
+
+StatusOr<std::vector<LaserLog>> ReadLaserLogs(const CalibrateOptions& flags, LaserFormat format) {
   if (flags.ticks_per_rev != 0.0 &&
       !(flags.ticks_per_rev > 0.0 && std::isfinite(flags.ticks_per_rev))) {
     return Status::InvalidInput("--ticks_per_rev must be positive (ticks per wheel turn)");
@@ -20,11 +26,15 @@ StatusOr<std::vector<LaserLog>> ReadCheckedLaserLogs(const CalibrateOptions& fla
     if (flags.ticks_per_rev > 0.0) {
       CALIB_RETURN_IF_ERROR(ConvertWheelTicks(flags.ticks_per_rev, &log));
     }
-    CALIB_RETURN_IF_ERROR(CheckLaserInput(log));
     logs.push_back(std::move(log));
   }
   if (logs.empty()) return Status::InvalidInput("--input names no file");
   return logs;
+}
+
+Status CheckLaserLogs(const std::vector<LaserLog>& logs) {
+  for (const LaserLog& log : logs) CALIB_RETURN_IF_ERROR(CheckLaserInput(log));
+  return Status::Ok();
 }
 
 StatusOr<double> WheelRadiansPerUnit(const CalibrateOptions& flags) {

@@ -16,6 +16,10 @@ namespace calib::cli {
 
 StatusOr<std::vector<LaserLog>> ReadCheckedLaserLogs(const CalibrateOptions& flags,
                                                      LaserFormat format);
+// The two halves: read and converted, then checked (calibrate starts its model screen between
+// them, so that the screen's thread runs beside the checks too).
+StatusOr<std::vector<LaserLog>> ReadLaserLogs(const CalibrateOptions& flags, LaserFormat format);
+Status CheckLaserLogs(const std::vector<LaserLog>& logs);
 
 // --ticks_per_rev for a bag: the JointState positions' radians per unit, as --wheel_angle_unit
 // ticks:N; an error when both flags give a unit.
