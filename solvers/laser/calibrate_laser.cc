@@ -108,9 +108,14 @@ void SeedFromTrimmedClosedForm(const std::vector<LaserInterval>& intervals,
 // warning; on all intervals when the screen leaves too little motion (then its error, if any).
 // The screen goes to *screen (the trimmed closed form's starts from it).
 Status ClosedFormWithoutGross(const std::vector<LaserInterval>& intervals,
-                              ConsensusScreen* screen_out, LaserCalibrationResult* result) {
+                              const ConsensusScreen* given, ConsensusScreen* screen_out,
+                              LaserCalibrationResult* result) {
   ConsensusScreen& screen = *screen_out;
-  const StatusOr<CensiClosedFormResult> screened = CensiClosedFormScreened(intervals, &screen);
+  const bool reuse = given != nullptr && given->kept.size() == intervals.size();
+  if (reuse) screen = *given;
+  const StatusOr<CensiClosedFormResult> screened =
+      reuse ? CensiClosedForm(intervals, &screen.kept)
+            : CensiClosedFormScreened(intervals, &screen);
   if (screened.ok() && screen.outliers() == 0) {
     result->closed_form = *screened;  // Every interval kept: the closed form on all of them.
     return Status::Ok();
@@ -291,7 +296,8 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
 
   auto start = std::chrono::steady_clock::now();
   ConsensusScreen screen;
-  CALIB_RETURN_IF_ERROR(ClosedFormWithoutGross(joined, &screen, &result));
+  const ConsensusScreen* given = logs.size() == 1 ? options.consensus_screen.get() : nullptr;
+  CALIB_RETURN_IF_ERROR(ClosedFormWithoutGross(joined, given, &screen, &result));
   // On huge logs an evenly spread subset suffices for a seed.
   const size_t total = joined.size();
   const size_t stride = (total + kWarmStartSubset - 1) / kWarmStartSubset;

@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -44,6 +45,9 @@ struct LaserCalibrationOptions {
   // after the refinement and the inliers, without the covariance, the jitter treatment and the
   // checks (the result's other members keep their defaults).
   bool estimate_only = false;
+  // The intervals' consensus screen when already computed under the default options (the input
+  // checks do: LaserInputCheckOptions::consensus_screen); one log only. Null: computed here.
+  std::shared_ptr<const ConsensusScreen> consensus_screen;
   // Called with a line of progress for long runs; may be empty.
   std::function<void(const std::string&)> progress;
 };

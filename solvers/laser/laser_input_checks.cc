@@ -29,9 +29,9 @@ struct Fit {
 
 double Median(std::vector<double> v) { return UpperMedian(&v); }
 
-Fit FitClosedForm(const std::vector<LaserInterval>& intervals) {
+Fit FitClosedForm(const std::vector<LaserInterval>& intervals, ConsensusScreen* screen = nullptr) {
   // Screened, so that a handful of glitches cannot make a log look like another reading.
-  const StatusOr<CensiClosedFormResult> closed = CensiClosedFormScreened(intervals);
+  const StatusOr<CensiClosedFormResult> closed = CensiClosedFormScreened(intervals, screen);
   Fit fit;
   if (!closed.ok()) return fit;
   const LaserCalibration& cal = closed->calibration;
@@ -264,7 +264,11 @@ Status CheckLaserInput(const LaserLog& log, const LaserInputCheckOptions& option
   }
   const std::vector<LaserInterval>& checked = subset.empty() ? log.intervals : subset;
   Fit fits[kNumReadings];
-  fits[kAsGiven] = FitClosedForm(checked);
+  ConsensusScreen screen;
+  fits[kAsGiven] = FitClosedForm(checked, &screen);
+  if (options.consensus_screen != nullptr && subset.empty()) {
+    *options.consensus_screen = std::make_shared<const ConsensusScreen>(std::move(screen));
+  }
   const Names names = ColumnNames(log, options);
   const Fit& given = fits[kAsGiven];
   if (Plausible(given, options)) {

@@ -3,7 +3,9 @@
 
 #include <calib/core/laser/laser_log.h>
 #include <calib/core/status.h>
+#include <calib/solvers/laser/censi_consensus.h>
 
+#include <memory>
 #include <string>
 
 // Input mistakes that a calibration would turn into a confident wrong number, told apart from the
@@ -29,6 +31,10 @@ struct LaserInputCheckOptions {
   bool check_sizes = true;
   // How the messages name the wheel readings (empty: phi_l, phi_r or the odometry.csv columns).
   std::string left_name, right_name;
+  // When not null, receives the consensus screen of the log as given (censi_consensus.h) when the
+  // check computed it on every interval (logs up to 50 000 intervals), for the calibration to
+  // reuse (LaserCalibrationOptions::consensus_screen); else left as it is.
+  std::shared_ptr<const ConsensusScreen>* consensus_screen = nullptr;
 };
 
 // Ok when the log reads as the contract says; otherwise InvalidInput naming log.source, what

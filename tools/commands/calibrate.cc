@@ -156,7 +156,9 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   if (logs.size() == 1 && !latent_timing) {
     report_options.started_screen = StartLaserModelScreen(logs.front().intervals, report_options);
   }
-  const Status checked = CheckLaserLogs(logs);
+  // The checks' consensus screen is the closed form's, unless the latent-time route re-forms
+  // the intervals.
+  const Status checked = CheckLaserLogs(logs, latent_timing ? nullptr : &options.consensus_screen);
   if (!checked.ok()) return Fail(checked.message());
 
   // Raw streams carry their own timing: the latent-time calibration models it (one log), and

@@ -32,8 +32,11 @@ StatusOr<std::vector<LaserLog>> ReadLaserLogs(const CalibrateOptions& flags, Las
   return logs;
 }
 
-Status CheckLaserLogs(const std::vector<LaserLog>& logs) {
-  for (const LaserLog& log : logs) CALIB_RETURN_IF_ERROR(CheckLaserInput(log));
+Status CheckLaserLogs(const std::vector<LaserLog>& logs,
+                      std::shared_ptr<const ConsensusScreen>* consensus_screen) {
+  LaserInputCheckOptions options;
+  if (logs.size() == 1) options.consensus_screen = consensus_screen;
+  for (const LaserLog& log : logs) CALIB_RETURN_IF_ERROR(CheckLaserInput(log, options));
   return Status::Ok();
 }
 

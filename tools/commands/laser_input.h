@@ -4,8 +4,10 @@
 #include <calib/core/laser/laser_log.h>
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/core/status.h>
+#include <calib/solvers/laser/censi_consensus.h>
 #include <calib/tools/commands/commands.h>
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -19,7 +21,10 @@ StatusOr<std::vector<LaserLog>> ReadCheckedLaserLogs(const CalibrateOptions& fla
 // The two halves: read and converted, then checked (calibrate starts its model screen between
 // them, so that the screen's thread runs beside the checks too).
 StatusOr<std::vector<LaserLog>> ReadLaserLogs(const CalibrateOptions& flags, LaserFormat format);
-Status CheckLaserLogs(const std::vector<LaserLog>& logs);
+// `consensus_screen`, when not null, receives a single log's consensus screen for the
+// calibration to reuse (LaserInputCheckOptions::consensus_screen).
+Status CheckLaserLogs(const std::vector<LaserLog>& logs,
+                      std::shared_ptr<const ConsensusScreen>* consensus_screen = nullptr);
 
 // --ticks_per_rev for a bag: the JointState positions' radians per unit, as --wheel_angle_unit
 // ticks:N; an error when both flags give a unit.

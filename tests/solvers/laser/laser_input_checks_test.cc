@@ -4,6 +4,7 @@
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/core/laser/laser_simulator.h>
 #include <calib/core/laser/wheel_readings.h>
+#include <calib/solvers/laser/calibrate_laser.h>
 #include <calib/solvers/laser/censi_closed_form.h>
 #include <calib/solvers/laser/laser_input_checks.h>
 #include <gtest/gtest.h>
@@ -11,6 +12,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -65,6 +67,39 @@ TEST(LaserInputChecksTest, CorrectLogsPass) {
   const LaserLog streams = GoodStreamLog();
   EXPECT_TRUE(CheckLaserInput(streams).ok()) << CheckLaserInput(streams).message();
   EXPECT_TRUE(streams.warnings.empty());
+}
+
+// The check's consensus screen is the one the calibration computes: handed over, it gives the
+// same screen and the same estimate (on a log with slips, which the screen removes).
+TEST(LaserInputChecksTest, TheConsensusScreenIsHandedToTheCalibration) {
+  LaserSimOptions simulation = Simulation();
+  simulation.num_intervals = 600;
+  simulation.outlier_fraction = 0.1;
+  const LaserLog log = SimulateLaserLog(simulation);
+  std::shared_ptr<const ConsensusScreen> screen;
+  LaserInputCheckOptions check;
+  check.consensus_screen = &screen;
+  ASSERT_TRUE(CheckLaserInput(log, check).ok());
+  ASSERT_NE(screen, nullptr);
+  EXPECT_GT(screen->outliers(), 0);
+  EXPECT_EQ(screen->kept, ScreenGrossIntervals(log.intervals).kept);
+
+  LaserCalibrationOptions options;
+  options.interval_jitter = false;
+  const StatusOr<LaserCalibrationResult> computed = CalibrateLaser(log.intervals, options);
+  options.consensus_screen = screen;
+  const StatusOr<LaserCalibrationResult> reused = CalibrateLaser(log.intervals, options);
+  ASSERT_TRUE(computed.ok() && reused.ok());
+  EXPECT_EQ(reused->gross_intervals, computed->gross_intervals);
+  EXPECT_EQ(reused->estimate.ToVector(), computed->estimate.ToVector());
+
+  // A screen of other intervals (another count) is not used.
+  const std::vector<LaserInterval> fewer(log.intervals.begin(), log.intervals.end() - 10);
+  const StatusOr<LaserCalibrationResult> other = CalibrateLaser(fewer, options);
+  options.consensus_screen = nullptr;
+  const StatusOr<LaserCalibrationResult> fresh = CalibrateLaser(fewer, options);
+  ASSERT_TRUE(other.ok() && fresh.ok());
+  EXPECT_EQ(other->estimate.ToVector(), fresh->estimate.ToVector());
 }
 
 TEST(LaserInputChecksTest, TicksAreRefusedWithTheConversionAndConvertedExactly) {
