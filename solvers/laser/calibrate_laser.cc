@@ -341,23 +341,36 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   ClassifyInliers(problem, options.inlier_chi2, &result);
   if (options.estimate_only) return result;
 
-  start = std::chrono::steady_clock::now();
-  // The fused problem hands ceres::Covariance a 7×6 Jacobian whatever N: one pass, no switch to
-  // another estimator on long logs.
-  CALIB_ASSIGN_OR_RETURN(const CorrectedCovariance<LaserParamMatrix> covariance,
-                         problem.Covariance());
-  result.covariance = covariance.covariance;
-  result.covariance_scale = covariance.kappa;
-  result.stddev = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-  result.covariance_seconds = SecondsSince(start);
-  report("covariance done in " + std::to_string(result.covariance_seconds) + " s");
-  result.observability =
-      AnalyzeLaserObservability(result.covariance, result.estimate, result.census);
+  // The jitter first: when it is significant the refit replaces the covariance.
+  bool jitter_refit = false;
+  double jitter_seconds = 0.0;
   if (options.interval_jitter) {
     start = std::chrono::steady_clock::now();
+    jitter_refit = EstimateBaseFitJitter(logs, options, &result);
+    jitter_seconds = SecondsSince(start);
+  }
+  if (!jitter_refit) {
+    result.refinement_seconds += jitter_seconds;
+    start = std::chrono::steady_clock::now();
+    // The fused problem hands ceres::Covariance a 7×6 Jacobian whatever N: one pass, no switch
+    // to another estimator on long logs.
+    CALIB_ASSIGN_OR_RETURN(const CorrectedCovariance<LaserParamMatrix> covariance,
+                           problem.Covariance());
+    result.covariance = covariance.covariance;
+    result.covariance_scale = covariance.kappa;
+    result.stddev = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+    result.covariance_seconds = SecondsSince(start);
+    report("covariance done in " + std::to_string(result.covariance_seconds) + " s");
+    result.observability =
+        AnalyzeLaserObservability(result.covariance, result.estimate, result.census);
+  } else {
+    start = std::chrono::steady_clock::now();
     CALIB_RETURN_IF_ERROR(RefitWithIntervalJitter(logs, options, &result));
-    result.refinement_seconds += SecondsSince(start);
-    report("interval jitter done in " + std::to_string(SecondsSince(start)) + " s");
+    jitter_seconds += SecondsSince(start);
+    result.refinement_seconds += jitter_seconds - result.covariance_seconds;
+  }
+  if (options.interval_jitter) {
+    report("interval jitter done in " + std::to_string(jitter_seconds) + " s");
   }
   start = std::chrono::steady_clock::now();
   JudgeInliers(problem, joined, &result);

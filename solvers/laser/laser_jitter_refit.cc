@@ -2,6 +2,7 @@
 #include <calib/solvers/laser/laser_jitter_refit.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 namespace calib {
@@ -33,17 +34,21 @@ std::vector<bool> Inliers(const std::vector<Eigen::Vector3d>& errors,
 
 }  // namespace
 
+bool EstimateBaseFitJitter(const std::vector<const std::vector<LaserInterval>*>& logs,
+                           const LaserCalibrationOptions& options, LaserCalibrationResult* result) {
+  bool any = false;
+  for (size_t d = 0; d < logs.size(); ++d) {
+    result->interval_jitter.push_back(EstimateIntervalJitter(
+        *logs[d], result->estimate, result->noise_sigma[d], result->is_inlier[d], options.jitter));
+    any = any || result->interval_jitter.back().significant;
+  }
+  return any;
+}
+
 Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval>*>& logs,
                                const LaserCalibrationOptions& options,
                                LaserCalibrationResult* result) {
   std::vector<IntervalJitterEstimate>& jitter = result->interval_jitter;
-  bool any = false;
-  for (size_t d = 0; d < logs.size(); ++d) {
-    jitter.push_back(EstimateIntervalJitter(*logs[d], result->estimate, result->noise_sigma[d],
-                                            result->is_inlier[d], options.jitter));
-    any = any || jitter.back().significant;
-  }
-  if (!any) return Status::Ok();
 
   // Refit, re-estimate σ_j and the scan noise jointly at the new parameters, refit while they move.
   std::vector<LaserDataset> datasets;
@@ -108,8 +113,11 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
     result->noise_sigma.push_back(jitter[d].noise_sigma);
     lag_one[d] = JitterCrossCovariances(*logs[d], sensitivities[d], UsedJitter(jitter[d]));
   }
+  const auto start = std::chrono::steady_clock::now();
   CALIB_ASSIGN_OR_RETURN(const CorrectedCovariance<LaserParamMatrix> covariance,
                          problem.CorrelatedSandwichCovariance(lag_one));
+  result->covariance_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result->covariance = covariance.covariance;
   result->covariance_scale = covariance.kappa;
   result->stddev = result->covariance.diagonal().cwiseMax(0.0).cwiseSqrt();

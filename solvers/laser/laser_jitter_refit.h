@@ -11,9 +11,14 @@
 // is significant, the refit with per-interval whitening Σ_k^{-1/2}.
 namespace calib {
 
-// Fills result->interval_jitter; when a log's jitter is significant, replaces the estimate,
-// inliers, noise levels, covariance and observability by the refit's, sets jitter_refit and adds
-// the statement that only this weaker treatment was possible. Otherwise leaves the rest untouched.
+// Fills result->interval_jitter with σ_j per log at the base fit; true when one is significant
+// (the refit is then due, and the base fit's covariance is not needed).
+bool EstimateBaseFitJitter(const std::vector<const std::vector<LaserInterval>*>& logs,
+                           const LaserCalibrationOptions& options, LaserCalibrationResult* result);
+
+// After EstimateBaseFitJitter said true: replaces the estimate, inliers, noise levels, covariance
+// (and its seconds) and observability by the refit's, sets jitter_refit and adds the statement
+// that only this weaker treatment was possible.
 Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval>*>& logs,
                                const LaserCalibrationOptions& options,
                                LaserCalibrationResult* result);
