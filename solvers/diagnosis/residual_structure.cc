@@ -31,9 +31,14 @@ ResidualStructure TestResidualStructure(const ResidualSeries& series,
                                         const StructureWords& words) {
   ResidualStructure structure;
   std::vector<double> p_values;  // The covariates', then the change test's.
-  for (const std::vector<double>& covariate : series.covariates) {
+  for (size_t c = 0; c < series.covariates.size(); ++c) {
+    const std::vector<double>& covariate = series.covariates[c];
     p_values.push_back(
-        BinByCovariate(covariate, series.values, series.weights, options.bins).p_value);
+        (c < series.covariate_orders.size()
+             ? BinByCovariate(covariate, series.covariate_orders[c], series.values, series.weights,
+                              options.bins)
+             : BinByCovariate(covariate, series.values, series.weights, options.bins))
+            .p_value);
   }
   size_t split = 0;
   if (series.change_series.size() > 0) {

@@ -16,8 +16,10 @@ namespace calib {
 struct ResidualSeries {
   std::vector<std::string> covariate_names;
   std::vector<std::vector<double>> covariates;  // Per covariate, per sample.
-  Eigen::MatrixXd values;                       // N × d: what the binned means test.
-  Eigen::VectorXd weights;                      // N: the loss's weights ρ'.
+  // Per covariate, CovariateOrder of it where the caller has it already; empty: sorted here.
+  std::vector<std::vector<size_t>> covariate_orders;
+  Eigen::MatrixXd values;   // N × d: what the binned means test.
+  Eigen::VectorXd weights;  // N: the loss's weights ρ'.
   // N × d, unit variance per sample: what the change test (CUSUM) scans. Empty: no change test.
   Eigen::MatrixXd change_series;
   std::vector<double> split_time_s;  // Per sample: the time a change before it is reported at.

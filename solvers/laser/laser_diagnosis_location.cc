@@ -11,13 +11,13 @@ namespace {
 // A covariate profile of before/after residuals; extra columns beyond the three error
 // components (the residual along a signal) are binned but not tested.
 CovariateProfile Profile(const std::string& name, const std::string& unit,
-                         const std::vector<double>& covariate, const Eigen::MatrixXd& before,
-                         const Eigen::VectorXd& before_weight, const Eigen::MatrixXd& after,
-                         const Eigen::VectorXd& after_weight, int bins) {
+                         const std::vector<double>& covariate, const std::vector<size_t>& order,
+                         const Eigen::MatrixXd& before, const Eigen::VectorXd& before_weight,
+                         const Eigen::MatrixXd& after, const Eigen::VectorXd& after_weight,
+                         int bins) {
   CovariateProfile profile;
   profile.name = name;
   profile.unit = unit;
-  const std::vector<size_t> order = CovariateOrder(covariate);
   const BinnedMeans b = BinByCovariate(covariate, order, before, before_weight, bins);
   const BinnedMeans a = BinByCovariate(covariate, order, after, after_weight, bins);
   const BinnedMeans b3 = BinByCovariate(covariate, order, before.leftCols(3), before_weight, bins);
@@ -39,10 +39,12 @@ CovariateProfile Profile(const std::string& name, const std::string& unit,
 // time change point of the weighted whitened residuals.
 ResidualStructure Structure(const Context& context,
                             const std::vector<std::vector<double>>& covariates,
+                            const std::vector<std::vector<size_t>>& orders,
                             const LaserEffectEvaluation& evaluation) {
   ResidualSeries series;
   series.covariate_names = LaserCovariateNames();
   series.covariates = covariates;
+  series.covariate_orders = orders;
   series.values = evaluation.residual;
   series.weights = evaluation.rho1;
   const Eigen::Index n = evaluation.residual.rows();
@@ -68,6 +70,7 @@ ResidualStructure Structure(const Context& context,
 // and the residuals against that covariate with the component along the signal d_k.
 void LocateAdoption(const Context& context, const Adoption& a,
                     const std::vector<std::vector<double>>& covariates,
+                    const std::vector<std::vector<size_t>>& orders,
                     const LaserEffectEvaluation& base, const LaserEffectEvaluation& final_fit,
                     LaserFinding* f) {
   const size_t n = context.intervals.size();
@@ -78,7 +81,7 @@ void LocateAdoption(const Context& context, const Adoption& a,
   size_t best_covariate = 0;
   for (size_t cov = 0; cov < covariates.size(); ++cov) {
     const BinnedMeans binned =
-        BinByCovariate(covariates[cov], energy, Eigen::VectorXd::Ones(n), bins);
+        BinByCovariate(covariates[cov], orders[cov], energy, Eigen::VectorXd::Ones(n), bins);
     if (binned.explained > best_explained) {
       best_explained = binned.explained;
       best_covariate = cov;
@@ -108,8 +111,9 @@ void LocateAdoption(const Context& context, const Adoption& a,
     before(k, 3) = a.signal.row(k).dot(base.residual.row(k)) / norm;
     after(k, 3) = a.signal.row(k).dot(final_fit.residual.row(k)) / norm;
   }
-  f->profile = Profile(f->location.covariate, CovariateUnits()[best_covariate],
-                       covariates[best_covariate], before, base.rho1, after, final_fit.rho1, bins);
+  f->profile =
+      Profile(f->location.covariate, CovariateUnits()[best_covariate], covariates[best_covariate],
+              orders[best_covariate], before, base.rho1, after, final_fit.rho1, bins);
 }
 
 }  // namespace
@@ -194,23 +198,29 @@ void DescribeResiduals(const Context& context, const LaserEffectEvaluation& base
                        std::vector<CandidateState>* candidates, LaserDiagnosis* diagnosis) {
   const std::vector<std::vector<double>> covariates =
       Covariates(context, diagnosis->baseline.estimate);
+  // Each covariate sorted once for its profile, the structure tests and the adoptions' places.
+  std::vector<std::vector<size_t>> orders;
+  for (const std::vector<double>& covariate : covariates) {
+    orders.push_back(CovariateOrder(covariate));
+  }
   const Eigen::MatrixXd before_errors = Unwhitened(context.data, base_evaluation.residual);
   const Eigen::MatrixXd after_errors = Unwhitened(context.data, final_evaluation.residual);
   for (size_t c = 0; c < covariates.size(); ++c) {
     diagnosis->covariates.push_back(Profile(
-        LaserCovariateNames()[c], CovariateUnits()[c], covariates[c], before_errors,
+        LaserCovariateNames()[c], CovariateUnits()[c], covariates[c], orders[c], before_errors,
         base_evaluation.rho1, after_errors, final_evaluation.rho1, context.options.covariate_bins));
   }
-  diagnosis->structure_before = Structure(context, covariates, base_evaluation);
+  diagnosis->structure_before = Structure(context, covariates, orders, base_evaluation);
   // The same fit (nothing adopted) has the same structure.
   diagnosis->structure_after = &final_evaluation == &base_evaluation
                                    ? diagnosis->structure_before
-                                   : Structure(context, covariates, final_evaluation);
+                                   : Structure(context, covariates, orders, final_evaluation);
   for (CandidateState& c : *candidates) {
     if (!c.finding.significant) continue;
     for (const Adoption& a : search.adoptions) {
       if (a.effect == c.effect) {
-        LocateAdoption(context, a, covariates, base_evaluation, final_evaluation, &c.finding);
+        LocateAdoption(context, a, covariates, orders, base_evaluation, final_evaluation,
+                       &c.finding);
       }
     }
   }
