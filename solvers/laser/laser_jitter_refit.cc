@@ -8,6 +8,9 @@
 namespace calib {
 namespace {
 
+// The rounds end when no log's jitter or noise level moves by this much (relative).
+constexpr double kSettled = 0.01;
+
 // The jitter each log's whitening uses: its estimate when significant, none otherwise.
 double UsedJitter(const IntervalJitterEstimate& estimate) {
   return estimate.significant ? estimate.jitter_s : 0.0;
@@ -87,6 +90,11 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
           options.inlier_chi2);
       IntervalJitterOptions near = options.jitter;
       near.previous_jitter_s = jitter[d].jitter_s;  // The refit moves σ_j little.
+      // σ of σ_j only where this round may be the last (see the loop's end).
+      const bool last_round = round + 1 == std::max(1, options.noise_rounds);
+      near.stddev_wanted = [&, last_round](const IntervalJitterEstimate& e) {
+        return last_round || Change(e, jitter[d]) < kSettled;
+      };
       IntervalJitterEstimate next =
           EstimateIntervalJitter(errors, sensitivities[d], jitter[d].noise_sigma, inliers[d], near);
       // The decision to model the jitter was taken at the base fit; keep it.
@@ -94,7 +102,7 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
       change = std::max(change, Change(next, jitter[d]));
       jitter[d] = next;
     }
-    if (change < 0.01 || round + 1 == std::max(1, options.noise_rounds)) break;
+    if (change < kSettled || round + 1 == std::max(1, options.noise_rounds)) break;
     for (size_t d = 0; d < logs.size(); ++d) {
       CALIB_RETURN_IF_ERROR(problem.SetIntervalSqrtInformation(
           d,

@@ -289,6 +289,10 @@ IntervalJitterEstimate EstimateIntervalJitter(
   estimate.p_value =
       estimate.lr_statistic > 0.0 ? 0.5 * std::erfc(std::sqrt(estimate.lr_statistic / 2.0)) : 1.0;
   estimate.significant = estimate.p_value < options.significance;
+  if (options.stddev_wanted && !options.stddev_wanted(estimate)) {
+    estimate.jitter_stddev_s = std::numeric_limits<double>::quiet_NaN();
+    return estimate;
+  }
   // σ of σ_j from the profile's curvature (ℓ is even in σ_j, so at 0 the one-sided difference).
   const double h = std::max(0.1 * jitter_s, 0.01 * scale);
   const double curvature =

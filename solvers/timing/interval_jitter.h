@@ -5,6 +5,7 @@
 #include <calib/core/laser/laser_params.h>
 
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -71,6 +72,8 @@ std::vector<Eigen::Matrix3d> JitterSqrtInformation(
     const std::vector<IntervalTimeSensitivity>& sensitivities, const Eigen::Vector3d& noise_sigma,
     double jitter_s);
 
+struct IntervalJitterEstimate;
+
 struct IntervalJitterOptions {
   // Level of the likelihood-ratio test against σ_j = 0.
   double significance = 0.01;
@@ -91,6 +94,9 @@ struct IntervalJitterOptions {
   // back to a golden-section search of the profile when that does not settle inside the bracket;
   // false: the golden section always (the reference the tests compare with).
   bool joint_scoring = true;
+  // Whether σ of σ_j (two more profiles, a third of a refit round's passes) is wanted, asked
+  // with the estimate otherwise complete; empty: always. A refit wants it for its last round only.
+  std::function<bool(const IntervalJitterEstimate&)> stddev_wanted;
 };
 
 struct IntervalJitterEstimate {

@@ -109,6 +109,39 @@ TEST(IntervalJitterTest, PreviousEstimateGivesTheGridsAnswer) {
   }
 }
 
+// σ of σ_j is computed only where asked (a refit's last round): the rest of the estimate is the
+// same bit for bit, and the predicate sees the estimate it decides on.
+TEST(IntervalJitterTest, StddevOnlyWhereWanted) {
+  LaserSimOptions sim;
+  sim.num_intervals = 1000;
+  sim.seed = 7;
+  const LaserLog log = JitteredTupleLog(sim, 0.02);
+  const std::vector<bool> all(log.intervals.size(), true);
+  const IntervalJitterEstimate always =
+      EstimateIntervalJitter(log.intervals, Truth(sim), sim.scan_noise_sigma, all);
+  ASSERT_TRUE(always.significant);
+  for (bool wanted : {false, true}) {
+    IntervalJitterOptions options;
+    double seen_jitter_s = 0.0;
+    options.stddev_wanted = [&](const IntervalJitterEstimate& e) {
+      seen_jitter_s = e.jitter_s;
+      return wanted;
+    };
+    const IntervalJitterEstimate e =
+        EstimateIntervalJitter(log.intervals, Truth(sim), sim.scan_noise_sigma, all, options);
+    EXPECT_EQ(seen_jitter_s, always.jitter_s);
+    EXPECT_EQ(e.jitter_s, always.jitter_s);
+    EXPECT_EQ(e.noise_sigma, always.noise_sigma);
+    EXPECT_EQ(e.log_likelihood, always.log_likelihood);
+    EXPECT_EQ(e.p_value, always.p_value);
+    if (wanted) {
+      EXPECT_EQ(e.jitter_stddev_s, always.jitter_stddev_s);
+    } else {
+      EXPECT_TRUE(std::isnan(e.jitter_stddev_s));
+    }
+  }
+}
+
 // Joint scoring in (θ, σ_j²) lands where the golden-section search of the profile does, from the
 // grid and from a previous round's estimate.
 TEST(IntervalJitterTest, JointScoringGivesTheProfileSearchsAnswer) {
