@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 
 #include "tests/solvers/timing/jittered_log.h"
 
@@ -17,6 +18,22 @@ namespace {
 LaserCalibration Truth(const LaserSimOptions& options) {
   return LaserCalibration{options.odometry, options.base_T_sensor};
 }
+
+// A simulated log of `n` intervals whose boundary stamps scatter by `jitter_s`, estimated at the
+// truth with every interval an inlier.
+struct JitteredCase {
+  JitteredCase(int n, uint64_t seed, double jitter_s) {
+    sim.num_intervals = n;
+    sim.seed = seed;
+    log = JitteredTupleLog(sim, jitter_s);
+  }
+  IntervalJitterEstimate Estimate(const IntervalJitterOptions& options = {}) const {
+    return EstimateIntervalJitter(log.intervals, Truth(sim), sim.scan_noise_sigma,
+                                  std::vector<bool>(log.intervals.size(), true), options);
+  }
+  LaserSimOptions sim;
+  LaserLog log;
+};
 
 // On a constant arc the end speeds are the interval's: moving the end by δ appends φ·δ of arc,
 // moving the start removes it.
@@ -70,14 +87,10 @@ TEST(IntervalJitterTest, SqrtInformationWhitensTheCovariance) {
 }
 
 TEST(IntervalJitterTest, RecoversTheJitterWithinItsSigma) {
-  LaserSimOptions sim;
-  sim.num_intervals = 2000;
-  sim.seed = 5;
   const double jitter_s = 0.03;
-  const LaserLog log = JitteredTupleLog(sim, jitter_s);
-  const LaserCalibration truth = Truth(sim);
-  const IntervalJitterEstimate estimate = EstimateIntervalJitter(
-      log.intervals, truth, sim.scan_noise_sigma, std::vector<bool>(log.intervals.size(), true));
+  const JitteredCase jittered(2000, 5, jitter_s);
+  const LaserSimOptions& sim = jittered.sim;
+  const IntervalJitterEstimate estimate = jittered.Estimate();
   EXPECT_TRUE(estimate.significant) << estimate.p_value;
   EXPECT_LT(std::abs(estimate.jitter_s - jitter_s), 3 * estimate.jitter_stddev_s)
       << estimate.jitter_s << " ± " << estimate.jitter_stddev_s;
@@ -91,18 +104,12 @@ TEST(IntervalJitterTest, RecoversTheJitterWithinItsSigma) {
 // A previous round's estimate narrows the search without moving the answer (beyond 1e-3 of its σ);
 // one far from the maximum (its bracket's edge) falls back to the grid.
 TEST(IntervalJitterTest, PreviousEstimateGivesTheGridsAnswer) {
-  LaserSimOptions sim;
-  sim.num_intervals = 2000;
-  sim.seed = 6;
-  const LaserLog log = JitteredTupleLog(sim, 0.03);
-  const std::vector<bool> all(log.intervals.size(), true);
-  const IntervalJitterEstimate grid =
-      EstimateIntervalJitter(log.intervals, Truth(sim), sim.scan_noise_sigma, all);
+  const JitteredCase jittered(2000, 6, 0.03);
+  const IntervalJitterEstimate grid = jittered.Estimate();
   for (double previous : {0.8 * grid.jitter_s, 1.5 * grid.jitter_s, 20.0 * grid.jitter_s}) {
     IntervalJitterOptions options;
     options.previous_jitter_s = previous;
-    const IntervalJitterEstimate near =
-        EstimateIntervalJitter(log.intervals, Truth(sim), sim.scan_noise_sigma, all, options);
+    const IntervalJitterEstimate near = jittered.Estimate(options);
     EXPECT_NEAR(near.jitter_s, grid.jitter_s, 1e-3 * grid.jitter_stddev_s) << previous;
     EXPECT_NEAR(near.jitter_stddev_s, grid.jitter_stddev_s, 1e-2 * grid.jitter_stddev_s);
     EXPECT_NEAR(near.log_likelihood, grid.log_likelihood, 1e-6);
@@ -112,13 +119,8 @@ TEST(IntervalJitterTest, PreviousEstimateGivesTheGridsAnswer) {
 // σ of σ_j is computed only where asked (a refit's last round): the rest of the estimate is the
 // same bit for bit, and the predicate sees the estimate it decides on.
 TEST(IntervalJitterTest, StddevOnlyWhereWanted) {
-  LaserSimOptions sim;
-  sim.num_intervals = 1000;
-  sim.seed = 7;
-  const LaserLog log = JitteredTupleLog(sim, 0.02);
-  const std::vector<bool> all(log.intervals.size(), true);
-  const IntervalJitterEstimate always =
-      EstimateIntervalJitter(log.intervals, Truth(sim), sim.scan_noise_sigma, all);
+  const JitteredCase jittered(1000, 7, 0.02);
+  const IntervalJitterEstimate always = jittered.Estimate();
   ASSERT_TRUE(always.significant);
   for (bool wanted : {false, true}) {
     IntervalJitterOptions options;
@@ -127,8 +129,7 @@ TEST(IntervalJitterTest, StddevOnlyWhereWanted) {
       seen_jitter_s = e.jitter_s;
       return wanted;
     };
-    const IntervalJitterEstimate e =
-        EstimateIntervalJitter(log.intervals, Truth(sim), sim.scan_noise_sigma, all, options);
+    const IntervalJitterEstimate e = jittered.Estimate(options);
     EXPECT_EQ(seen_jitter_s, always.jitter_s);
     EXPECT_EQ(e.jitter_s, always.jitter_s);
     EXPECT_EQ(e.noise_sigma, always.noise_sigma);
@@ -145,19 +146,13 @@ TEST(IntervalJitterTest, StddevOnlyWhereWanted) {
 // Joint scoring in (θ, σ_j²) lands where the golden-section search of the profile does, from the
 // grid and from a previous round's estimate.
 TEST(IntervalJitterTest, JointScoringGivesTheProfileSearchsAnswer) {
-  LaserSimOptions sim;
-  sim.num_intervals = 2000;
-  sim.seed = 8;
-  const LaserLog log = JitteredTupleLog(sim, 0.02);
-  const std::vector<bool> all(log.intervals.size(), true);
+  const JitteredCase jittered(2000, 8, 0.02);
   for (double previous : {0.0, 0.015}) {
     IntervalJitterOptions golden, joint;
     golden.joint_scoring = false;
     golden.previous_jitter_s = joint.previous_jitter_s = previous;
-    const IntervalJitterEstimate a =
-        EstimateIntervalJitter(log.intervals, Truth(sim), sim.scan_noise_sigma, all, golden);
-    const IntervalJitterEstimate b =
-        EstimateIntervalJitter(log.intervals, Truth(sim), sim.scan_noise_sigma, all, joint);
+    const IntervalJitterEstimate a = jittered.Estimate(golden);
+    const IntervalJitterEstimate b = jittered.Estimate(joint);
     ASSERT_TRUE(a.significant && b.significant);
     EXPECT_NEAR(b.jitter_s, a.jitter_s, 1e-3 * a.jitter_stddev_s) << previous;
     EXPECT_NEAR(b.jitter_stddev_s, a.jitter_stddev_s, 1e-3 * a.jitter_stddev_s);
