@@ -57,7 +57,20 @@ int ScanPoints::NearestBeam(double phi_rad) const {
   const double turn = 2.0 * M_PI / std::abs(angle_increment_rad);
   if (beam < 0 && beam + turn <= n - 1 + 0.5) beam += turn;
   if (beam > n - 1 && beam - turn >= -0.5) beam -= turn;
-  return static_cast<int>(std::clamp(beam, 0.0, static_cast<double>(n - 1)));
+  int k = static_cast<int>(std::clamp(beam, 0.0, static_cast<double>(n - 1)));
+  if (static_cast<int>(beam_angle_rad.size()) != n) return k;
+  // De-skewed, beam k looks along its nominal angle turned by the sensor's rotation at its time:
+  // tens of beams away in a fast turn (0.5 rad over a 0.1 s sweep at 5 rad/s). Step towards phi
+  // by the angle still missing; each step leaves the share ω·time_increment/angle_increment of it.
+  for (int iteration = 0; iteration < 8; ++iteration) {
+    const long step = std::lround(WrapAngle(phi_rad - beam_angle_rad[k]) / angle_increment_rad);
+    if (step == 0) break;
+    const int next = full_circle ? static_cast<int>(((k + step) % n + n) % n)
+                                 : static_cast<int>(std::clamp<long>(k + step, 0, n - 1));
+    if (next == k) break;
+    k = next;
+  }
+  return k;
 }
 
 std::vector<Pose2d> SweepMotion::StampTSensor(const std::vector<double>& dt_s) const {
@@ -103,7 +116,14 @@ StatusOr<ScanPoints> MakeScanPoints(const LaserScan& scan, const ScanPointsOptio
     Eigen::Vector2d direction(std::cos(angle_rad), std::sin(angle_rad));
     out.beam_angle_rad[i] = angle_rad;
     out.beam_unit[i] = direction;
-    if (!scan.IsReturn(i)) continue;
+    if (!scan.IsReturn(i)) {
+      // Turned with the sensor, so that the angles stay in beam order for the searches.
+      if (options.sweep.has_value()) {
+        out.beam_angle_rad[i] += stamp_T_beam[i](2);
+        out.beam_unit[i] = {std::cos(out.beam_angle_rad[i]), std::sin(out.beam_angle_rad[i])};
+      }
+      continue;
+    }
     const double range_m = scan.ranges_m[i];
     Eigen::Vector2d point_m = range_m * direction;
     if (options.sweep.has_value()) {

@@ -19,7 +19,8 @@ struct ScanPoints {
   std::vector<int> beams;                   // The beam index of each return.
   // Per beam: the index of its return in points_m, or −1 when the beam has no return.
   std::vector<int> point_of_beam;
-  // Per beam: the polar angle of its point (its nominal angle when it has no return).
+  // Per beam: the polar angle of its point; without a return, its nominal angle (de-skewed: turned
+  // by the sensor's rotation at its time).
   std::vector<double> beam_angle_rad;
   // Per beam: (cos, sin) of beam_angle_rad, so that searches need no trigonometry. May be left
   // empty by hand-made ScanPoints (FindCorrespondences then computes it).
@@ -30,8 +31,9 @@ struct ScanPoints {
 
   int NumBeams() const { return static_cast<int>(point_of_beam.size()); }
   int NumPoints() const { return static_cast<int>(points_m.size()); }
-  // The beam whose nominal angle is nearest to the polar angle phi_rad, for either sign of the
-  // increment and any span (a partial scan's beyond its ends: the end beam); −1 without beams.
+  // The beam whose angle (beam_angle_rad: de-skewed, when the scan was) is nearest to the polar
+  // angle phi_rad, for either sign of the increment and any span (a partial scan's beyond its
+  // ends: the end beam); −1 without beams.
   int NearestBeam(double phi_rad) const;
 };
 

@@ -72,7 +72,7 @@ TEST_F(BagCliTest, BagsOfTheReferenceWritersCalibrateWithinThreeSigma) {
     const nlohmann::json& recording = json["recording"];
     EXPECT_EQ(recording["scan_topic"], "/scan");
     EXPECT_EQ(recording["scan_matching"]["failed"], 0);
-    EXPECT_EQ(recording["scan_matching"]["passes"], 2);  // The sweeps are de-skewed.
+    EXPECT_GE(recording["scan_matching"]["passes"], 2);  // The sweeps are de-skewed.
     EXPECT_LT(std::abs(recording["mounting_minus_nominal"]["sensor_x"].get<double>()), 0.01);
     EXPECT_EQ(json["timing"]["latent_times"]["sensor_clock"], "free_running");
   }
@@ -88,7 +88,7 @@ TEST_F(BagCliTest, AnUpsideDownLidarsBagCalibratesWithinThreeSigma) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
   ExpectWithinThreeSigma(json, truth);
-  EXPECT_EQ(json["recording"]["scan_matching"]["passes"], 2);  // The sweeps are de-skewed.
+  EXPECT_GE(json["recording"]["scan_matching"]["passes"], 2);  // The sweeps are de-skewed.
   EXPECT_LT(std::abs(json["recording"]["mounting_minus_nominal"]["sensor_x"].get<double>()), 0.01);
   EXPECT_NE(json["warnings"].dump().find("upside down"), std::string::npos) << json["warnings"];
 }

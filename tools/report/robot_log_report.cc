@@ -62,8 +62,10 @@ std::string RobotLogSummary(const RobotBagLog& log, const LaserCalibrationResult
          std::to_string(s.failed_matches) + " failed, " + std::to_string(s.keyframes) +
          " keyframes, " + std::to_string(s.segments) + " segment(s)" +
          Format(", %.2f s", s.matching_seconds) +
-         (log.matching_passes > 1 ? "; matched again de-skewed through the first calibration\n"
-                                  : "\n");
+         (log.matching_passes > 1
+              ? "; " + std::to_string(log.matching_passes) +
+                    " passes, each de-skewed through the previous one's calibration\n"
+              : "\n");
   const LaserParamVector v = result.estimate.ToVector();
   if (log.nominal_mounting) {
     const Pose2d& m = log.nominal_mounting->base_T_sensor;

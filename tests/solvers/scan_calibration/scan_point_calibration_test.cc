@@ -193,7 +193,7 @@ TEST(ScanPointCalibration, RefinesABagOfAnUpsideDownLidar) {
   ASSERT_TRUE(r.ok()) << r.message();
   ASSERT_TRUE(r->scan_points.has_value()) << r->scan_point_warnings.front();
   EXPECT_TRUE(r->log.mirrored);
-  EXPECT_EQ(r->log.matching_passes, 2);  // The sweeps were de-skewed.
+  EXPECT_GE(r->log.matching_passes, 2);  // The sweeps were de-skewed.
   const LaserCalibrationResult& two_stage = r->result.calibration;
   const LaserParamVector z =
       (two_stage.estimate.ToVector() - Truth(*sim).ToVector()).cwiseQuotient(two_stage.stddev);
