@@ -46,27 +46,30 @@ Status CheckScan(const LaserScan& scan, const ScanPointsOptions& options) {
 
 }  // namespace
 
+int ScanPoints::BeamToward(double phi_rad, int from_beam, double from_angle_rad) const {
+  const int n = NumBeams();
+  // The offset wrapped into (−π, π]: on a scan spanning more than half a turn it may land a whole
+  // turn away from the beams; then the nearer of the two ways to them.
+  double beam =
+      from_beam + std::round(WrapAngle(phi_rad - from_angle_rad) / angle_increment_rad);
+  if (full_circle) return ((static_cast<int>(beam) % n) + n) % n;
+  const double turn = 2.0 * M_PI / std::abs(angle_increment_rad);
+  if (beam < 0 && beam + turn - (n - 1) < -beam) beam += turn;
+  if (beam > n - 1 && -(beam - turn) < beam - (n - 1)) beam -= turn;
+  return static_cast<int>(std::clamp(beam, 0.0, static_cast<double>(n - 1)));
+}
+
 int ScanPoints::NearestBeam(double phi_rad) const {
   const int n = NumBeams();
   if (n == 0) return -1;
   if (angle_increment_rad == 0.0) return 0;
-  // The offset from angle_min wrapped into (−π, π]: on a scan spanning more than half a turn it
-  // may land a whole turn away from the beams.
-  double beam = std::round(WrapAngle(phi_rad - angle_min_rad) / angle_increment_rad);
-  if (full_circle) return ((static_cast<int>(beam) % n) + n) % n;
-  const double turn = 2.0 * M_PI / std::abs(angle_increment_rad);
-  if (beam < 0 && beam + turn <= n - 1 + 0.5) beam += turn;
-  if (beam > n - 1 && beam - turn >= -0.5) beam -= turn;
-  int k = static_cast<int>(std::clamp(beam, 0.0, static_cast<double>(n - 1)));
+  int k = BeamToward(phi_rad, 0, angle_min_rad);
   if (static_cast<int>(beam_angle_rad.size()) != n) return k;
   // De-skewed, beam k looks along its nominal angle turned by the sensor's rotation at its time:
   // tens of beams away in a fast turn (0.5 rad over a 0.1 s sweep at 5 rad/s). Step towards phi
   // by the angle still missing; each step leaves the share ω·time_increment/angle_increment of it.
   for (int iteration = 0; iteration < 8; ++iteration) {
-    const long step = std::lround(WrapAngle(phi_rad - beam_angle_rad[k]) / angle_increment_rad);
-    if (step == 0) break;
-    const int next = full_circle ? static_cast<int>(((k + step) % n + n) % n)
-                                 : static_cast<int>(std::clamp<long>(k + step, 0, n - 1));
+    const int next = BeamToward(phi_rad, k, beam_angle_rad[k]);
     if (next == k) break;
     k = next;
   }

@@ -35,6 +35,11 @@ struct ScanPoints {
   // angle phi_rad, for either sign of the increment and any span (a partial scan's beyond its
   // ends: the end beam); −1 without beams.
   int NearestBeam(double phi_rad) const;
+
+ private:
+  // The beam phi_rad is found at by stepping from beam from_beam, which looks along
+  // from_angle_rad, by the angle between them in beam increments.
+  int BeamToward(double phi_rad, int from_beam, double from_angle_rad) const;
 };
 
 // The sensor's motion during a sweep as a piecewise-constant body velocity (vx, vy, ω per second,

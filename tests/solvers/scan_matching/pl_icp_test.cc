@@ -308,6 +308,39 @@ TEST(ScanPointsTest, NearestBeamOfEveryBeamsAngleIsThatBeam) {
   EXPECT_EQ(ScanPoints().NearestBeam(0.0), -1);
 }
 
+// A sweep de-skewed through a fast turn (±5 rad/s over 0.1 s: the last beams turned 0.5 rad, tens
+// of beams from their nominal angles): the beam found for each beam's de-skewed angle looks along
+// it, returns and missing returns alike (by the nominal angles, the scan points' correspondences
+// had been searched among the wrong beams).
+TEST(ScanPointsTest, NearestBeamFollowsADeskewedSweep) {
+  for (const int beams : {1081, 360}) {
+    for (const double omega : {5.0, -5.0}) {
+      LaserScan scan;
+      const double span_rad = beams == 360 ? 2.0 * M_PI * 359.0 / 360.0 : 1.5 * M_PI;
+      scan.angle_min_rad = -0.5 * span_rad;
+      scan.angle_increment_rad = span_rad / (beams - 1);
+      scan.time_increment_s = 0.1 / beams;
+      scan.ranges_m.assign(beams, 2.0f);
+      for (int b = 0; b < beams; b += 7) scan.ranges_m[b] = std::numeric_limits<float>::infinity();
+      scan.range_max_m = 10.0;
+      ScanPointsOptions options;
+      options.sweep = SweepMotion::Constant(Twist2d(0.0, 0.0, omega));
+      const StatusOr<ScanPoints> points = MakeScanPoints(scan, options);
+      ASSERT_TRUE(points.ok()) << points.message();
+      for (int b = 0; b < beams; ++b) {
+        const double phi = points->beam_angle_rad[b];
+        ASSERT_NEAR(phi, scan.BeamAngle(b) + omega * b * scan.time_increment_s, 1e-9);
+        const int found = points->NearestBeam(phi);
+        // Half the de-skewed beams' spacing (on a full circle the turn's overlap has two beams
+        // along an angle: either will do).
+        ASSERT_LE(std::abs(WrapAngle(points->beam_angle_rad[found] - phi)),
+                  0.5 * (scan.angle_increment_rad + std::abs(omega) * scan.time_increment_s))
+            << beams << " beams, ω " << omega << ", beam " << b << " found " << found;
+      }
+    }
+  }
+}
+
 // The trig-free search finds the same nearest point as brute force, the repeated search the same
 // as FindCorrespondences (every stride-th point with a stride), and each line straddles its
 // nearest point: one end on either side, at least min_segment_length_m / 2 from it.
