@@ -50,8 +50,7 @@ int ScanPoints::BeamToward(double phi_rad, int from_beam, double from_angle_rad)
   const int n = NumBeams();
   // The offset wrapped into (−π, π]: on a scan spanning more than half a turn it may land a whole
   // turn away from the beams; then the nearer of the two ways to them.
-  double beam =
-      from_beam + std::round(WrapAngle(phi_rad - from_angle_rad) / angle_increment_rad);
+  double beam = from_beam + std::round(WrapAngle(phi_rad - from_angle_rad) / angle_increment_rad);
   if (full_circle) return ((static_cast<int>(beam) % n) + n) % n;
   const double turn = 2.0 * M_PI / std::abs(angle_increment_rad);
   if (beam < 0 && beam + turn - (n - 1) < -beam) beam += turn;
