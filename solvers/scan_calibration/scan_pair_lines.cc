@@ -75,6 +75,28 @@ int SegmentEnd(const ScanPoints& ref, int a, int step, const CorrespondenceOptio
   return -1;
 }
 
+// The turn from direction `before` to direction `after` exceeds max_bend_rad.
+bool Bends(const Eigen::Vector2d& before, const Eigen::Vector2d& after, double max_bend_rad) {
+  const double cross = before.x() * after.y() - before.y() * after.x();
+  return std::abs(std::atan2(cross, before.dot(after))) > max_bend_rad;
+}
+
+// The reference segment from return a to return b spans a corner, and its line is neither wall:
+// it turns at its middle return, or it leaves the line that the returns before a (a segment on
+// a's other side) follow, by more than max_bend_rad (at 1 cm of noise the directions of these
+// 0.12–0.25 m chords scatter by 0.06–0.11 rad). A segment across a full circle's seam is not
+// checked at its middle.
+bool SpansCorner(const ScanPoints& ref, int a, int b, const CorrespondenceOptions& o) {
+  const Eigen::Vector2d& pa = ref.points_m[a];
+  const int behind = SegmentEnd(ref, a, b > a ? -1 : 1, o);
+  if (behind >= 0 && Bends(pa - ref.points_m[behind], ref.points_m[b] - pa, o.max_bend_rad)) {
+    return true;
+  }
+  if (std::abs(b - a) < 2 || std::abs(b - a) > ref.NumPoints() / 2) return false;
+  const Eigen::Vector2d& pm = ref.points_m[(a + b) / 2];
+  return Bends(pm - pa, ref.points_m[b] - pm, o.max_bend_rad);
+}
+
 void FindBeamCorrespondences(const ScanPoints& ref, const std::vector<Eigen::Vector2d>& points,
                              const CorrespondenceOptions& o, std::vector<Correspondence>* out) {
   out->clear();
@@ -85,8 +107,8 @@ void FindBeamCorrespondences(const ScanPoints& ref, const std::vector<Eigen::Vec
     const int toward =
         WrapAngle(phi - ref.beam_angle_rad[ref.beams[a]]) * ref.angle_increment_rad >= 0.0 ? 1 : -1;
     int b = SegmentEnd(ref, a, toward, o);
-    if (b < 0) b = SegmentEnd(ref, a, -toward, o);
-    if (b < 0) continue;
+    if (b < 0 || SpansCorner(ref, a, b, o)) b = SegmentEnd(ref, a, -toward, o);
+    if (b < 0 || SpansCorner(ref, a, b, o)) continue;
     out->push_back(Correspondence{static_cast<int>(i), a, b});
   }
 }

@@ -54,6 +54,8 @@ CorrespondenceSearch::CorrespondenceSearch(const ScanPoints& reference,
     Walk(a, 0);
     Walk(a, 1);
   }
+  at_corner_.resize(n);
+  for (int a = 0; a < n; ++a) at_corner_[a] = AtCorner(a);
 }
 
 // Dense beams (neighbours a few cm apart against cm of range noise) give segments whose
@@ -129,10 +131,25 @@ int CorrespondenceSearch::Nearest(const Eigen::Vector2d& p) const {
   return best;
 }
 
+// Near a corner the line through points on both of its sides is neither wall: in a bare room
+// seen over 270° (1081 beams, 1 cm noise) such lines put the matches' x off by −0.32 mm on
+// average (5 standard errors), the front corners outweighing the blind back ones; left out,
+// −0.09 ± 0.06 mm (PlIcpTest.ScanEndsAndCornersAreNoNearestPoints). The turn is taken between
+// segments of min_segment_length_m (at 1 cm of noise their directions scatter by 0.14 rad), so that
+// noise alone rarely reaches max_bend_rad.
+bool CorrespondenceSearch::AtCorner(int a) const {
+  const std::array<int, 2>& ends = segment_end_[a];
+  if (ends[0] < 0 || ends[1] < 0) return false;
+  const Eigen::Vector2d before = reference_.points_m[a] - reference_.points_m[ends[0]];
+  const Eigen::Vector2d after = reference_.points_m[ends[1]] - reference_.points_m[a];
+  const double cross = before.x() * after.y() - before.y() * after.x();
+  return std::abs(std::atan2(cross, before.dot(after))) > options_.max_bend_rad;
+}
+
 // A current point beyond the reference's field of view (the robot turned) finds its nearest point
 // among the reference's end beams, on a surface the reference may not show there: on a 0.1 rad
 // turn of a 270° scan of 1081 beams such pairs pulled the pose by −0.3 mm in y and +0.2 mrad in
-// θ on average (PlIcpTest.ScanEndsAreNoNearestPoints).
+// θ on average (PlIcpTest.ScanEndsAndCornersAreNoNearestPoints).
 bool CorrespondenceSearch::AtScanEnd(int a) const {
   if (reference_.full_circle) return false;
   const int beam = reference_.beams[a];
@@ -149,7 +166,7 @@ void CorrespondenceSearch::Find(const std::vector<Eigen::Vector2d>& current_in_r
   for (int i = 0; i < static_cast<int>(current_in_reference_m.size()); i += stride) {
     const Eigen::Vector2d& p = current_in_reference_m[i];
     const int a = Nearest(p);
-    if (a < 0 || AtScanEnd(a)) continue;
+    if (a < 0 || AtScanEnd(a) || at_corner_[a]) continue;
     // The side of a's nearer beam neighbour (within max_segment_length_m).
     const std::array<int, 2>& neighbours = neighbour_[a];
     auto distance2 = [&](int j) {

@@ -32,6 +32,10 @@ struct CorrespondenceOptions {
   double min_segment_length_m = 0.1;  // Shorter ones go on along the beams (dense scans).
   // A partial scan's first and last this many beams are no nearest point (see AtScanEnd).
   int scan_end_beams = 3;
+  // A reference point whose segments on its two sides (min_segment_length_m each) turn by more
+  // than this is at a corner and no nearest point (see AtCorner); π: none is. The scan-point
+  // calibration drops its lines that turn so much (scan_pair_lines.cc, SpansCorner).
+  double max_bend_rad = 0.6;
 };
 
 // The search against one reference scan, repeated (ICP iterations): the segments of every
@@ -46,6 +50,7 @@ class CorrespondenceSearch {
  private:
   int Nearest(const Eigen::Vector2d& p) const;
   bool AtScanEnd(int a) const;
+  bool AtCorner(int a) const;
   void Walk(int a, int side);
 
   const ScanPoints& reference_;
@@ -56,6 +61,7 @@ class CorrespondenceSearch {
   // within max_segment_length_m, the end of the segment walked from it, and the first point whose
   // beams' arc reaches min_segment_length_m / 2 (the line's end); −1 for none.
   std::vector<std::array<int, 2>> neighbour_, segment_end_, half_end_;
+  std::vector<char> at_corner_;  // AtCorner of each reference point.
 };
 
 // Finds the nearest reference point by walking the reference's beams outward from the point's

@@ -1,8 +1,11 @@
 #include <calib/core/scan/scan_simulator.h>
+#include <calib/solvers/scan_calibration/scan_pair_lines.h>
 #include <calib/solvers/scan_calibration/scan_point_calibration.h>
 #include <calib/solvers/scan_matching/robot_bag_log.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 namespace calib {
@@ -65,6 +68,37 @@ StatusOr<RobotBagCalibration> CalibrateWithScanPoints(const RobotMessages& bag) 
   RobotBagOptions options;
   options.scan_points = ScanPointOptions();
   return CalibrateRobotMessages(bag, options, LaserTimingOptions());
+}
+
+// Noise-free sweeps among boxes and pillars, placed through the truth: the current points lie on
+// their lines but for a few that see what the reference does not (occlusions, for the gate to
+// drop). A line from a return near a corner to one 0.25 m on, across it, is neither wall: 6 % of
+// the lines had been more than 3 mm off (0.4 % now), and they had put the scan points'
+// parameters beyond 2σ of the truth far more often than 5 % (fast turns 15 %, dense 270° scans
+// 20 %).
+TEST(ScanPointCalibration, NoLineSpansACorner) {
+  const StatusOr<ScanSimulation> sim = SimulateScans(Robot(120, 0.0, 0.1, 2));
+  ASSERT_TRUE(sim.ok()) << sim.message();
+  const ScanPointInput input = Input(*sim);
+  int lines = 0, off = 0;
+  double worst_m = 0.0;
+  for (int i = 0; i + 8 < static_cast<int>(sim->scans.size()); i += 4) {
+    ScanPair pair;
+    pair.reference = i;
+    pair.current = i + 8;
+    pair.timeline = MakePairTimeline(sim->encoders, sim->scans[i].stamp_s - 0.2,
+                                     sim->scans[i + 8].stamp_s + 0.3);
+    ASSERT_TRUE(FindPairLines(input, Truth(*sim), 0.0, ScanPointOptions(), &pair).ok());
+    for (const double d : pair.distance_m) {
+      ++lines;
+      off += std::abs(d) > 3e-3;
+      worst_m = std::max(worst_m, std::abs(d));
+    }
+  }
+  std::printf("%d lines, %d more than 3 mm from their current point, the largest %.2g m\n", lines,
+              off, worst_m);
+  EXPECT_GT(lines, 5000);
+  EXPECT_LT(off, lines / 100);
 }
 
 // Noise-free scans of straight walls: the estimate is the truth, from a start a few % off.

@@ -91,9 +91,10 @@ TEST(PlIcpTest, CovarianceIsHonestUnderRangeNoise) {
 // A 270° scan turned clockwise by 0.1 rad: its first beams look beyond the reference's field of
 // view, and their nearest reference points are the reference's end beams, on surfaces it may not
 // show there. Such pairs pulled the pose by about −0.3 mm in y and +0.2 mrad in θ on average
-// (1081 beams, 1 cm noise, a bare room). Left out (the default), y and θ average to within 3
-// standard errors of zero.
-TEST(PlIcpTest, ScanEndsAreNoNearestPoints) {
+// (1081 beams, 1 cm noise, a bare room). And lines through a corner (points of both walls) pulled
+// x by −0.32 mm (5 standard errors: the room's front corners are seen, its back ones are not).
+// Both left out (the default), x, y and θ average to within 3 standard errors of zero.
+TEST(PlIcpTest, ScanEndsAndCornersAreNoNearestPoints) {
   std::vector<test_scans::Wall> room;
   test_scans::AddBox(-5.0, -3.0, 5.0, 3.0, &room);
   room.push_back({{-4.0, 2.0}, {-2.5, 2.9}});
@@ -102,10 +103,12 @@ TEST(PlIcpTest, ScanEndsAreNoNearestPoints) {
   spec.fov_rad = 1.5 * M_PI;
   spec.range_sigma_m = 0.01;
   const Pose2d truth(0.02, 0.0, -0.1);
-  const auto mean_error = [&](int scan_end_beams, Eigen::Vector3d* standard_error) {
+  const auto mean_error = [&](int scan_end_beams, double max_bend_rad,
+                              Eigen::Vector3d* standard_error) {
     std::mt19937 rng(5);
     PlIcpOptions options;
     options.correspondence.scan_end_beams = scan_end_beams;
+    options.correspondence.max_bend_rad = max_bend_rad;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero(), sum2 = Eigen::Vector3d::Zero();
     const int trials = 200;
     for (int trial = 0; trial < trials; ++trial) {
@@ -121,18 +124,22 @@ TEST(PlIcpTest, ScanEndsAreNoNearestPoints) {
     }
     const Eigen::Vector3d mean = sum / trials;
     *standard_error = ((sum2 / trials - mean.cwiseAbs2()) / trials).cwiseSqrt();
+    std::printf(
+        "scan end beams %d, max bend %.1f rad: mean error %+.1f ± %.1f, %+.1f ± %.1f um, "
+        "%+.1f ± %.1f urad\n",
+        scan_end_beams, max_bend_rad, 1e6 * mean(0), 1e6 * (*standard_error)(0), 1e6 * mean(1),
+        1e6 * (*standard_error)(1), 1e6 * mean(2), 1e6 * (*standard_error)(2));
     return mean;
   };
-  Eigen::Vector3d se_kept, se_left;
-  const Eigen::Vector3d kept = mean_error(0, &se_kept);
-  const Eigen::Vector3d left_out = mean_error(3, &se_left);
-  std::printf(
-      "mean error, ends kept: %+.1f %+.1f um %+.1f urad; left out: %+.1f %+.1f um %+.1f urad\n",
-      1e6 * kept(0), 1e6 * kept(1), 1e6 * kept(2), 1e6 * left_out(0), 1e6 * left_out(1),
-      1e6 * left_out(2));
-  EXPECT_GT(std::abs(kept(2)), 3.0 * se_kept(2));
-  EXPECT_LT(std::abs(left_out(1)), 3.0 * se_left(1));
-  EXPECT_LT(std::abs(left_out(2)), 3.0 * se_left(2));
+  const CorrespondenceOptions defaults;
+  Eigen::Vector3d se_ends, se_corners, se;
+  const Eigen::Vector3d ends_kept = mean_error(0, defaults.max_bend_rad, &se_ends);
+  const Eigen::Vector3d corners_kept = mean_error(defaults.scan_end_beams, M_PI, &se_corners);
+  const Eigen::Vector3d both_left_out =
+      mean_error(defaults.scan_end_beams, defaults.max_bend_rad, &se);
+  EXPECT_GT(std::abs(ends_kept(2)), 3.0 * se_ends(2));
+  EXPECT_GT(std::abs(corners_kept(0)), 3.0 * se_corners(0));
+  for (int i = 0; i < 3; ++i) EXPECT_LT(std::abs(both_left_out(i)), 3.0 * se(i)) << i;
 }
 
 TEST(PlIcpTest, FlagsACorridorAsDegenerate) {
