@@ -61,6 +61,8 @@ int ReturnAlongBeam(const ScanPoints& ref, double phi_rad) {
 // with no depth jump (max_segment_length_m) between consecutive returns; −1 when none.
 int SegmentEnd(const ScanPoints& ref, int a, int step, const CorrespondenceOptions& o) {
   const int n = ref.NumBeams();
+  const double max2 = o.max_segment_length_m * o.max_segment_length_m;
+  const double min2 = o.min_segment_length_m * o.min_segment_length_m;
   int previous = a;
   for (int k = 1; k < n; ++k) {
     int beam = ref.beams[a] + step * k;
@@ -68,8 +70,8 @@ int SegmentEnd(const ScanPoints& ref, int a, int step, const CorrespondenceOptio
     if (beam < 0 || beam >= n || k > 60) return -1;
     const int j = ref.point_of_beam[beam];
     if (j < 0) continue;
-    if ((ref.points_m[j] - ref.points_m[previous]).norm() > o.max_segment_length_m) return -1;
-    if ((ref.points_m[j] - ref.points_m[a]).norm() >= o.min_segment_length_m) return j;
+    if ((ref.points_m[j] - ref.points_m[previous]).squaredNorm() > max2) return -1;
+    if ((ref.points_m[j] - ref.points_m[a]).squaredNorm() >= min2) return j;
     previous = j;
   }
   return -1;

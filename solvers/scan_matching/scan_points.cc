@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 namespace calib {
@@ -50,7 +51,10 @@ int ScanPoints::BeamToward(double phi_rad, int from_beam, double from_angle_rad)
   const int n = NumBeams();
   // The offset wrapped into (−π, π]: on a scan spanning more than half a turn it may land a whole
   // turn away from the beams; then the nearer of the two ways to them.
-  double beam = from_beam + std::round(WrapAngle(phi_rad - from_angle_rad) / angle_increment_rad);
+  const double offset = WrapAngle(phi_rad - from_angle_rad) / angle_increment_rad;
+  // Rounded half away from zero, as std::round, without its library call (a search per point).
+  double beam =
+      from_beam + static_cast<double>(static_cast<int64_t>(offset + (offset < 0.0 ? -0.5 : 0.5)));
   if (full_circle) return ((static_cast<int>(beam) % n) + n) % n;
   const double turn = 2.0 * M_PI / std::abs(angle_increment_rad);
   if (beam < 0 && beam + turn - (n - 1) < -beam) beam += turn;
@@ -63,13 +67,19 @@ int ScanPoints::NearestBeam(double phi_rad) const {
   if (n == 0) return -1;
   if (angle_increment_rad == 0.0) return 0;
   int k = BeamToward(phi_rad, 0, angle_min_rad);
-  if (static_cast<int>(beam_angle_rad.size()) != n) return k;
+  if (!deskewed || static_cast<int>(beam_angle_rad.size()) != n) return k;
   // De-skewed, beam k looks along its nominal angle turned by the sensor's rotation at its time:
   // tens of beams away in a fast turn (0.5 rad over a 0.1 s sweep at 5 rad/s). Step towards phi
   // by the angle still missing; each step leaves the share ω·time_increment/angle_increment of it.
+  int previous = -1;
   for (int iteration = 0; iteration < 8; ++iteration) {
     const int next = BeamToward(phi_rad, k, beam_angle_rad[k]);
     if (next == k) break;
+    if (next == previous) {  // Back and forth across a gap (a sweep turning against its beams).
+      const auto off = [&](int b) { return std::abs(WrapAngle(phi_rad - beam_angle_rad[b])); };
+      return off(next) < off(k) ? next : k;
+    }
+    previous = k;
     k = next;
   }
   return k;
@@ -108,6 +118,7 @@ StatusOr<ScanPoints> MakeScanPoints(const LaserScan& scan, const ScanPointsOptio
   out.directions.reserve(num_beams);
   out.beams.reserve(num_beams);
   std::vector<Pose2d> stamp_T_beam;
+  out.deskewed = options.sweep.has_value();
   if (options.sweep.has_value()) {
     std::vector<double> dt_s(num_beams);
     for (int i = 0; i < num_beams; ++i) dt_s[i] = i * scan.time_increment_s;

@@ -28,6 +28,7 @@ struct ScanPoints {
   double angle_min_rad = 0.0;
   double angle_increment_rad = 0.0;
   bool full_circle = false;  // The beams close a whole turn (search windows wrap around).
+  bool deskewed = false;     // The points were moved to the stamp's frame (a sweep was given).
 
   int NumBeams() const { return static_cast<int>(point_of_beam.size()); }
   int NumPoints() const { return static_cast<int>(points_m.size()); }
