@@ -17,57 +17,67 @@ constexpr size_t kPrefetchAhead = 4;
 }  // namespace
 
 Status BandArrowProblem::Build(const std::vector<double*>& latents, ceres::Problem* problem) {
+  return Build(latents, ArrowTerms::FromProblem(*problem));
+}
+
+Status BandArrowProblem::Build(const std::vector<double*>& latents, const ArrowTerms& terms) {
+  std::unordered_map<const double*, int> listed;  // Into terms.blocks.
+  listed.reserve(terms.blocks.size());
+  for (size_t i = 0; i < terms.blocks.size(); ++i) listed.emplace(terms.blocks[i].values, i);
+  const auto make_block = [&](const double* value, bool latent, Block* b) {
+    const auto it = listed.find(value);
+    if (it == listed.end()) return false;
+    const ArrowTerms::Block& listed_block = terms.blocks[it->second];
+    if (listed_block.constant) return false;
+    b->values = listed_block.values, b->size = listed_block.size, b->latent = latent;
+    b->manifold = listed_block.manifold;
+    b->tangent = b->manifold ? b->manifold->TangentSize() : b->size;
+    return b->tangent > 0;
+  };
   std::unordered_map<const double*, int>& index = block_index_;
+  index.reserve(terms.blocks.size());
   for (double* value : latents) {
-    if (problem->IsParameterBlockConstant(value)) continue;
     Block b;
-    b.values = value, b.size = problem->ParameterBlockSize(value), b.latent = true;
-    b.manifold = problem->GetManifold(value);
-    b.tangent = b.manifold ? b.manifold->TangentSize() : b.size;
-    if (b.tangent == 0) continue;
+    if (!make_block(value, true, &b)) continue;
     b.column = latent_columns_;
     latent_columns_ += b.tangent;
     index[value] = static_cast<int>(blocks_.size());
     latent_blocks_.push_back(static_cast<int>(blocks_.size()));
     blocks_.push_back(b);
   }
-  std::vector<double*> all;
-  problem->GetParameterBlocks(&all);
-  for (double* value : all) {
-    if (index.count(value) || problem->IsParameterBlockConstant(value)) continue;
+  for (const ArrowTerms::Block& listed_block : terms.blocks) {
     Block b;
-    b.values = value;
-    b.size = problem->ParameterBlockSize(value);
-    b.manifold = problem->GetManifold(value);
-    b.tangent = b.manifold ? b.manifold->TangentSize() : b.size;
+    if (index.count(listed_block.values) || !make_block(listed_block.values, false, &b)) continue;
     b.column = globals_;
     globals_ += b.tangent;
-    index[value] = static_cast<int>(blocks_.size());
+    index[listed_block.values] = static_cast<int>(blocks_.size());
     blocks_.push_back(b);
   }
-  std::vector<ceres::ResidualBlockId> ids;
-  problem->GetResidualBlocks(&ids);
-  terms_.reserve(ids.size());
-  std::vector<double*> values;
-  for (const ceres::ResidualBlockId id : ids) {
+  terms_.reserve(terms.num_residuals());
+  for (size_t i = 0; i < terms.num_residuals(); ++i) {
     Term term;
     term.index = static_cast<int>(terms_.size());
-    term.cost = problem->GetCostFunctionForResidualBlock(id);
-    term.loss = problem->GetLossFunctionForResidualBlock(id);
-    problem->GetParameterBlocksForResidualBlock(id, &values);
+    term.cost = terms.costs[i];
+    term.loss = terms.losses[i];
+    double* const* values = terms.values.data() + terms.first_value[i];
+    const int num_values = terms.first_value[i + 1] - terms.first_value[i];
     const std::vector<int32_t>& sizes = term.cost->parameter_block_sizes();
     int ambient = 0;
     for (const int32_t size : sizes) ambient += size;
     if (term.cost->num_residuals() > kMaxResiduals || ambient > kMaxColumns ||
-        values.size() > static_cast<size_t>(kMaxBlocks)) {
+        num_values > kMaxBlocks || num_values != static_cast<int>(sizes.size())) {
       return Status::Internal("a residual of the band-arrow solver is larger than it supports");
     }
     term.first_block = static_cast<int>(term_values_.size());
-    term.num_blocks = static_cast<int>(values.size());
+    term.num_blocks = num_values;
     term.first_column = static_cast<int>(term_column_.size());
-    for (double* value : values) {
+    for (int v = 0; v < num_values; ++v) {
+      double* value = values[v];
       const auto it = index.find(value);
       const int block = it == index.end() ? -1 : it->second;
+      if (block < 0 && !listed.count(value)) {
+        return Status::Internal("a residual of the band-arrow solver uses an unlisted block");
+      }
       term_values_.push_back(value);
       term_block_.push_back(block);
       if (block >= 0 && !blocks_[block].latent) term.columns += blocks_[block].tangent;

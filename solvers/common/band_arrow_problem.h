@@ -3,6 +3,7 @@
 
 #include <calib/core/status.h>
 #include <calib/core/timing/banded_ldlt.h>
+#include <calib/solvers/common/arrow_terms.h>
 #include <ceres/ceres.h>
 
 #include <Eigen/Core>
@@ -61,11 +62,13 @@ struct ArrowSystem {
   }
 };
 
-// The arrow read from a Ceres problem: its blocks (latents in band order, then globals), its
-// residuals in band order, and the pieces of one Levenberg–Marquardt iteration on them.
+// The arrow read from a Ceres problem or from lists of its terms: its blocks (latents in band
+// order, then globals), its residuals in band order, and the pieces of one Levenberg–Marquardt
+// iteration on them.
 class BandArrowProblem {
  public:
   Status Build(const std::vector<double*>& latents, ceres::Problem* problem);
+  Status Build(const std::vector<double*>& latents, const ArrowTerms& terms);
   // Cost (½Σρ) at the current values, with the normal equations when `system` is not null.
   bool Evaluate(ArrowSystem* system, int num_threads, double* cost) const;
   // Δ from (H + λD)Δ = −g; false when the damped system is not positive definite.

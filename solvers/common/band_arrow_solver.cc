@@ -102,6 +102,13 @@ Status BandArrowSolver::Build(const std::vector<double*>& latents, ceres::Proble
   return built;
 }
 
+Status BandArrowSolver::Build(const std::vector<double*>& latents, const ArrowTerms& terms) {
+  structure_ = std::make_unique<Structure>();
+  const Status built = structure_->arrow.Build(latents, terms);
+  if (!built.ok()) structure_.reset();
+  return built;
+}
+
 Status BandArrowSolver::Solve(const BandArrowOptions& options, const std::string& what,
                               BandArrowSummary* summary) const {
   if (!structure_) return Status::Internal(what + ": the band-arrow solver was not built");

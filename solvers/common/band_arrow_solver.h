@@ -2,6 +2,7 @@
 #define CALIB_SOLVERS_COMMON_BAND_ARROW_SOLVER_H_
 
 #include <calib/core/status.h>
+#include <calib/solvers/common/arrow_terms.h>
 #include <ceres/ceres.h>
 
 #include <memory>
@@ -61,6 +62,8 @@ class BandArrowSolver {
   BandArrowSolver& operator=(const BandArrowSolver&) = delete;
 
   Status Build(const std::vector<double*>& latents, ceres::Problem* problem);
+  // The same from lists (arrow_terms.h): the blocks and cost functions must outlive the solver.
+  Status Build(const std::vector<double*>& latents, const ArrowTerms& terms);
   Status Solve(const BandArrowOptions& options, const std::string& what,
                BandArrowSummary* summary) const;
 

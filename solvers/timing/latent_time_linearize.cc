@@ -41,21 +41,21 @@ struct RobustRow {
 // `column_of` gives a block's first tangent column (−1: constant); `manifold_block` is the one
 // block with a manifold (the odometry's, 3 → 3), `plus` its Plus Jacobian.
 template <typename ColumnOf>
-bool EvaluateRobustRow(const ceres::CostFunction& function, const std::vector<double*>& blocks,
-                       const ColumnOf& column_of, const ceres::LossFunction* loss,
-                       const double* manifold_block, const Eigen::Matrix3d& plus, bool with_angles,
-                       RobustRow* row) {
+bool EvaluateRobustRow(const ceres::CostFunction& function, double* const* blocks,
+                       size_t num_blocks, const ColumnOf& column_of,
+                       const ceres::LossFunction* loss, const double* manifold_block,
+                       const Eigen::Matrix3d& plus, bool with_angles, RobustRow* row) {
   constexpr int kMaxAmbient = 3, kMaxBlocks = 12;
   const std::vector<int32_t>& sizes = function.parameter_block_sizes();
-  if (blocks.size() > static_cast<size_t>(kMaxBlocks)) return false;
+  if (num_blocks > static_cast<size_t>(kMaxBlocks)) return false;
   double storage[3 * kMaxAmbient * kMaxBlocks];
   double* jacobians[kMaxBlocks];
-  for (size_t b = 0; b < blocks.size(); ++b) {
+  for (size_t b = 0; b < num_blocks; ++b) {
     if (sizes[b] > kMaxAmbient) return false;
     jacobians[b] = column_of(blocks[b]) >= 0 ? storage + 3 * kMaxAmbient * b : nullptr;
   }
   double r[3];
-  if (!function.Evaluate(blocks.data(), r, jacobians)) return false;
+  if (!function.Evaluate(blocks, r, jacobians)) return false;
   const double s = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
   double rho[3] = {s, 1.0, 0.0};
   if (loss) loss->Evaluate(s, rho);
@@ -71,7 +71,7 @@ bool EvaluateRobustRow(const ceres::CostFunction& function, const std::vector<do
   }
   row->num_entries = 0;
   const Eigen::Map<const Eigen::Vector3d> rv(r);
-  for (size_t b = 0; b < blocks.size(); ++b) {
+  for (size_t b = 0; b < num_blocks; ++b) {
     if (!jacobians[b]) continue;
     const int size = sizes[b];
     if (row->num_entries + size > RobustRow::kMaxEntries) return false;
@@ -93,7 +93,7 @@ bool EvaluateRobustRow(const ceres::CostFunction& function, const std::vector<do
   if (row->has_angles) {
     double unused[3];
     Eigen::Matrix<double, 3, 4, Eigen::RowMajor> a;
-    interval->EndAngleJacobian(blocks.data(), unused, a.data());
+    interval->EndAngleJacobian(blocks, unused, a.data());
     a = (sqrt_rho1 * (a - alpha_over_s * rv * (rv.transpose() * a))).eval();
     for (int c = 0; c < 3; ++c) {
       for (int w = 0; w < 4; ++w) row->angle[c][w] = a(c, w);
@@ -207,7 +207,7 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize(bool with_scores) con
   };
   // The odometry's manifold (the only one): its Plus Jacobian is the same for every row.
   Eigen::Matrix3d plus = Eigen::Matrix3d::Identity();
-  if (const ceres::Manifold* manifold = problem_->GetManifold(odometry_)) {
+  if (const ceres::Manifold* manifold = odometry_manifold_.get()) {
     Eigen::Matrix<double, 3, 3, Eigen::RowMajor> values;
     if (manifold->AmbientSize() != 3 || manifold->TangentSize() != 3 ||
         !manifold->PlusJacobian(odometry_, values.data())) {
@@ -217,10 +217,10 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize(bool with_scores) con
   }
   // The band's width from the blocks alone (the rows are evaluated in batches below).
   int width = 0;
-  for (const std::vector<double*>& blocks : interval_blocks_) {
+  for (size_t i = 0; i < interval_functions_.size(); ++i) {
     int lo = num_latents, hi = -1;
-    for (const double* block : blocks) {
-      const int column = column_of(block);
+    for (int b = 0; b < NumIntervalBlocks(i); ++b) {
+      const int column = column_of(IntervalBlocks(i)[b]);
       if (column >= g) lo = std::min(lo, column - g), hi = std::max(hi, column - g);
     }
     if (hi >= lo) width = std::max(width, hi - lo);
@@ -234,28 +234,30 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize(bool with_scores) con
     lin.b_l_c[c] = Eigen::VectorXd::Zero(num_latents);
   }
   if (with_scores) {
-    lin.score_globals = Eigen::MatrixXd::Zero(interval_costs_.size(), g);
-    lin.score_latents.resize(interval_costs_.size());
+    lin.score_globals = Eigen::MatrixXd::Zero(interval_functions_.size(), g);
+    lin.score_latents.resize(interval_functions_.size());
     lin.latent_row.assign(num_latents, -1);
     for (Eigen::MatrixXd& a : lin.angle_globals)
-      a = Eigen::MatrixXd::Zero(interval_costs_.size(), g);
-    for (Eigen::MatrixXd& a : lin.row_globals) a = Eigen::MatrixXd::Zero(interval_costs_.size(), g);
+      a = Eigen::MatrixXd::Zero(interval_functions_.size(), g);
+    for (Eigen::MatrixXd& a : lin.row_globals)
+      a = Eigen::MatrixXd::Zero(interval_functions_.size(), g);
     lin.interval_sample = data_.interval_start;
     lin.sample_angle = AngleSpreads();
   }
   // Rows evaluated in parallel a batch at a time (a buffer that stays in cache), added in order.
-  std::vector<RobustRow> rows(std::min(interval_costs_.size(), kBatch));
-  for (size_t first = 0; first < interval_costs_.size(); first += kBatch) {
-    const size_t count = std::min(kBatch, interval_costs_.size() - first);
+  std::vector<RobustRow> rows(std::min(interval_functions_.size(), kBatch));
+  for (size_t first = 0; first < interval_functions_.size(); first += kBatch) {
+    const size_t count = std::min(kBatch, interval_functions_.size() - first);
     std::vector<char> ok(ChunkCount(count, options_.num_threads, kMinChunk), 1);
     ParallelChunks(
         count, options_.num_threads, kMinChunk, [&](int chunk, size_t begin, size_t end) {
           // A local flag, stored once: the chunks' flags share a cache line.
           bool evaluated = true;
           for (size_t i = begin; i < end && evaluated; ++i) {
-            evaluated = EvaluateRobustRow(
-                *interval_functions_[first + i], interval_blocks_[first + i], column_of,
-                loss_.get(), odometry_, plus, with_scores && !encoder_rates_.empty(), &rows[i]);
+            evaluated =
+                EvaluateRobustRow(*interval_functions_[first + i], IntervalBlocks(first + i),
+                                  NumIntervalBlocks(first + i), column_of, loss_.get(), odometry_,
+                                  plus, with_scores && !encoder_rates_.empty(), &rows[i]);
           }
           ok[chunk] = evaluated;
         });
@@ -307,7 +309,7 @@ StatusOr<LatentLinearization> LatentTimeProblem::Linearize(bool with_scores) con
     lin.b_l += lin.b_l_c[c];
   }
   lin.noise_sigma = state_.noise_sigma;
-  lin.num_intervals = static_cast<int>(interval_costs_.size());
+  lin.num_intervals = static_cast<int>(interval_functions_.size());
   for (int i = 0; i < 3; ++i) lin.odometry_plus_jacobian(i, i) = odometry_[i];
   return lin;
 }

@@ -25,12 +25,6 @@ LatentTimeProblem::LatentTimeProblem(const StreamSamples& data, SensorClockModel
     for (const StreamSample& sample : data.samples) state_.bracket.push_back(sample.bracket);
   }
   loss_ = MakeLossFunction(options.loss, options.loss_scale);
-  ceres::Problem::Options problem_options;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.enable_fast_removal = false;
-  // Every block is built here with matching sizes (as in LaserProblem): skip Ceres' checks.
-  problem_options.disable_all_safety_checks = true;
-  problem_ = std::make_unique<ceres::Problem>(problem_options);
   sqrt_information_ =
       std::make_unique<Eigen::Matrix3d>(state.noise_sigma.cwiseInverse().asDiagonal());
   const LaserParamVector v = state.calibration.ToVector();
@@ -42,8 +36,10 @@ LatentTimeProblem::LatentTimeProblem(const StreamSamples& data, SensorClockModel
   clock_[0] = state.clock.t0_s;
   clock_[1] = state.clock.period_s;
   clock_[2] = state.clock.drift_s;
-  problem_->AddParameterBlock(odometry_, 3, new PositiveManifold<3>());
-  problem_->AddParameterBlock(base_T_sensor_, 3);
+  odometry_manifold_ = std::make_unique<PositiveManifold<3>>();
+  terms_.AddBlock(odometry_, 3, odometry_manifold_.get());
+  terms_.AddBlock(base_T_sensor_, 3);
+  if (model == SensorClockModel::kFreeRunning) terms_.AddBlock(clock_, 3);
   sensor_used_.assign(data.samples.size(), 0);
   encoder_used_.assign(data.encoders.size(), 0);
   // The wheel rates at each encoder sample, at the encoder times this problem starts from: held
@@ -59,6 +55,12 @@ LatentTimeProblem::LatentTimeProblem(const StreamSamples& data, SensorClockModel
 }
 
 LatentTimeProblem::~LatentTimeProblem() = default;
+
+void LatentTimeProblem::AddResidual(ceres::CostFunction* cost, const ceres::LossFunction* loss,
+                                    const std::vector<double*>& blocks) {
+  costs_.emplace_back(cost);
+  terms_.AddResidual(cost, loss, blocks);
+}
 
 LatentTimeEnd LatentTimeProblem::MakeEnd(int k, std::vector<double*>* blocks,
                                          std::vector<int>* sizes) const {
@@ -122,9 +124,8 @@ void LatentTimeProblem::AddIntervals() {
     ceres::CostFunction* cost = LaserLatentTimeCost::Create(
         Pose2d(measured(0), measured(1), WrapAngle(measured(2))), sqrt_information_.get(), start,
         end, std::move(left), std::move(right), sizes);
-    interval_costs_.push_back(problem_->AddResidualBlock(cost, loss_.get(), blocks));
+    AddResidual(cost, loss_.get(), blocks);
     interval_functions_.push_back(cost);
-    interval_blocks_.push_back(blocks);
     for (double* block : blocks) {
       if (block >= state_.sensor_latent.data() &&
           block < state_.sensor_latent.data() + state_.sensor_latent.size()) {
@@ -135,40 +136,36 @@ void LatentTimeProblem::AddIntervals() {
       }
     }
   }
+  for (const LatentRef& latent : LatentOrder()) terms_.AddBlock(latent.value, 1);
   // Priors: δ_k ~ N(τ, σ_s²) (τ fixed at its value unless estimated), η_j ~ N(0, σ_e²).
   if (model_ == SensorClockModel::kStamps && state_.sensor_sigma_s > 0.0) {
-    problem_->AddParameterBlock(&offset_, 1);
-    if (!estimate_offset_) problem_->SetParameterBlockConstant(&offset_);
+    terms_.AddBlock(&offset_, 1, nullptr, !estimate_offset_);
     for (size_t k = 0; k < sensor_used_.size(); ++k) {
       if (!sensor_used_[k]) continue;
-      problem_->AddResidualBlock(new TimePriorWithOffset(&state_.sensor_sigma_s), nullptr,
-                                 &state_.sensor_latent[k], &offset_);
+      AddResidual(new TimePriorWithOffset(&state_.sensor_sigma_s), nullptr,
+                  {&state_.sensor_latent[k], &offset_});
     }
   }
   if (model_ == SensorClockModel::kFreeRunning) {
-    problem_->AddResidualBlock(new ClockDriftPrior(kClockDriftSigmaS), nullptr, clock_);
+    AddResidual(new ClockDriftPrior(kClockDriftSigmaS), nullptr, {clock_});
     if (state_.period_prior_sigma_s > 0.0) {
-      problem_->AddResidualBlock(
-          new ClockPeriodPrior(state_.period_prior_s, state_.period_prior_sigma_s), nullptr,
-          clock_);
+      AddResidual(new ClockPeriodPrior(state_.period_prior_s, state_.period_prior_sigma_s), nullptr,
+                  {clock_});
     }
     // The stamps: each sample's clock time lies τ from its stamp, with the pick-up scatter σ_s.
     if (state_.sensor_sigma_s > 0.0) {
-      problem_->AddParameterBlock(&offset_, 1);
-      if (!estimate_offset_) problem_->SetParameterBlockConstant(&offset_);
+      terms_.AddBlock(&offset_, 1, nullptr, !estimate_offset_);
       for (const int k : ClockSamples()) {
         const double n = state_.clock_index[k];
-        problem_->AddResidualBlock(
-            new ClockStampPrior(data_.samples[k].stamp_s, n, state_.clock.Curvature(n),
-                                &state_.sensor_sigma_s),
-            nullptr, clock_, &offset_);
+        AddResidual(new ClockStampPrior(data_.samples[k].stamp_s, n, state_.clock.Curvature(n),
+                                        &state_.sensor_sigma_s),
+                    nullptr, {clock_, &offset_});
       }
     }
   }
   for (size_t j = 0; j < encoder_used_.size(); ++j) {
     if (!encoder_used_[j]) continue;
-    problem_->AddResidualBlock(new TimePrior(&state_.encoder_sigma_s), nullptr,
-                               &state_.encoder_latent[j]);
+    AddResidual(new TimePrior(&state_.encoder_sigma_s), nullptr, {&state_.encoder_latent[j]});
   }
 }
 
@@ -181,7 +178,7 @@ SolverSettings LatentTimeProblem::Settings(double cost_tolerance) const {
   settings.max_iterations = options_.max_iterations;
   settings.num_threads = options_.num_threads;
   settings.function_tolerance =
-      std::min(1e-6, cost_tolerance / std::max<size_t>(1, interval_costs_.size()));
+      std::min(1e-6, cost_tolerance / std::max<size_t>(1, interval_functions_.size()));
   settings.gradient_tolerance = 1e-12;
   settings.parameter_tolerance = 1e-10;
   return settings;
@@ -206,7 +203,7 @@ Status LatentTimeProblem::Solve(BandArrowSummary* summary, double cost_tolerance
   if (!solver_built_) {
     std::vector<double*> latents;
     for (const LatentRef& latent : LatentOrder()) latents.push_back(latent.value);
-    CALIB_RETURN_IF_ERROR(solver_.Build(latents, problem_.get()));
+    CALIB_RETURN_IF_ERROR(solver_.Build(latents, terms_));
     solver_built_ = true;
   }
   const SolverSettings settings = Settings(cost_tolerance);
@@ -223,8 +220,9 @@ Status LatentTimeProblem::Solve(BandArrowSummary* summary, double cost_tolerance
 }
 
 Status LatentTimeProblem::SolveWithCeres(ceres::Solver::Summary* summary, double cost_tolerance) {
+  const std::unique_ptr<ceres::Problem> problem = terms_.ToProblem();
   CALIB_RETURN_IF_ERROR(calib::Solve(Settings(cost_tolerance), "the timing-aware refinement",
-                                     problem_.get(), summary));
+                                     problem.get(), summary));
   return CheckPositive();
 }
 
@@ -347,12 +345,11 @@ bool LatentTimeProblem::BracketsHold() const {
 
 std::vector<Eigen::Vector3d> LatentTimeProblem::Errors() const {
   std::vector<Eigen::Vector3d> errors;
-  errors.reserve(interval_costs_.size());
+  errors.reserve(interval_functions_.size());
   const Eigen::Matrix3d l_inv = sqrt_information_->inverse();
-  for (const ceres::ResidualBlockId id : interval_costs_) {
-    Eigen::Vector3d r;
-    double cost = 0.0;
-    problem_->EvaluateResidualBlock(id, false, &cost, r.data(), nullptr);
+  for (size_t i = 0; i < interval_functions_.size(); ++i) {
+    Eigen::Vector3d r = Eigen::Vector3d::Constant(NAN);
+    interval_functions_[i]->Evaluate(IntervalBlocks(i), r.data(), nullptr);
     errors.push_back(l_inv * r);
   }
   return errors;

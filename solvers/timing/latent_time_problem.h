@@ -7,6 +7,7 @@
 #include <calib/core/timing/stream_samples.h>
 #include <calib/core/timing/wheel_angle_spline.h>
 #include <calib/problems/laser/laser_latent_time_residual.h>
+#include <calib/solvers/common/arrow_terms.h>
 #include <calib/solvers/common/band_arrow_solver.h>
 #include <calib/solvers/common/robust_covariance.h>
 #include <calib/solvers/common/solver_options.h>
@@ -168,7 +169,7 @@ class LatentTimeProblem {
   std::vector<Eigen::Vector3d> Errors() const;
   // `with_scores`: also each interval's gradient contribution (LatentLinearization::score_*).
   StatusOr<LatentLinearization> Linearize(bool with_scores = false) const;
-  size_t num_intervals() const { return interval_costs_.size(); }
+  size_t num_intervals() const { return interval_functions_.size(); }
   const ceres::LossFunction* loss() const { return loss_.get(); }
 
  private:
@@ -187,6 +188,15 @@ class LatentTimeProblem {
   // The samples at the ends of the intervals (those the clock model's stamp prior covers).
   std::vector<int> ClockSamples() const;
   LatentTimeEnd MakeEnd(int k, std::vector<double*>* blocks, std::vector<int>* sizes) const;
+  void AddResidual(ceres::CostFunction* cost, const ceres::LossFunction* loss,
+                   const std::vector<double*>& blocks);
+  // The parameter blocks of interval i.
+  double* const* IntervalBlocks(size_t i) const {
+    return terms_.values.data() + terms_.first_value[i];
+  }
+  int NumIntervalBlocks(size_t i) const {
+    return terms_.first_value[i + 1] - terms_.first_value[i];
+  }
 
   const StreamSamples& data_;
   SensorClockModel model_;
@@ -194,7 +204,11 @@ class LatentTimeProblem {
   LaserRefinementOptions options_;
   bool estimate_offset_;
   std::unique_ptr<ceres::LossFunction> loss_;
-  std::unique_ptr<ceres::Problem> problem_;
+  // The blocks and residuals (intervals first, then the priors), for the band-arrow solver and,
+  // as a reference, Ceres; the cost functions and the odometry's manifold are owned here.
+  ArrowTerms terms_;
+  std::vector<std::unique_ptr<ceres::CostFunction>> costs_;
+  std::unique_ptr<ceres::Manifold> odometry_manifold_;
   std::unique_ptr<Eigen::Matrix3d> sqrt_information_;
   double odometry_[3];
   double base_T_sensor_[3];
@@ -202,10 +216,8 @@ class LatentTimeProblem {
   double clock_[3] = {0.0, 0.0, 0.0};
   std::vector<char> sensor_used_, encoder_used_;
   std::vector<WheelRates> encoder_rates_;
-  std::vector<ceres::ResidualBlockId> interval_costs_;
-  std::vector<const ceres::CostFunction*> interval_functions_;
-  std::vector<std::vector<double*>> interval_blocks_;
-  BandArrowSolver solver_;  // Built at the first solve.
+  std::vector<const ceres::CostFunction*> interval_functions_;  // terms_' first residuals.
+  BandArrowSolver solver_;                                      // Built at the first solve.
   bool solver_built_ = false;
 };
 

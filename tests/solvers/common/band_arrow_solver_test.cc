@@ -133,5 +133,41 @@ TEST(BandArrowSolverTest, ConstantBlocksStayPut) {
   EXPECT_LT(summary.final_cost, summary.initial_cost);
 }
 
+// The same problem listed as ArrowTerms (blocks in the problem's order, constants kept) solves to
+// the same point; a residual on a block that is not listed is refused.
+TEST(BandArrowSolverTest, ListedTermsSolveAsTheProblem) {
+  Problem from_problem(200), from_lists(200);
+  from_problem.problem.SetParameterBlockConstant(&from_problem.x[3]);
+  from_lists.problem.SetParameterBlockConstant(&from_lists.x[3]);
+  const ArrowTerms terms = ArrowTerms::FromProblem(from_lists.problem);
+  ASSERT_EQ(terms.num_residuals(), static_cast<size_t>(from_lists.problem.NumResidualBlocks()));
+  const BandArrowOptions options = band_arrow_test::TightBandArrowOptions();
+  BandArrowSummary expected, summary;
+  ASSERT_TRUE(
+      SolveBandArrow(options, from_problem.Latents(), "test", &from_problem.problem, &expected)
+          .ok());
+  BandArrowSolver solver;
+  ASSERT_TRUE(solver.Build(from_lists.Latents(), terms).ok());
+  ASSERT_TRUE(solver.Solve(options, "test", &summary).ok());
+  EXPECT_EQ(summary.iterations, expected.iterations);
+  EXPECT_EQ(summary.final_cost, expected.final_cost);
+  EXPECT_EQ(from_lists.scale, from_problem.scale);
+  EXPECT_EQ(from_lists.x[3], 0.0);
+
+  // Back to a Ceres problem: the same blocks, residuals and constants.
+  const std::unique_ptr<ceres::Problem> rebuilt = terms.ToProblem();
+  EXPECT_EQ(rebuilt->NumResidualBlocks(), from_lists.problem.NumResidualBlocks());
+  EXPECT_EQ(rebuilt->NumParameterBlocks(), from_lists.problem.NumParameterBlocks());
+  EXPECT_TRUE(rebuilt->IsParameterBlockConstant(&from_lists.x[3]));
+  EXPECT_NE(rebuilt->GetManifold(&from_lists.scale), nullptr);
+
+  ArrowTerms missing = terms;
+  missing.blocks.erase(missing.blocks.begin());  // x[0], which residuals use.
+  BandArrowSolver refused;
+  const Status status = refused.Build(from_lists.Latents(), missing);
+  EXPECT_EQ(status.code(), StatusCode::kInternal);
+  EXPECT_NE(status.message().find("unlisted block"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace calib
