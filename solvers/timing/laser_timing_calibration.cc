@@ -103,14 +103,20 @@ LaserStreams TimedStreams(const StreamSamples& data, const TimingModelFit& fit) 
   return streams;
 }
 
+bool Redescends(const LaserTimingOptions& options) {
+  const LaserRefinementOptions& refinement = options.calibration.refinement;
+  return refinement.loss != RobustLoss::kNone && refinement.redescending_scale > 0.0;
+}
+
 // The chosen model's last passes under Tukey's biweight from its (Cauchy) optimum, as the
 // refinement on stamps ends: a gross interval then has no influence, where Cauchy leaks a fixed
 // bias that a σ shrinking as 1/√N stops covering. The models were ranked under one loss before.
-void Redescend(const StreamSamples& data, const LaserTimingOptions& options, TimingModelFit* best,
-               std::string* loss, std::vector<std::string>* warnings) {
+// The Cauchy fit's statistics are computed only where it stays (the passes failed).
+Status Redescend(const StreamSamples& data, const LaserTimingOptions& options, TimingModelFit* best,
+                 std::string* loss, std::vector<std::string>* warnings) {
   const LaserRefinementOptions& refinement = options.calibration.refinement;
   *loss = RobustLossName(refinement.loss);
-  if (refinement.loss == RobustLoss::kNone || !(refinement.redescending_scale > 0.0)) return;
+  if (!Redescends(options)) return Status::Ok();
   LaserTimingOptions tukey = options;
   tukey.calibration.refinement.loss = RobustLoss::kTukey;
   tukey.calibration.refinement.loss_scale = refinement.redescending_scale;
@@ -119,10 +125,11 @@ void Redescend(const StreamSamples& data, const LaserTimingOptions& options, Tim
   if (!polished.ok()) {
     warnings->push_back("the timing-aware refinement's last passes under Tukey's loss failed (" +
                         polished.message() + "): it ends under " + *loss);
-    return;
+    return best->has_statistics ? Status::Ok() : PolishTimingModel(data, options, best);
   }
   *best = std::move(redescended);
   *loss = LossStagesName(refinement.loss, refinement.redescending_scale);
+  return Status::Ok();
 }
 
 void FillCalibration(const TimingModelFit& fit, const LaserCalibrationOptions& options,
@@ -321,7 +328,9 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
                                 "): the stamp model is used");
     }
   }
-  if (!best.polished) CALIB_RETURN_IF_ERROR(PolishTimingModel(data, options, &best));
+  if (!best.polished) {
+    CALIB_RETURN_IF_ERROR(PolishTimingModel(data, options, &best, !Redescends(options)));
+  }
   if (best.model == SensorClockModel::kStamps) {
     result.stamps_score = best.score;
   } else {
@@ -338,7 +347,8 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
         "which the sample times' σ does not include (the calibration is not affected)");
   }
   result.calibration = result.stamps_as_truth;
-  Redescend(data, options, &best, &result.calibration.loss, &result.warnings);
+  CALIB_RETURN_IF_ERROR(
+      Redescend(data, options, &best, &result.calibration.loss, &result.warnings));
   FillCalibration(best, options.calibration, &result.calibration);
   FillTiming(data, best, &result);
   result.timed_streams = TimedStreams(data, best);

@@ -209,7 +209,7 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
 }
 
 Status PolishTimingModel(const StreamSamples& data, const LaserTimingOptions& options,
-                         TimingModelFit* fit) {
+                         TimingModelFit* fit, bool with_statistics) {
   LatentTimeProblem problem(data, fit->model, fit->state, options.calibration.refinement,
                             options.estimate_offset);
   BandArrowSummary summary;
@@ -217,7 +217,9 @@ Status PolishTimingModel(const StreamSamples& data, const LaserTimingOptions& op
   fit->iterations += summary.iterations;
   fit->converged = summary.converged;
   fit->polished = true;
-  CALIB_RETURN_IF_ERROR(CaptureFit(data, problem, fit, /*with_scores=*/true));
+  fit->has_statistics = with_statistics;
+  CALIB_RETURN_IF_ERROR(CaptureFit(data, problem, fit, /*with_scores=*/with_statistics));
+  if (!with_statistics) return Status::Ok();
   const double components = 3.0 * fit->errors.size();
   const double redundancy = components - fit->lin.num_globals - fit->covariance.effective_latents;
   if (!(redundancy > 0.0)) return Status::NotObservable("too few intervals for the timing model");

@@ -33,7 +33,8 @@ struct TimingModelFit {
   int iterations = 0;
   int rounds = 0;
   bool converged = true;
-  bool polished = false;  // PolishTimingModel ran: κ and the statistics are final.
+  bool polished = false;        // PolishTimingModel ran: the fit is at its optimum,
+  bool has_statistics = false;  // and κ and the statistics are final.
 };
 
 // Rounds at the looser tolerance (kLatentRoundCostTolerance) until the σ's settle; the models
@@ -42,9 +43,11 @@ StatusOr<TimingModelFit> FitTimingModel(const StreamSamples& data, SensorClockMo
                                         const LatentTimeState& initial,
                                         const LaserTimingOptions& options);
 // The fit re-solved to the full tolerance (kLatentCostTolerance) at its latest σ's, with its
-// statistics and the robust loss's covariance correction κ.
+// statistics and the robust loss's covariance correction κ; without them (`with_statistics`
+// false: κ = 1 and the model's covariance) for a fit that the redescending passes replace, where
+// they took a tenth of the calibration.
 Status PolishTimingModel(const StreamSamples& data, const LaserTimingOptions& options,
-                         TimingModelFit* fit);
+                         TimingModelFit* fit, bool with_statistics = true);
 
 // A jitter σ to start the rounds from: twice the stamps' robust scatter about their regular grid
 // (a pick-up stamp lags its sample by more than the stamps scatter), within [the floor of the
