@@ -120,6 +120,7 @@ nlohmann::json RunSpeed(const BenchConfig& config) {
   out["real"] = RunSpeedRealSets(config, e2e, reps, &report);
   SpeedSizes sizes_run(config, e2e, reps, dir, &report);
   for (int64_t n : sizes) sizes_run.Run(n, &out);
+  out["streams"] = RunSpeedStreams(config, e2e, reps, dir, &report);
   fs::remove_all(dir);
   sizes_run.PrintTable(&out);
   if (!e2e.calib_cli.empty()) {

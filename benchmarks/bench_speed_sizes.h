@@ -51,6 +51,13 @@ class SpeedSizes {
   std::vector<double> e2e_ns_[2], e2e_walls_[2];  // calib, peer
 };
 
+// The timing-aware calibration end to end on raw streams (odometry.csv and sensor_poses.csv; the
+// simulator's default robot, seed 1, 5 % slips, pick-up stamps scattered by 2 ms, as `calib
+// simulate --format stream --outliers 0.05 --logger_jitter 0.002`) of 10³, 10⁴ and, without
+// --quick, 10⁵ intervals; calib alone. Rows go to `report`.
+nlohmann::json RunSpeedStreams(const BenchConfig& config, const EndToEndOptions& e2e, int reps,
+                               const std::filesystem::path& dir, EndToEndReport* report);
+
 }  // namespace calib::bench
 
 #endif  // CALIB_BENCHMARKS_BENCH_SPEED_SIZES_H_

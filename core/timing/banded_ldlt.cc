@@ -51,6 +51,21 @@ void BandedLdlt::SolveInPlace(RowMajorMatrix* x) const {
   }
 }
 
+void BandedLdlt::SolveInPlace(Eigen::VectorXd* x) const {
+  const Eigen::Index w = bandwidth();
+  const Eigen::Index n = size();
+  double* v = x->data();
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const double* l = &factor_(0, j);
+    for (Eigen::Index a = 1; a <= w && j + a < n; ++a) v[j + a] -= l[a] * v[j];
+  }
+  for (Eigen::Index j = 0; j < n; ++j) v[j] /= factor_(0, j);
+  for (Eigen::Index j = n - 1; j >= 0; --j) {
+    const double* l = &factor_(0, j);
+    for (Eigen::Index a = 1; a <= w && j + a < n; ++a) v[j] -= l[a] * v[j + a];
+  }
+}
+
 double BandedLdlt::LogDeterminant() const { return factor_.row(0).array().log().sum(); }
 
 Eigen::VectorXd BandedLdlt::InverseDiagonal() const { return InverseBand().row(0).transpose(); }

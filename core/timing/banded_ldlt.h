@@ -23,6 +23,8 @@ class BandedLdlt {
   Eigen::MatrixXd Solve(const Eigen::MatrixXd& b) const;
   // X ← A⁻¹·X, row-major: every column goes through each step at once, contiguous in memory.
   void SolveInPlace(RowMajorMatrix* x) const;
+  // x ← A⁻¹·x for one column (as SolveInPlace, without its loop over columns).
+  void SolveInPlace(Eigen::VectorXd* x) const;
   // log det A.
   double LogDeterminant() const;
   // diag(A⁻¹).

@@ -13,17 +13,28 @@
 namespace calib {
 namespace {
 
-StatusOr<BandedLdlt> FactorWithPrior(const LatentLinearization& lin, const LatentPrior& prior) {
-  Eigen::MatrixXd band = lin.h_ll_band;
-  band.row(0) += prior.sigma.array().square().inverse().matrix().transpose();
+// H_ll + Λ factored, H_ll's band from `make_band`: called again (rather than copied) for the
+// rare retry with a relative ridge, for round-off on near noise-free data (whitening by a floored
+// noise level).
+template <typename MakeBand>
+StatusOr<BandedLdlt> FactorBandWithPrior(const MakeBand& make_band, const LatentPrior& prior) {
+  const auto with_prior = [&] {
+    Eigen::MatrixXd band = make_band();
+    band.row(0) += prior.sigma.array().square().inverse().matrix().transpose();
+    return band;
+  };
   BandedLdlt ldlt;
-  if (ldlt.Compute(band)) return ldlt;
-  // Round-off on near noise-free data (whitening by a floored noise level): a relative ridge.
+  if (ldlt.Compute(with_prior())) return ldlt;
+  Eigen::MatrixXd band = with_prior();
   band.row(0).array() += 1e-12 * band.row(0).cwiseAbs().maxCoeff();
   if (!ldlt.Compute(std::move(band))) {
     return Status::NotObservable("the information of the sample times is not positive definite");
   }
   return ldlt;
+}
+
+StatusOr<BandedLdlt> FactorWithPrior(const LatentLinearization& lin, const LatentPrior& prior) {
+  return FactorBandWithPrior([&] { return lin.h_ll_band; }, prior);
 }
 
 // Band matrix (lower band, band(d, i) = H(i + d, i)) times a vector.
@@ -68,18 +79,19 @@ StatusOr<LatentEvidence> LatentEvidenceWithGradient(const LatentLinearization& l
     out.gradient(c) = -2.0 * scale(c) * lin.rr_c(c) + 2.0 * lin.num_intervals;
   if (lin.latent_value.size() == 0) return out;
   const LatentPrior prior = MakeLatentPrior(lin, offset_s, scales.sensor_s, scales.encoder_s);
-  LatentLinearization scaled;
-  scaled.h_ll_band = scale(0) * lin.h_ll_band_c[0];
-  Eigen::VectorXd b = scale(0) * lin.b_l_c[0];
-  for (int c = 1; c < 3; ++c) {
-    scaled.h_ll_band += scale(c) * lin.h_ll_band_c[c];
-    b += scale(c) * lin.b_l_c[c];
-  }
-  CALIB_ASSIGN_OR_RETURN(const BandedLdlt ldlt, FactorWithPrior(scaled, prior));
+  // Σ s_c H_c in one pass (the band of each evaluation is built once and factored in place).
+  const auto scaled_band = [&] {
+    return Eigen::MatrixXd(scale(0) * lin.h_ll_band_c[0] + scale(1) * lin.h_ll_band_c[1] +
+                           scale(2) * lin.h_ll_band_c[2]);
+  };
+  CALIB_ASSIGN_OR_RETURN(const BandedLdlt ldlt, FactorBandWithPrior(scaled_band, prior));
+  const Eigen::VectorXd b =
+      scale(0) * lin.b_l_c[0] + scale(1) * lin.b_l_c[1] + scale(2) * lin.b_l_c[2];
   const Eigen::VectorXd lambda = prior.sigma.array().square().inverse();
   const Eigen::VectorXd dm = prior.mean - lin.latent_value;
   const Eigen::VectorXd u = b - lambda.cwiseProduct(dm);
-  const Eigen::VectorXd x = ldlt.Solve(u).col(0);
+  Eigen::VectorXd x = u;
+  ldlt.SolveInPlace(&x);
   out.value += dm.dot(lambda.cwiseProduct(dm)) - u.dot(x) + ldlt.LogDeterminant() +
                2.0 * prior.sigma.array().log().sum();
   if (!with_gradient) return out;

@@ -23,6 +23,10 @@ TEST(BandedLdlt, MatchesDenseSolveDeterminantAndInverseBand) {
   ASSERT_TRUE(ldlt.Compute(band));
   const Eigen::MatrixXd b = Eigen::MatrixXd::Random(n, 2);
   EXPECT_LT((ldlt.Solve(b) - a.ldlt().solve(b)).cwiseAbs().maxCoeff(), 1e-12);
+  // One column in place: the same numbers as the matrix solve's column.
+  Eigen::VectorXd x = b.col(1);
+  ldlt.SolveInPlace(&x);
+  EXPECT_EQ(x, ldlt.Solve(b).col(1));
   EXPECT_NEAR(ldlt.LogDeterminant(), std::log(a.determinant()), 1e-9);
   EXPECT_LT((ldlt.InverseDiagonal() - a.inverse().diagonal()).cwiseAbs().maxCoeff(), 1e-12);
   const Eigen::MatrixXd inverse = a.inverse();
