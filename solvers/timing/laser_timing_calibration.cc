@@ -120,7 +120,13 @@ Status Redescend(const StreamSamples& data, const LaserTimingOptions& options, T
   LaserTimingOptions tukey = options;
   tukey.calibration.refinement.loss = RobustLoss::kTukey;
   tukey.calibration.refinement.loss_scale = refinement.redescending_scale;
-  TimingModelFit redescended = *best;
+  // What the polish starts from: it recomputes the rest (a whole copy held the linearisation and
+  // the covariance twice at the run's peak of memory).
+  TimingModelFit redescended;
+  redescended.model = best->model;
+  redescended.state = best->state;
+  redescended.iterations = best->iterations;
+  redescended.rounds = best->rounds;
   const Status polished = PolishTimingModel(data, tukey, &redescended);
   if (!polished.ok()) {
     warnings->push_back("the timing-aware refinement's last passes under Tukey's loss failed (" +
