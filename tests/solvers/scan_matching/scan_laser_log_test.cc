@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <string>
 
 namespace calib {
 namespace {
@@ -34,6 +35,17 @@ double WorstZ(const LaserCalibrationResult& r, const ScanSimTruth& truth) {
   const LaserParamVector z = (r.estimate.ToVector() - t.ToVector()).cwiseQuotient(r.stddev);
   std::printf("z %+.2f %+.2f %+.2f %+.2f %+.2f %+.2f\n", z(0), z(1), z(2), z(3), z(4), z(5));
   return z.cwiseAbs().maxCoeff();
+}
+
+// The robot of `o` simulated, its recording as a bag holds it (named `source`) calibrated.
+StatusOr<RobotBagCalibration> CalibrateSimulatedBag(const ScanSimOptions& o,
+                                                    const std::string& source,
+                                                    ScanSimTruth* truth) {
+  CALIB_ASSIGN_OR_RETURN(const ScanSimulation sim, SimulateScans(o));
+  *truth = sim.truth;
+  RobotMessages bag = ScanSimulationMessages(sim);
+  bag.source = source;
+  return CalibrateRobotMessages(bag, RobotBagOptions(), kTiming);
 }
 
 // Raw scans of a simulated robot, matched inside calib and calibrated with their timing: every
@@ -146,14 +158,11 @@ TEST(ScanLaserLog, WheelJointsInDegreesOrCountsAndWithAGap) {
 TEST(ScanLaserLog, SweepingScansAreDeskewedThroughAFirstCalibration) {
   ScanSimOptions o = Robot(600, 5);
   o.sweep_s = 0.1;
-  const StatusOr<ScanSimulation> sim = SimulateScans(o);
-  ASSERT_TRUE(sim.ok()) << sim.message();
-  RobotMessages bag = ScanSimulationMessages(*sim);
-  bag.source = "sweep.bag";
-  const StatusOr<RobotBagCalibration> r = CalibrateRobotMessages(bag, RobotBagOptions(), kTiming);
+  ScanSimTruth truth;
+  const StatusOr<RobotBagCalibration> r = CalibrateSimulatedBag(o, "sweep.bag", &truth);
   ASSERT_TRUE(r.ok()) << r.message();
   EXPECT_GE(r->log.matching_passes, 2);
-  EXPECT_LE(WorstZ(r->result.calibration, sim->truth), 3.0);
+  EXPECT_LE(WorstZ(r->result.calibration, truth), 3.0);
 }
 
 // Fast turns (wheels to 12 rad/s: up to 0.5 rad per 0.1 s sweep, a full circle of 360 beams): the
@@ -167,14 +176,11 @@ TEST(ScanLaserLog, FastTurnsAreDeskewedUntilThePassesSettle) {
   o.sweep_s = 0.1;
   o.range_noise_sigma_m = 0.01;
   o.missing_probability = 0.02;
-  const StatusOr<ScanSimulation> sim = SimulateScans(o);
-  ASSERT_TRUE(sim.ok()) << sim.message();
-  RobotMessages bag = ScanSimulationMessages(*sim);
-  bag.source = "fast_turns.bag";
-  const StatusOr<RobotBagCalibration> r = CalibrateRobotMessages(bag, RobotBagOptions(), kTiming);
+  ScanSimTruth truth;
+  const StatusOr<RobotBagCalibration> r = CalibrateSimulatedBag(o, "fast_turns.bag", &truth);
   ASSERT_TRUE(r.ok()) << r.message();
   EXPECT_GT(r->log.matching_passes, 2);
-  EXPECT_LE(WorstZ(r->result.calibration, sim->truth), 3.0);
+  EXPECT_LE(WorstZ(r->result.calibration, truth), 3.0);
   EXPECT_LT(std::abs(r->result.time_offset_s), 3.0 * r->result.time_offset_stddev_s + 1e-4);
   for (const std::string& warning : r->log.warnings) {
     EXPECT_EQ(warning.find("had not settled"), std::string::npos) << warning;
