@@ -73,22 +73,26 @@ Eigen::VectorXd BandedLdlt::InverseDiagonal() const { return InverseBand().row(0
 Eigen::MatrixXd BandedLdlt::InverseBand() const {
   // Z = A⁻¹ inside the band: Z(j, i) = −Σ_a L(i + a, i)·Z(i + a, j) for j in (i, i + w], and
   // Z(i, i) = 1/D_i − Σ_a L(i + a, i)·Z(i + a, i); every Z(i + a, j) lies in the band already.
+  // For j = i + d the sum runs over Z(i + a, i + d) = z(d − a, i + a) for a < d and z(a − d, i + d)
+  // for a ≥ d, in two loops (no branch per term; the same order of the terms).
   const Eigen::Index w = bandwidth();
   const Eigen::Index n = size();
   Eigen::MatrixXd z = Eigen::MatrixXd::Zero(w + 1, n);  // z(d, i) = Z(i + d, i).
-  const auto at = [&](Eigen::Index r, Eigen::Index c) {
-    return r >= c ? z(r - c, c) : z(c - r, r);
-  };
+  const Eigen::Index rows = w + 1;
+  double* zp = z.data();
   for (Eigen::Index i = n - 1; i >= 0; --i) {
     const Eigen::Index reach = std::min(w, n - 1 - i);
+    const double* l = &factor_(0, i);
     for (Eigen::Index d = reach; d >= 1; --d) {
       double sum = 0.0;
-      for (Eigen::Index a = 1; a <= reach; ++a) sum += factor_(a, i) * at(i + a, i + d);
-      z(d, i) = -sum;
+      for (Eigen::Index a = 1; a < d; ++a) sum += l[a] * zp[(i + a) * rows + (d - a)];
+      const double* column = zp + (i + d) * rows;
+      for (Eigen::Index a = d; a <= reach; ++a) sum += l[a] * column[a - d];
+      zp[i * rows + d] = -sum;
     }
     double sum = 0.0;
-    for (Eigen::Index a = 1; a <= reach; ++a) sum += factor_(a, i) * z(a, i);
-    z(0, i) = 1.0 / factor_(0, i) - sum;
+    for (Eigen::Index a = 1; a <= reach; ++a) sum += l[a] * zp[i * rows + a];
+    zp[i * rows] = 1.0 / l[0] - sum;
   }
   return z;
 }

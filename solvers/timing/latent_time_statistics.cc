@@ -37,22 +37,25 @@ StatusOr<BandedLdlt> FactorWithPrior(const LatentLinearization& lin, const Laten
   return FactorBandWithPrior([&] { return lin.h_ll_band; }, prior);
 }
 
-// Band matrix (lower band, band(d, i) = H(i + d, i)) times a vector.
-Eigen::VectorXd BandTimes(const Eigen::MatrixXd& band, const Eigen::VectorXd& x) {
-  const Eigen::Index n = band.cols();
-  Eigen::VectorXd y = band.row(0).transpose().cwiseProduct(x);
-  for (Eigen::Index d = 1; d < band.rows(); ++d) {
-    for (Eigen::Index i = 0; i + d < n; ++i) {
-      y(i + d) += band(d, i) * x(i);
-      y(i) += band(d, i) * x(i + d);
+// Of the three components' bands H_c (lower bands, band(d, i) = H(i + d, i)) in one pass, which
+// reads each band once (the evaluation is bound by memory): xᵀH_c·x and tr(Z·H_c), Z symmetric
+// and given by its lower band of the same width.
+void QuadraticsAndTraces(const std::array<Eigen::MatrixXd, 3>& h, const Eigen::VectorXd& x,
+                         const Eigen::MatrixXd& z, double quadratic[3], double trace[3]) {
+  const Eigen::Index rows = z.rows(), n = z.cols();
+  double q[3] = {0.0, 0.0, 0.0}, t[3] = {0.0, 0.0, 0.0};
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Index reach = std::min(rows - 1, n - 1 - i);
+    const double* zi = z.data() + i * rows;
+    const double* hi[3] = {h[0].data() + i * rows, h[1].data() + i * rows, h[2].data() + i * rows};
+    // The diagonal once, the entries below it twice (for the entries above).
+    for (Eigen::Index d = 0; d <= reach; ++d) {
+      const double weight = d == 0 ? 1.0 : 2.0;
+      const double xx = weight * x(i) * x(i + d), zz = weight * zi[d];
+      for (int c = 0; c < 3; ++c) q[c] += hi[c][d] * xx, t[c] += hi[c][d] * zz;
     }
   }
-  return y;
-}
-
-// tr(Z·H) of two symmetric matrices given by their lower bands of the same width.
-double BandTrace(const Eigen::MatrixXd& z, const Eigen::MatrixXd& h) {
-  return 2.0 * z.cwiseProduct(h).sum() - z.row(0).cwiseProduct(h.row(0)).sum();
+  for (int c = 0; c < 3; ++c) quadratic[c] = q[c], trace[c] = t[c];
 }
 
 }  // namespace
@@ -98,10 +101,10 @@ StatusOr<LatentEvidence> LatentEvidenceWithGradient(const LatentLinearization& l
   // With A = Σ s_c H_c + Λ, u = Σ s_c b_c − Λ·dm, x = A⁻¹u and Z = A⁻¹:
   //   d(−uᵀA⁻¹u) = −2xᵀdu + xᵀdA·x,  d log det A = tr(Z·dA).
   const Eigen::MatrixXd z = ldlt.InverseBand();
+  double quadratic[3], trace[3];
+  QuadraticsAndTraces(lin.h_ll_band_c, x, z, quadratic, trace);
   for (int c = 0; c < 3; ++c) {
-    const double quadratic = x.dot(BandTimes(lin.h_ll_band_c[c], x));
-    out.gradient(c) += scale(c) * (4.0 * x.dot(lin.b_l_c[c]) - 2.0 * quadratic -
-                                   2.0 * BandTrace(z, lin.h_ll_band_c[c]));
+    out.gradient(c) += scale(c) * (4.0 * x.dot(lin.b_l_c[c]) - 2.0 * quadratic[c] - 2.0 * trace[c]);
   }
   // d/d log σ_i of a prior: dΛ_ii = −2λ_i; the latent's departure from its prior mean is
   // −(dm_i + x_i), so the terms gather into −2λ_i[(dm_i + x_i)² + Z_ii] + 2 (EM's σ² update).
