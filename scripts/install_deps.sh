@@ -4,7 +4,7 @@
 set -euo pipefail
 packages=(cmake g++ make libceres-dev libeigen3-dev libgoogle-glog-dev libgflags-dev
           libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libbz2-dev liblz4-dev
-          libzstd-dev pybind11-dev python3-dev python3-numpy librsvg2-bin "$@")
+          libzstd-dev libsqlite3-dev pybind11-dev python3-dev python3-numpy librsvg2-bin "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -24,7 +24,7 @@ else
   seconds="${1:-60}"
   runs="${2:--1}"
 fi
-harnesses=(${FUZZ_HARNESSES:-laser_tuples laser_csv laser_stream bearing_log scan_csv mcap rosbag1
+harnesses=(${FUZZ_HARNESSES:-laser_tuples laser_csv laser_stream bearing_log scan_csv mcap sqlite_bag rosbag1
   laser_calibrate})
 
 # The project's packages, and clang with its libFuzzer and sanitizer runtimes (Debian 12:

@@ -1,11 +1,10 @@
 // ReadMcapBag: a ROS 2 bag (MCAP file, CDR messages) read without an MCAP library.
-#include <calib/core/bag/cdr_decoder.h>
 #include <calib/core/bag/mcap_records.h>
 #include <calib/core/bag/robot_messages.h>
+#include <calib/core/bag/ros2_collector.h>
 #include <calib/core/text_file.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -18,72 +17,8 @@ using mcap::ChannelRecord;
 using mcap::ChunkIndexRecord;
 using mcap::RecordView;
 
-// A bag directory's .mcap files (several when rosbag2 split the recording by size or time), in
-// the order their names count them (run_2 before run_10); a file is itself.
-StatusOr<std::vector<std::string>> BagFiles(const std::string& path) {
-  std::error_code error;
-  if (!std::filesystem::is_directory(path, error)) return std::vector<std::string>{path};
-  std::vector<std::string> files;
-  for (const auto& entry : std::filesystem::directory_iterator(path, error)) {
-    if (entry.path().extension() == ".mcap") files.push_back(entry.path().string());
-  }
-  if (files.empty()) return Status::InvalidInput(path + ": the bag directory holds no .mcap file");
-  const auto key = [](const std::string& f) {
-    const std::string stem = std::filesystem::path(f).stem().string();
-    size_t digits = stem.size();
-    while (digits > 0 && std::isdigit(static_cast<unsigned char>(stem[digits - 1]))) --digits;
-    const std::string number = stem.substr(digits);
-    return std::make_pair(stem.substr(0, digits),
-                          number.empty() ? -1 : std::stoll(number.substr(0, 18)));
-  };
-  std::sort(files.begin(), files.end(),
-            [&](const std::string& a, const std::string& b) { return key(a) < key(b); });
-  return files;
-}
-
-// "sensor_msgs/msg/LaserScan" → "sensor_msgs/LaserScan".
-std::string NormalisedType(const std::string& name) {
-  const size_t slash = name.find("/msg/");
-  return slash == std::string::npos ? name : name.substr(0, slash) + name.substr(slash + 4);
-}
-
-enum class Kind { kNone, kScan, kJoints, kOdometry, kTf, kTfStatic };
-
-Kind KindOf(const std::string& topic, const std::string& type, const std::string& encoding) {
-  if (encoding != "cdr") return Kind::kNone;
-  if (type == "sensor_msgs/LaserScan") return Kind::kScan;
-  if (type == "sensor_msgs/JointState") return Kind::kJoints;
-  if (type == "nav_msgs/Odometry") return Kind::kOdometry;
-  if (type != "tf2_msgs/TFMessage") return Kind::kNone;
-  const std::string last = topic.substr(topic.rfind('/') + 1);  // npos + 1 == 0.
-  return last == "tf" ? Kind::kTf : last == "tf_static" ? Kind::kTfStatic : Kind::kNone;
-}
-
-struct Channel {
-  std::string topic, type;
-  Kind kind = Kind::kNone;
-  bool wanted = false;
-  int64_t message_count = 0;
-};
-
-// Messages with their log time in ns, sorted at the end by (log time, record).
-template <typename T>
-using Logged = std::vector<std::pair<uint64_t, T>>;
-
-template <typename T>
-std::vector<T> InLogTimeOrder(Logged<T>* logged) {
-  std::stable_sort(logged->begin(), logged->end(), [](const auto& a, const auto& b) {
-    return a.first != b.first ? a.first < b.first : a.second.record < b.second.record;
-  });
-  std::vector<T> out;
-  out.reserve(logged->size());
-  for (auto& item : *logged) out.push_back(std::move(item.second));
-  return out;
-}
-
-double Seconds(uint64_t ns) {
-  return static_cast<double>(ns / 1000000000) + 1e-9 * static_cast<double>(ns % 1000000000);
-}
+using ros2::Channel;
+using ros2::Kind;
 
 std::string At(uint64_t offset) { return " at byte " + std::to_string(offset); }
 
@@ -108,7 +43,6 @@ class BagReader {
   Status OnRecord(const RecordView& record, const std::string& where);
   Status OnChannel(const RecordView& record);
   Status OnMessage(const RecordView& record, const std::string& where);
-  Status Decode(const Channel& channel, const mcap::MessageRecord& message, int64_t record);
   Status ForEachInChunk(const RecordView& chunk, const std::string& where);
   Status CountIndexed(const ChunkIndexRecord& index, uint64_t* count, bool* known);
 
@@ -120,22 +54,17 @@ class BagReader {
   int64_t next_record_ = 0;
   bool count_messages_ = true;  // False when the summary's statistics gave the counts.
   std::vector<uint8_t> chunk_buffer_;
-  std::map<std::string, Logged<LaserScan>> scans_;
-  std::map<std::string, Logged<JointState>> joints_;
-  std::map<std::string, Logged<Odometry>> odometry_;
-  Logged<TransformStamped> tf_, tf_static_;
+  ros2::MessageCollector collector_;
 };
 
 Status BagReader::OnChannel(const RecordView& record) {
   ChannelRecord c;
   CALIB_RETURN_IF_ERROR(mcap::ParseChannel(record, &c));
-  Channel& channel = channels_[c.id];
-  channel.topic = c.topic;
   const auto schema = schema_types_.find(c.schema_id);
-  channel.type = schema == schema_types_.end() ? "" : schema->second;
-  channel.kind = KindOf(c.topic, channel.type, c.message_encoding);
-  channel.wanted = channel.kind != Kind::kNone &&
-                   (options_.topics.empty() || options_.topics.count(c.topic) > 0);
+  const int64_t count = channels_[c.id].message_count;
+  channels_[c.id] = ros2::MakeChannel(c.topic, schema == schema_types_.end() ? "" : schema->second,
+                                      c.message_encoding, options_);
+  channels_[c.id].message_count = count;  // A channel repeated in the summary keeps its count.
   return Status::Ok();
 }
 
@@ -144,7 +73,7 @@ Status BagReader::OnRecord(const RecordView& record, const std::string& where) {
     case mcap::kSchema: {
       mcap::SchemaRecord schema;
       CALIB_RETURN_IF_ERROR(mcap::ParseSchema(record, &schema).Prefixed(where));
-      if (schema.id != 0) schema_types_[schema.id] = NormalisedType(schema.name);
+      if (schema.id != 0) schema_types_[schema.id] = ros2::NormalisedType(schema.name);
       return Status::Ok();
     }
     case mcap::kChannel:
@@ -168,56 +97,9 @@ Status BagReader::OnMessage(const RecordView& record, const std::string& where) 
   }
   if (count_messages_) ++channel->second.message_count;
   if (!channel->second.wanted) return Status::Ok();
-  return Decode(channel->second, message, index)
+  return collector_.Decode(channel->second, message.log_time_ns, message.data, message.size, index)
       .Prefixed(where + "topic '" + channel->second.topic + "' record " + std::to_string(index) +
                 " (Message record" + At(record.offset) + "): ");
-}
-
-Status BagReader::Decode(const Channel& channel, const mcap::MessageRecord& message,
-                         int64_t record) {
-  const uint64_t ns = message.log_time_ns;
-  const double log_time_s = Seconds(ns);
-  switch (channel.kind) {
-    case Kind::kScan: {
-      LaserScan scan;
-      CALIB_RETURN_IF_ERROR(DecodeLaserScan(message.data, message.size, &scan));
-      scan.record = record;
-      scan.log_time_s = log_time_s;
-      scans_[channel.topic].emplace_back(ns, std::move(scan));
-      return Status::Ok();
-    }
-    case Kind::kJoints: {
-      JointState joints;
-      CALIB_RETURN_IF_ERROR(DecodeJointState(message.data, message.size, &joints));
-      joints.record = record;
-      joints.log_time_s = log_time_s;
-      joints_[channel.topic].emplace_back(ns, std::move(joints));
-      return Status::Ok();
-    }
-    case Kind::kOdometry: {
-      Odometry odometry;
-      CALIB_RETURN_IF_ERROR(DecodeOdometry(message.data, message.size, &odometry));
-      odometry.record = record;
-      odometry.log_time_s = log_time_s;
-      odometry_[channel.topic].emplace_back(ns, std::move(odometry));
-      return Status::Ok();
-    }
-    case Kind::kTf:
-    case Kind::kTfStatic: {
-      std::vector<TransformStamped> transforms;
-      CALIB_RETURN_IF_ERROR(DecodeTfMessage(message.data, message.size, &transforms));
-      Logged<TransformStamped>& out = channel.kind == Kind::kTf ? tf_ : tf_static_;
-      for (TransformStamped& t : transforms) {
-        t.record = record;
-        t.log_time_s = log_time_s;
-        out.emplace_back(ns, std::move(t));
-      }
-      return Status::Ok();
-    }
-    case Kind::kNone:
-      break;
-  }
-  return Status::Ok();
 }
 
 Status BagReader::ForEachInChunk(const RecordView& record, const std::string& where) {
@@ -377,11 +259,7 @@ void BagReader::Finish(RobotMessages* out) {
   for (const auto& [id, channel] : channels_) {
     out->topics.push_back({channel.topic, channel.type, channel.message_count});
   }
-  for (auto& [topic, logged] : scans_) out->scans[topic] = InLogTimeOrder(&logged);
-  for (auto& [topic, logged] : joints_) out->joint_states[topic] = InLogTimeOrder(&logged);
-  for (auto& [topic, logged] : odometry_) out->odometry[topic] = InLogTimeOrder(&logged);
-  out->tf = InLogTimeOrder(&tf_);
-  out->tf_static = InLogTimeOrder(&tf_static_);
+  collector_.Finish(out);
 }
 
 // The Footer, when the file ends with one and the closing magic.
@@ -428,59 +306,6 @@ StatusOr<RobotMessages> ReadMcapFile(const std::string& file, const BagReadOptio
                          [&] { return ReadMcap(mapped.data(), mapped.size(), file, options); });
 }
 
-// `part` (the next file of a split bag) appended to `all`: its records numbered on after
-// `record_base`, every topic kept in log-time order.
-template <typename Message>
-void AppendTopics(std::map<std::string, std::vector<Message>>&& part, int64_t record_base,
-                  std::map<std::string, std::vector<Message>>* all) {
-  for (auto& [topic, messages] : part) {
-    std::vector<Message>& to = (*all)[topic];
-    for (Message& m : messages) {
-      m.record += record_base;
-      to.push_back(std::move(m));
-    }
-    std::stable_sort(to.begin(), to.end(), [](const Message& a, const Message& b) {
-      return a.log_time_s < b.log_time_s;
-    });
-  }
-}
-
-int64_t LastRecord(const RobotMessages& m) {
-  int64_t last = -1;
-  const auto scan = [&](const auto& topics) {
-    for (const auto& [topic, messages] : topics) {
-      for (const auto& message : messages) last = std::max<int64_t>(last, message.record);
-    }
-  };
-  scan(m.scans);
-  scan(m.joint_states);
-  scan(m.odometry);
-  for (const auto* list : {&m.tf, &m.tf_static}) {
-    for (const TransformStamped& t : *list) last = std::max<int64_t>(last, t.record);
-  }
-  return last;
-}
-
-void AppendPart(RobotMessages&& part, int64_t record_base, RobotMessages* all) {
-  for (const TopicInfo& t : part.topics) {
-    auto it = std::find_if(all->topics.begin(), all->topics.end(),
-                           [&](const TopicInfo& a) { return a.name == t.name; });
-    if (it == all->topics.end()) {
-      all->topics.push_back(t);
-    } else {
-      it->message_count += t.message_count;
-    }
-  }
-  AppendTopics(std::move(part.scans), record_base, &all->scans);
-  AppendTopics(std::move(part.joint_states), record_base, &all->joint_states);
-  AppendTopics(std::move(part.odometry), record_base, &all->odometry);
-  for (auto* list : {&part.tf, &part.tf_static}) {
-    for (TransformStamped& t : *list) t.record += record_base;
-  }
-  all->tf.insert(all->tf.end(), part.tf.begin(), part.tf.end());
-  all->tf_static.insert(all->tf_static.end(), part.tf_static.begin(), part.tf_static.end());
-}
-
 }  // namespace
 
 StatusOr<RobotMessages> ReadMcapBytes(std::string_view bytes, const std::string& source,
@@ -490,31 +315,16 @@ StatusOr<RobotMessages> ReadMcapBytes(std::string_view bytes, const std::string&
   });
 }
 
-namespace {
-
-// The files of a split bag, one after the other.
-StatusOr<RobotMessages> ReadSplitBag(const std::string& path, const std::vector<std::string>& files,
-                                     const BagReadOptions& options) {
-  RobotMessages all;
-  all.source = path;
-  int64_t record_base = 0;
-  for (const std::string& file : files) {
-    CALIB_ASSIGN_OR_RETURN(RobotMessages part, ReadMcapFile(file, options));
-    int64_t records = 0;
-    for (const TopicInfo& t : part.topics) records += t.message_count;
-    const int64_t next_base = record_base + std::max(records, LastRecord(part) + 1);
-    AppendPart(std::move(part), record_base, &all);
-    record_base = next_base;
-  }
-  return all;
-}
-
-}  // namespace
-
 StatusOr<RobotMessages> ReadMcapBag(const std::string& path, const BagReadOptions& options) {
-  CALIB_ASSIGN_OR_RETURN(const std::vector<std::string> files, BagFiles(path));
+  std::error_code error;
+  if (!std::filesystem::is_directory(path, error)) return ReadMcapFile(path, options);
+  CALIB_ASSIGN_OR_RETURN(const std::vector<std::string> files,
+                         ros2::BagDirectoryFiles(path, ".mcap"));
   if (files.size() == 1) return ReadMcapFile(files[0], options);
-  return GuardAllocation(path, [&] { return ReadSplitBag(path, files, options); });
+  return GuardAllocation(path, [&] {
+    return ros2::ReadSplitBag(path, files,
+                              [&](const std::string& file) { return ReadMcapFile(file, options); });
+  });
 }
 
 }  // namespace calib

@@ -11,6 +11,7 @@ namespace fs = std::filesystem;
 
 constexpr char kMcapMagic[] = "\x89MCAP0\r\n";
 constexpr char kRos1Magic[] = "#ROSBAG V";
+constexpr char kSqliteMagic[] = "SQLite format 3";
 
 std::string FirstBytes(const std::string& path, size_t count) {
   std::ifstream in(path, std::ios::binary);
@@ -31,7 +32,16 @@ bool BagDirectory(const std::string& path) {
   for (const fs::directory_entry& e : fs::directory_iterator(path, ec)) {
     if (e.path().extension() == ".mcap") return true;
   }
-  return false;
+  return HoldsSqliteBag(path);
+}
+
+bool SqliteBagName(const std::string& path) {
+  const std::string name = fs::path(path).filename().string();
+  const auto ends = [&](const std::string& suffix) {
+    return name.size() > suffix.size() &&
+           name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+  };
+  return ends(".db3") || ends(".db3.zstd");
 }
 
 }  // namespace
@@ -41,21 +51,29 @@ bool LooksLikeRobotBag(const std::string& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return false;
   const std::string extension = fs::path(path).extension().string();
-  if (extension == ".mcap" || extension == ".bag") return true;  // Read as one, or said not to be.
+  // Read as one, or said not to be.
+  if (extension == ".mcap" || extension == ".bag" || SqliteBagName(path)) return true;
   const std::string bytes = FirstBytes(path, 16);
-  return StartsWith(bytes, kMcapMagic) || StartsWith(bytes, kRos1Magic);
+  return StartsWith(bytes, kMcapMagic) || StartsWith(bytes, kRos1Magic) ||
+         StartsWith(bytes, kSqliteMagic);
 }
 
 StatusOr<RobotMessages> ReadRobotBag(const std::string& path, const BagReadOptions& options) {
-  if (BagDirectory(path)) return ReadMcapBag(path, options);
+  if (BagDirectory(path)) {
+    return HoldsSqliteBag(path) ? ReadSqliteBag(path, options) : ReadMcapBag(path, options);
+  }
   std::error_code ec;
   if (!fs::exists(path, ec)) return Status::Io(path + ": no such file or directory");
   const std::string bytes = FirstBytes(path, 16);
   if (StartsWith(bytes, kRos1Magic)) return ReadRos1Bag(path, options);
   if (StartsWith(bytes, kMcapMagic)) return ReadMcapBag(path, options);
+  if (StartsWith(bytes, kSqliteMagic) || (SqliteBagName(path) && !bytes.empty())) {
+    return ReadSqliteBag(path, options);
+  }
   return Status::InvalidInput(path + ": not a bag: " +
                               (bytes.empty() ? std::string("the file is empty")
-                                             : "it starts with neither MCAP's nor ROS 1's magic"));
+                                             : "it starts with neither MCAP's, ROS 1's nor "
+                                               "SQLite's magic"));
 }
 
 }  // namespace calib

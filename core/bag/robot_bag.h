@@ -6,12 +6,14 @@
 
 #include <string>
 
-// A robot's recording in either bag format, told apart by content: a ROS 2 bag (an .mcap file,
-// or a bag directory holding one and metadata.yaml) or a ROS 1 bag (v2.0).
+// A robot's recording in any bag format, told apart by content: a ROS 2 bag (an .mcap file, a
+// rosbag2 sqlite3 .db3 file, or a bag directory holding them and metadata.yaml) or a ROS 1 bag
+// (v2.0).
 namespace calib {
 
-// Whether `path` is a bag: it is named .mcap or .bag, its first bytes are MCAP's or ROS 1's
-// magic, or it is a directory holding metadata.yaml or an .mcap file. Reads a few bytes only.
+// Whether `path` is a bag: it is named .mcap, .bag, .db3 or .db3.zstd, its first bytes are
+// MCAP's, ROS 1's or SQLite's magic, or it is a directory holding metadata.yaml or an .mcap,
+// .db3 or .db3.zstd file. Reads a few bytes only.
 bool LooksLikeRobotBag(const std::string& path);
 
 StatusOr<RobotMessages> ReadRobotBag(const std::string& path, const BagReadOptions& options = {});

@@ -13,9 +13,9 @@
 #include <string_view>
 #include <vector>
 
-// The messages of a robot's recording that a calibration uses, decoded from a ROS 2 bag (MCAP,
-// CDR) or a ROS 1 bag (v2.0), with no ROS installation. Every message keeps its header stamp
-// (stamp_s, the driver's idea of the sample time), the bag's log time (log_time_s, when the
+// The messages of a robot's recording that a calibration uses, decoded from a ROS 2 bag (MCAP or
+// sqlite3, CDR) or a ROS 1 bag (v2.0), with no ROS installation. Every message keeps its header
+// stamp (stamp_s, the driver's idea of the sample time), the bag's log time (log_time_s, when the
 // recorder received it) and its record index, so that errors name it and the timing diagnostics
 // can compare the two clocks.
 namespace calib {
@@ -71,12 +71,22 @@ struct BagReadOptions {
 // A ROS 2 bag: an .mcap file, or a bag directory holding one (metadata.yaml beside it).
 StatusOr<RobotMessages> ReadMcapBag(const std::string& path, const BagReadOptions& options = {});
 
+// A ROS 2 bag in rosbag2's sqlite3 storage: a .db3 file, a .db3.zstd file (compression_mode
+// FILE), or a bag directory holding them (split files read as one); messages zstd-compressed one
+// by one (compression_mode MESSAGE) are decompressed.
+StatusOr<RobotMessages> ReadSqliteBag(const std::string& path, const BagReadOptions& options = {});
+
+// Whether `directory` holds a .db3 or .db3.zstd file.
+bool HoldsSqliteBag(const std::string& directory);
+
 // A ROS 1 bag, format 2.0 (uncompressed, bz2 or lz4 chunks).
 StatusOr<RobotMessages> ReadRos1Bag(const std::string& path, const BagReadOptions& options = {});
 
 // The same over a file's bytes in memory; `source` names them in messages.
 StatusOr<RobotMessages> ReadMcapBytes(std::string_view bytes, const std::string& source,
                                       const BagReadOptions& options = {});
+StatusOr<RobotMessages> ReadSqliteBytes(std::string_view bytes, const std::string& source,
+                                        const BagReadOptions& options = {});
 StatusOr<RobotMessages> ReadRos1BagBytes(std::string_view bytes, const std::string& source,
                                          const BagReadOptions& options = {});
 

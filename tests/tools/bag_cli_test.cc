@@ -93,16 +93,19 @@ TEST_F(BagCliTest, AnUpsideDownLidarsBagCalibratesWithinThreeSigma) {
   EXPECT_NE(json["warnings"].dump().find("upside down"), std::string::npos) << json["warnings"];
 }
 
-// A bag rosbag2 split into three files calibrates exactly as the one file does.
+// A bag rosbag2 split into three files, and the same recording in its sqlite3 storage (two files,
+// each message zstd-compressed, Humble's schema), calibrate exactly as the one MCAP file does.
 TEST_F(BagCliTest, ASplitBagCalibratesAsTheWholeOne) {
-  nlohmann::json estimates[2];
+  nlohmann::json estimates[3];
   int k = 0;
-  for (const fs::path& bag : {kBags / "sim_robot_split", kBags / "sim_robot_zstd.mcap"}) {
+  for (const fs::path& bag :
+       {kBags / "sim_robot_split", kBags / "sim_robot_db3", kBags / "sim_robot_zstd.mcap"}) {
     const CliRun run = Calibrate(bag);
     ASSERT_EQ(run.exit_code, 0) << run.err;
     estimates[k++] = nlohmann::json::parse(ReadFile(dir_ / "out.json"))["estimate"];
   }
-  EXPECT_EQ(estimates[0], estimates[1]);
+  EXPECT_EQ(estimates[0], estimates[2]);
+  EXPECT_EQ(estimates[1], estimates[2]);
 }
 
 // --scan_points: the estimate refined against the scan points is the result, within 3σ of the
@@ -210,6 +213,12 @@ TEST_F(BagCliTest, BadBagsAndTopicsAreNamed) {
     std::ofstream(cut, std::ios::binary) << bytes.substr(0, bytes.size() / 2);
     ExpectFailure(cut, "", {cut.string(), "truncated"});
   }
+  std::ofstream(dir_ / "empty.db3").flush();
+  ExpectFailure(dir_ / "empty.db3", "", {"empty.db3: not a bag: the file is empty"});
+  const std::string db3 = ReadFile(kBags / "sim_robot_db3" / "sim_robot_db3_0.db3");
+  const fs::path cut = dir_ / "cut.db3";
+  std::ofstream(cut, std::ios::binary) << db3.substr(0, db3.size() / 2);
+  ExpectFailure(cut, "", {cut.string(), "truncated or corrupt"});
 }
 
 }  // namespace

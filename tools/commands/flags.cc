@@ -9,7 +9,7 @@ const calib::cli::SimulateOptions kSimulate;
 
 DEFINE_string(input, "",
               "A laser log file (tuples or CSV), a laser raw-stream directory, a robot's bag "
-              "(ROS 2 .mcap or bag directory, ROS 1 .bag), several laser logs "
+              "(ROS 2 .mcap or .db3 or bag directory, ROS 1 .bag), several laser logs "
               "separated by commas (calibrated jointly), or a bearing log directory "
               "(odometry.csv, bearings.csv, meta.json)");
 DEFINE_string(output, "",

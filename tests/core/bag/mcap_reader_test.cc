@@ -13,179 +13,28 @@
 #include <string>
 #include <vector>
 
+#include "tests/core/bag/small_robot_expectations.h"
+
 namespace calib {
 namespace {
 
-const std::string kBags = std::string(CALIB_SOURCE_DIR) + "/data/bags/";
+using testing::kBags;
 const std::vector<std::string> kFixtures = {"small_robot_zstd.mcap", "small_robot_lz4.mcap",
                                             "small_robot_none.mcap", "small_robot_nosummary.mcap"};
-
-nlohmann::json Input() {
-  std::string text;
-  EXPECT_TRUE(ReadWholeFile(kBags + "small_robot.json", &text).ok());
-  return nlohmann::json::parse(text);
-}
-
-double Seconds(uint64_t ns) {
-  return static_cast<double>(ns / 1000000000) + 1e-9 * static_cast<double>(ns % 1000000000);
-}
-double Stamp(const nlohmann::json& header) {
-  return header["stamp"]["sec"].get<int32_t>() + 1e-9 * header["stamp"]["nanosec"].get<uint32_t>();
-}
-float Float(const nlohmann::json& v) {
-  if (v.is_string()) {
-    const std::string s = v.get<std::string>();
-    return s == "nan" ? NAN : s == "inf" ? INFINITY : -INFINITY;
-  }
-  return static_cast<float>(v.get<double>());
-}
-void ExpectSameFloat(float expected, float actual, const std::string& what) {
-  if (std::isnan(expected)) {
-    EXPECT_TRUE(std::isnan(actual)) << what;
-  } else {
-    EXPECT_EQ(expected, actual) << what;
-  }
-}
-Eigen::Vector3d Vec(const nlohmann::json& v) {
-  return {v["x"].get<double>(), v["y"].get<double>(), v["z"].get<double>()};
-}
-void ExpectQuaternion(const nlohmann::json& q, const Eigen::Quaterniond& actual) {
-  EXPECT_EQ(q["x"].get<double>(), actual.x());
-  EXPECT_EQ(q["y"].get<double>(), actual.y());
-  EXPECT_EQ(q["z"].get<double>(), actual.z());
-  EXPECT_EQ(q["w"].get<double>(), actual.w());
-}
-
-// The JSON's messages of one topic with their record numbers, in (log time, record) order.
-std::vector<std::pair<int64_t, nlohmann::json>> Expected(const nlohmann::json& input,
-                                                         const std::string& topic) {
-  std::vector<std::pair<int64_t, nlohmann::json>> out;
-  const auto& messages = input["messages"];
-  for (size_t i = 0; i < messages.size(); ++i) {
-    if (messages[i]["topic"] == topic) out.emplace_back(i, messages[i]);
-  }
-  std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
-    return a.second["log_time_ns"].template get<uint64_t>() <
-           b.second["log_time_ns"].template get<uint64_t>();
-  });
-  return out;
-}
-
-void ExpectScans(const nlohmann::json& input, const std::vector<LaserScan>& scans) {
-  const auto expected = Expected(input, "/scan");
-  ASSERT_EQ(expected.size(), scans.size());
-  for (size_t k = 0; k < scans.size(); ++k) {
-    const LaserScan& s = scans[k];
-    const nlohmann::json& m = expected[k].second["msg"];
-    EXPECT_EQ(expected[k].first, s.record);
-    EXPECT_EQ(Seconds(expected[k].second["log_time_ns"].get<uint64_t>()), s.log_time_s);
-    EXPECT_EQ(Stamp(m["header"]), s.stamp_s);
-    EXPECT_EQ(m["header"]["frame_id"], s.frame_id);
-    EXPECT_EQ(Float(m["angle_min"]), s.angle_min_rad);
-    EXPECT_EQ(Float(m["angle_increment"]), s.angle_increment_rad);
-    EXPECT_EQ(Float(m["time_increment"]), s.time_increment_s);
-    EXPECT_EQ(Float(m["scan_time"]), s.scan_time_s);
-    EXPECT_EQ(Float(m["range_min"]), s.range_min_m);
-    EXPECT_EQ(Float(m["range_max"]), s.range_max_m);
-    ASSERT_EQ(m["ranges"].size(), s.ranges_m.size());
-    ASSERT_EQ(m["intensities"].size(), s.intensities.size());
-    for (size_t i = 0; i < s.ranges_m.size(); ++i) {
-      ExpectSameFloat(Float(m["ranges"][i]), s.ranges_m[i], "scan " + std::to_string(k));
-    }
-    for (size_t i = 0; i < s.intensities.size(); ++i) {
-      EXPECT_EQ(Float(m["intensities"][i]), s.intensities[i]);
-    }
-  }
-}
-
-void ExpectJoints(const nlohmann::json& input, const std::vector<JointState>& joints) {
-  const auto expected = Expected(input, "/joint_states");
-  ASSERT_EQ(expected.size(), joints.size());
-  for (size_t k = 0; k < joints.size(); ++k) {
-    const nlohmann::json& m = expected[k].second["msg"];
-    EXPECT_EQ(expected[k].first, joints[k].record);
-    EXPECT_EQ(Seconds(expected[k].second["log_time_ns"].get<uint64_t>()), joints[k].log_time_s);
-    EXPECT_EQ(Stamp(m["header"]), joints[k].stamp_s);
-    EXPECT_EQ(m["name"].get<std::vector<std::string>>(), joints[k].name);
-    EXPECT_EQ(m["position"].get<std::vector<double>>(), joints[k].position);
-    EXPECT_EQ(m["velocity"].get<std::vector<double>>(), joints[k].velocity);
-    EXPECT_EQ(m["effort"].get<std::vector<double>>(), joints[k].effort);
-  }
-}
-
-void ExpectOdometry(const nlohmann::json& input, const std::vector<Odometry>& odometry) {
-  const auto expected = Expected(input, "/odom");
-  ASSERT_EQ(expected.size(), odometry.size());
-  for (size_t k = 0; k < odometry.size(); ++k) {
-    const nlohmann::json& m = expected[k].second["msg"];
-    const Odometry& o = odometry[k];
-    EXPECT_EQ(expected[k].first, o.record);
-    EXPECT_EQ(Seconds(expected[k].second["log_time_ns"].get<uint64_t>()), o.log_time_s);
-    EXPECT_EQ(Stamp(m["header"]), o.stamp_s);
-    EXPECT_EQ(m["header"]["frame_id"], o.frame_id);
-    EXPECT_EQ(m["child_frame_id"], o.child_frame_id);
-    EXPECT_EQ(Vec(m["pose"]["pose"]["position"]), o.position);
-    ExpectQuaternion(m["pose"]["pose"]["orientation"], o.orientation);
-    EXPECT_EQ(Vec(m["twist"]["twist"]["linear"]), o.linear_velocity);
-    EXPECT_EQ(Vec(m["twist"]["twist"]["angular"]), o.angular_velocity);
-  }
-}
-
-void ExpectTransforms(const nlohmann::json& input, const std::string& topic,
-                      const std::vector<TransformStamped>& transforms) {
-  size_t j = 0;
-  for (const auto& [record, message] : Expected(input, topic)) {
-    for (const nlohmann::json& t : message["msg"]["transforms"]) {
-      ASSERT_LT(j, transforms.size());
-      const TransformStamped& a = transforms[j++];
-      EXPECT_EQ(record, a.record);
-      EXPECT_EQ(Seconds(message["log_time_ns"].get<uint64_t>()), a.log_time_s);
-      EXPECT_EQ(Stamp(t["header"]), a.stamp_s);
-      EXPECT_EQ(t["header"]["frame_id"], a.parent_frame);
-      EXPECT_EQ(t["child_frame_id"], a.child_frame);
-      EXPECT_EQ(Vec(t["transform"]["translation"]), a.translation);
-      ExpectQuaternion(t["transform"]["rotation"], a.rotation);
-    }
-  }
-  EXPECT_EQ(j, transforms.size());
-}
 
 class FixtureTest : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(FixtureTest, DecodesExactlyTheMessagesTheReferenceWriterWasGiven) {
   const auto bag = ReadMcapBag(kBags + GetParam());
   ASSERT_TRUE(bag.ok()) << bag.message();
-  const nlohmann::json input = Input();
   EXPECT_EQ(kBags + GetParam(), bag->source);
-  ASSERT_EQ(1u, bag->scans.size());
-  ASSERT_EQ(1u, bag->joint_states.size());
-  ASSERT_EQ(1u, bag->odometry.size());
-  ExpectScans(input, bag->scans.at("/scan"));
-  ExpectJoints(input, bag->joint_states.at("/joint_states"));
-  ExpectOdometry(input, bag->odometry.at("/odom"));
-  ExpectTransforms(input, "/tf", bag->tf);
-  ExpectTransforms(input, "/tf_static", bag->tf_static);
-  EXPECT_EQ(8u, bag->tf.size());
-  ASSERT_EQ(1u, bag->tf_static.size());
-  EXPECT_EQ("base_link", bag->tf_static[0].parent_frame);
-  EXPECT_EQ("laser", bag->tf_static[0].child_frame);
+  testing::ExpectSmallRobot(*bag);
 }
 
 TEST_P(FixtureTest, ListsEveryTopicWithItsTypeAndCount) {
   const auto bag = ReadMcapBag(kBags + GetParam());
   ASSERT_TRUE(bag.ok()) << bag.message();
-  const std::vector<std::tuple<std::string, std::string, int64_t>> expected = {
-      {"/scan", "sensor_msgs/LaserScan", 20},
-      {"/joint_states", "sensor_msgs/JointState", 40},
-      {"/odom", "nav_msgs/Odometry", 40},
-      {"/tf", "tf2_msgs/TFMessage", 4},
-      {"/tf_static", "tf2_msgs/TFMessage", 1}};
-  ASSERT_EQ(expected.size(), bag->topics.size());
-  for (size_t i = 0; i < expected.size(); ++i) {
-    EXPECT_EQ(std::get<0>(expected[i]), bag->topics[i].name);
-    EXPECT_EQ(std::get<1>(expected[i]), bag->topics[i].type);
-    EXPECT_EQ(std::get<2>(expected[i]), bag->topics[i].message_count);
-  }
+  testing::ExpectSmallRobotTopics(*bag);
 }
 
 TEST_P(FixtureTest, DecodesOnlyTheRequestedTopicsAndIgnoresUnknownOnes) {
@@ -200,7 +49,7 @@ TEST_P(FixtureTest, DecodesOnlyTheRequestedTopicsAndIgnoresUnknownOnes) {
   EXPECT_TRUE(bag->tf.empty());
   EXPECT_EQ(1u, bag->tf_static.size());
   EXPECT_EQ(5u, bag->topics.size());  // Counted all the same.
-  ExpectScans(Input(), bag->scans.at("/scan"));
+  testing::ExpectScans(testing::Input(), bag->scans.at("/scan"));
 }
 
 INSTANTIATE_TEST_SUITE_P(Fixtures, FixtureTest, ::testing::ValuesIn(kFixtures),
@@ -246,7 +95,7 @@ std::string Fixture(const std::string& name) {
 }
 
 std::string Scratch(const std::string& name, const std::string& bytes) {
-  const std::string path = testing::TempDir() + "mcap_reader_test_" + name;
+  const std::string path = ::testing::TempDir() + "mcap_reader_test_" + name;
   EXPECT_TRUE(WriteWholeFile(path, bytes).ok());
   return path;
 }
@@ -258,9 +107,9 @@ TEST(McapReaderTest, ChunkedFileWithoutSummaryIsScannedLinearly) {
   std::memset(&bytes[summary_start], 0, 16);
   const auto bag = ReadMcapBag(Scratch("no_summary_start.mcap", bytes));
   ASSERT_TRUE(bag.ok()) << bag.message();
-  const nlohmann::json input = Input();
-  ExpectScans(input, bag->scans.at("/scan"));
-  ExpectJoints(input, bag->joint_states.at("/joint_states"));
+  const nlohmann::json input = testing::Input();
+  testing::ExpectScans(input, bag->scans.at("/scan"));
+  testing::ExpectJoints(input, bag->joint_states.at("/joint_states"));
   EXPECT_EQ(40, bag->topics[2].message_count);
 }
 
@@ -292,7 +141,7 @@ TEST(McapReaderTest, IndexedReadSkipsChunksWithoutWantedTopics) {
 }
 
 TEST(McapReaderTest, ReadsABagDirectory) {
-  const std::string dir = testing::TempDir() + "mcap_reader_test_bag_dir";
+  const std::string dir = ::testing::TempDir() + "mcap_reader_test_bag_dir";
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   ASSERT_TRUE(WriteWholeFile(dir + "/metadata.yaml", "rosbag2_bagfile_information:\n").ok());
@@ -354,7 +203,7 @@ TEST(McapReaderTest, BadMagicIsNotAnMcapFile) {
 TEST(McapReaderTest, TruncatedFilesFailNamingTheByte) {
   for (const std::string& name : kFixtures) {
     const std::string bytes = Fixture(name);
-    const std::string path = testing::TempDir() + "mcap_reader_test_truncated.mcap";
+    const std::string path = ::testing::TempDir() + "mcap_reader_test_truncated.mcap";
     std::vector<size_t> cuts = {0, 5, 8, 9, 16, bytes.size() - 9, bytes.size() - 1};
     for (size_t cut = 17; cut < bytes.size(); cut += 211) cuts.push_back(cut);
     for (size_t cut : cuts) {
@@ -445,7 +294,7 @@ TEST(McapReaderTest, CdrSequenceLongerThanTheMessageNamesTopicAndRecord) {
 TEST(McapReaderTest, ScribbledBytesNeverCrash) {
   for (const std::string name : {"small_robot_zstd.mcap", "small_robot_nosummary.mcap"}) {
     const std::string original = Fixture(name);
-    const std::string path = testing::TempDir() + "mcap_reader_test_scribbled.mcap";
+    const std::string path = ::testing::TempDir() + "mcap_reader_test_scribbled.mcap";
     for (size_t at = 8; at < original.size();
          at += (at < 90 || at + 250 > original.size()) ? 3 : 401) {
       std::string bytes = original;
