@@ -60,12 +60,31 @@ std::string Join(const std::set<std::string>& names) {
   return out.empty() ? "none" : out;
 }
 
-// The joint whose name holds `side` and "wheel" (case-insensitive), when exactly one does.
+// Whether a joint names a drive wheel on `side` ("left" or "right"): its name (case-insensitive)
+// holds "wheel" and the side, spelt out or as the word "l" or "r" (Fetch's l_wheel_joint), and
+// names no caster (whose joints also say "wheel" on some robots).
+bool SideWheel(const std::string& name, const std::string& side) {
+  const std::string l = Lower(name);
+  if (l.find("wheel") == std::string::npos || l.find("caster") != std::string::npos ||
+      l.find("castor") != std::string::npos) {
+    return false;
+  }
+  if (l.find(side) != std::string::npos) return true;
+  for (size_t begin = 0; begin < l.size();) {
+    size_t end = begin;
+    while (end < l.size() && std::isalnum(static_cast<unsigned char>(l[end]))) ++end;
+    if (end - begin == 1 && l[begin] == side[0]) return true;
+    begin = end + 1;
+  }
+  return false;
+}
+
+// The joint SideWheel finds on `side`, when exactly one is (a skid-steer robot's two wheels a
+// side are for the user to choose).
 std::string WheelJoint(const std::set<std::string>& names, const std::string& side) {
   std::string found;
   for (const std::string& n : names) {
-    const std::string l = Lower(n);
-    if (l.find(side) == std::string::npos || l.find("wheel") == std::string::npos) continue;
+    if (!SideWheel(n, side)) continue;
     if (!found.empty()) return "";
     found = n;
   }

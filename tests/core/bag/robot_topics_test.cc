@@ -1,6 +1,10 @@
 #include <calib/core/bag/robot_topics.h>
 #include <gtest/gtest.h>
 
+#include <string>
+#include <tuple>
+#include <vector>
+
 namespace calib {
 namespace {
 
@@ -32,6 +36,29 @@ TEST(RobotTopics, UniqueTopicsAndWheelJointsArePicked) {
   EXPECT_EQ(p->left_joint, "wheel_left_joint");
   EXPECT_EQ(p->right_joint, "wheel_right_joint");
   EXPECT_TRUE(p->odom_topic.empty());
+}
+
+// Real robots' names: TurtleBot3's, Fetch's one-letter sides, a diff-drive with caster joints that
+// also say "wheel"; a skid-steer robot's two wheels a side are not guessed.
+TEST(RobotTopics, WheelJointsOfRealRobotsArePicked) {
+  const std::vector<std::tuple<std::vector<std::string>, std::string, std::string>> cases = {
+      {{"wheel_left_joint", "wheel_right_joint"}, "wheel_left_joint", "wheel_right_joint"},
+      {{"l_wheel_joint", "r_wheel_joint", "torso_lift_joint"}, "l_wheel_joint", "r_wheel_joint"},
+      {{"LeftWheel", "RightWheel"}, "LeftWheel", "RightWheel"},
+      {{"left_wheel_joint", "right_wheel_joint", "caster_left_wheel_joint",
+        "castor_right_wheel_joint"},
+       "left_wheel_joint",
+       "right_wheel_joint"},
+      {{"front_left_wheel", "rear_left_wheel", "front_right_wheel", "rear_right_wheel"}, "", ""}};
+  for (const auto& [names, left, right] : cases) {
+    RobotMessages bag = Bag();
+    bag.joint_states["/joint_states"] = {Joints(names)};
+    const StatusOr<PickedTopics> p = PickRobotTopics(bag, {});
+    ASSERT_TRUE(p.ok()) << p.message();
+    EXPECT_EQ(p->left_joint, left) << names.front();
+    EXPECT_EQ(p->right_joint, right) << names.front();
+    EXPECT_EQ(p->odom_topic.empty(), !left.empty()) << names.front();  // Else Odometry's wheels.
+  }
 }
 
 TEST(RobotTopics, SeveralScanTopicsAreListedWithTheFlag) {
