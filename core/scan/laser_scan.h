@@ -41,6 +41,11 @@ struct LaserScan {
   }
 };
 
+// Beam times for the scans whose driver gave none (time_increment 0), from the lidar's rotation
+// period: a spinning lidar turns through each angle_increment in period·|angle_increment|/2π,
+// whatever its field of view. Returns how many scans were given them.
+int AssumeRotationPeriod(double rotation_period_s, std::vector<LaserScan>* scans);
+
 }  // namespace calib
 
 #endif  // CALIB_CORE_SCAN_LASER_SCAN_H_

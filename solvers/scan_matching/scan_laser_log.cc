@@ -1,4 +1,6 @@
 #include <calib/core/laser/laser_log_io.h>
+#include <calib/core/se2.h>
+#include <calib/core/text_format.h>
 #include <calib/core/text_number.h>
 #include <calib/core/timing/encoder_integration.h>
 #include <calib/solvers/scan_matching/scan_laser_log.h>
@@ -109,17 +111,23 @@ bool SameSample(const LaserScan& a, const LaserScan& b) {
          std::memcmp(a.ranges_m.data(), b.ranges_m.data(), a.ranges_m.size() * sizeof(float)) == 0;
 }
 
-// The longest sweep taken as one (max_sweep_periods of the median step between the stamps), and
-// a warning when some scans' sweeps are longer.
-double MaxSweep(const std::vector<const LaserScan*>& scans, const ScanLogOptions& options,
-                const std::string& scans_name, std::vector<std::string>* warnings) {
+// The scans' period: the median step between their stamps (0 for fewer than two).
+double ScanPeriod(const std::vector<const LaserScan*>& scans) {
   std::vector<double> steps;
   for (size_t i = 1; i < scans.size(); ++i) {
     steps.push_back(scans[i]->stamp_s - scans[i - 1]->stamp_s);
   }
   if (steps.empty()) return 0.0;
   std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
-  const double period_s = steps[steps.size() / 2];
+  return steps[steps.size() / 2];
+}
+
+// The longest sweep taken as one (max_sweep_periods of the scans' period), and a warning when
+// some scans' sweeps are longer.
+double MaxSweep(const std::vector<const LaserScan*>& scans, const ScanLogOptions& options,
+                const std::string& scans_name, std::vector<std::string>* warnings) {
+  if (scans.size() < 2) return 0.0;
+  const double period_s = ScanPeriod(scans);
   const double max_sweep_s = options.max_sweep_periods * period_s;
   int longer = 0;
   const LaserScan* first = nullptr;
@@ -138,6 +146,45 @@ double MaxSweep(const std::vector<const LaserScan*>& scans, const ScanLogOptions
         "instantaneous, not de-skewed");
   }
   return max_sweep_s;
+}
+
+// The q-quantile of `values` (0 when empty).
+double Quantile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * values.size()));
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  return values[k];
+}
+
+// Below these motions per scan period (95th percentile) an unknown sweep smears a scan by less
+// than the matcher's own noise.
+constexpr double kUnskewedTurnRad = 0.5 * M_PI / 180.0;
+constexpr double kUnskewedTravelM = 0.01;
+
+// A warning when no scan says when its beams were measured (time_increment 0 in every one) and
+// the robot moved enough between scans for a spinning lidar's sweep to matter: the scans are then
+// matched as instantaneous, which biases the calibration on fast turns and runs.
+void WarnInstantScans(const std::vector<const LaserScan*>& scans, const ScanOdometryResult& r,
+                      const std::string& scans_name, std::vector<std::string>* warnings) {
+  for (const LaserScan* scan : scans) {
+    if (scan->time_increment_s != 0.0) return;
+  }
+  std::vector<double> turns, travels;
+  for (int i = 0; i + 1 < r.size(); ++i) {
+    if (r.chain[i] < 0 || r.chain[i] != r.chain[i + 1]) continue;
+    const Pose2d step = Between(r.poses[i].world_T_sensor, r.poses[i + 1].world_T_sensor);
+    turns.push_back(std::abs(WrapAngle(step(2))));
+    travels.push_back(step.head<2>().norm());
+  }
+  const double turn = Quantile(turns, 0.95), travel = Quantile(travels, 0.95);
+  if (turn < kUnskewedTurnRad && travel < kUnskewedTravelM) return;
+  warnings->push_back(Format(
+      "%s: every scan's time_increment is 0, so each scan is matched as if all its beams were "
+      "measured at once; a spinning lidar sweeps over up to its period (%.0f ms here), in which "
+      "this robot turned up to %.1f° and moved up to %.0f mm (95th percentiles per scan), enough "
+      "to bias the calibration: if the lidar spins, give its rotation period with "
+      "--lidar_rotation_period (s, e.g. 0.1 for 10 Hz) or record its driver's time_increment",
+      scans_name.c_str(), 1e3 * ScanPeriod(scans), turn * 180.0 / M_PI, 1e3 * travel));
 }
 
 // Matches scans [begin, end), each seeded (and de-skewed) through the nominal wheels when known.
@@ -229,6 +276,7 @@ StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
   out.matching_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const ScanOdometryResult& r = out.matching;
+  WarnInstantScans(distinct, r, scans_name, &out.warnings);
   out.failed_matches = static_cast<int>(r.failed.size());
   std::set<int> segments, keyframes;
   std::vector<StampedPose> poses;

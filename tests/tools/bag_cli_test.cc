@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 
 #include "tests/tools/cli_runner.h"
@@ -158,6 +159,41 @@ TEST_F(BagCliTest, AScansCsvDirectoryCalibratesWithinThreeSigma) {
   text.erase(text.rfind(',', text.find('\n', third_line)));
   std::ofstream(log / "scans.csv") << text;
   ExpectFailure(log, "", {"scans.csv:3"});
+}
+
+// A driver that leaves time_increment 0 on a lidar that sweeps: calibrate warns (b was 4.9σ off on
+// this log, the verdict "check"), and --lidar_rotation_period gives the beams their times back.
+TEST_F(BagCliTest, ScansWithoutBeamTimesGetThemFromTheRotationPeriod) {
+  const fs::path log = dir_ / "scans_log";
+  const fs::path truth_path = dir_ / "truth.json";
+  const CliRun simulated = ::calib::testing::RunCalib(
+      "simulate --beams 180 --intervals 400 --seed 11 --sweep 0.1 --output " + log.string() +
+          " --truth " + truth_path.string(),
+      dir_);
+  ASSERT_EQ(simulated.exit_code, 0) << simulated.err;
+  std::istringstream in(ReadFile(log / "scans.csv"));
+  std::string line, text;
+  for (int row = 0; std::getline(in, line); ++row) {
+    if (row > 0) {  // t,angle_min,angle_increment,time_increment,...: the fourth field to 0.
+      size_t at = 0;
+      for (int comma = 0; comma < 3; ++comma) at = line.find(',', at) + 1;
+      line.replace(at, line.find(',', at) - at, "0");
+    }
+    text += line + "\n";
+  }
+  std::ofstream(log / "scans.csv") << text;
+  CliRun run = Calibrate(log);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+  EXPECT_NE(json["warnings"].dump().find("every scan's time_increment is 0"), std::string::npos)
+      << json["warnings"];
+  EXPECT_NE(json["verdict"], "trusted");
+  run = Calibrate(log, "--lidar_rotation_period 0.1");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+  ExpectWithinThreeSigma(json, nlohmann::json::parse(ReadFile(truth_path))["estimate"]);
+  EXPECT_EQ(json["verdict"], "trusted") << json["warnings"];
+  ExpectFailure(log, "--lidar_rotation_period -0.1", {"--lidar_rotation_period -0.1", "one turn"});
 }
 
 // `calib diagnose` on raw scans: the scans are matched and timed as calibrate does, then

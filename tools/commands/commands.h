@@ -30,6 +30,8 @@ struct CalibrateOptions {
   std::string scan_topic, joint_state_topic, odom_topic, left_wheel_joint, right_wheel_joint;
   std::string base_frame;
   double nominal_wheel_radius = 0.0, nominal_wheelbase = 0.0;
+  // The lidar's rotation period (s) for scans without beam times (time_increment 0); 0: none.
+  double lidar_rotation_period_s = 0.0;
   std::string wheel_angle_unit = "rad";  // rad, deg, or ticks:N.
   double ticks_per_rev = 0.0;  // > 0: wheel readings are encoder ticks, this many per turn.
   bool scan_points = false;    // Refine against the scan points after the two-stage route.

@@ -50,6 +50,11 @@ DEFINE_double(nominal_wheel_radius, 0.0,
               "odometry, the result gives corrections to it");
 DEFINE_double(nominal_wheelbase, 0.0,
               "calibrate, diagnose (bags): the wheelbase (m) the driver uses");
+DEFINE_double(lidar_rotation_period, 0.0,
+              "calibrate, diagnose (bags, scan directories): the time (s) the lidar takes to turn "
+              "once (0.1 for 10 Hz), for scans whose driver leaves time_increment 0: each beam is "
+              "then placed at its own time (period × angle_increment / 2π after the previous), so "
+              "that the sweeps are de-skewed; scans with a time_increment keep theirs");
 DEFINE_string(base_frame, "",
               "calibrate, diagnose (bags): the robot's base frame in tf (default base_link, else "
               "base_footprint)");
@@ -202,6 +207,7 @@ CalibrateOptions CalibrateOptionsFromFlags() {
   options.base_frame = FLAGS_base_frame;
   options.nominal_wheel_radius = FLAGS_nominal_wheel_radius;
   options.nominal_wheelbase = FLAGS_nominal_wheelbase;
+  options.lidar_rotation_period_s = FLAGS_lidar_rotation_period;
   options.scan_points = FLAGS_scan_points;
   options.wheel_angle_unit = FLAGS_wheel_angle_unit;
   options.ticks_per_rev = FLAGS_ticks_per_rev;

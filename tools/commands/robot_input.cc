@@ -1,10 +1,18 @@
 #include <calib/core/bag/robot_bag.h>
+#include <calib/core/scan/laser_scan.h>
 #include <calib/core/scan/scan_directory.h>
+#include <calib/core/text_number.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/laser_input.h>
 #include <calib/tools/commands/robot_input.h>
 
 namespace calib::cli {
+namespace {
+
+// No spinning lidar turns slower than this (the slowest turn at a few Hz).
+constexpr double kLongestRotationPeriodS = 10.0;
+
+}  // namespace
 
 bool IsRobotInput(const std::string& input) {
   return LooksLikeRobotBag(input) || IsScanDirectory(input);
@@ -29,8 +37,18 @@ StatusOr<RobotInput> ReadRobotInput(const CalibrateOptions& flags) {
   if (flags.scan_points) o.scan_points = ScanPointOptions();
   o.sensor_time_offset_s = flags.time_offset_s.value_or(0.0);
   CALIB_ASSIGN_OR_RETURN(o.wheel_radians_per_unit, WheelRadiansPerUnit(flags));
+  const double period_s = flags.lidar_rotation_period_s;
+  if (!(period_s >= 0.0 && period_s <= kLongestRotationPeriodS)) {
+    return Status::InvalidInput("--lidar_rotation_period " + Num(period_s) +
+                                ": the lidar's time for one turn in seconds (0.1 for 10 Hz), "
+                                "between 0 (unknown) and " +
+                                Num(kLongestRotationPeriodS));
+  }
   CALIB_ASSIGN_OR_RETURN(out.bag, IsScanDirectory(flags.input) ? ReadScanDirectory(flags.input)
                                                                : ReadRobotBag(flags.input));
+  if (period_s > 0.0) {
+    for (auto& [topic, scans] : out.bag.scans) AssumeRotationPeriod(period_s, &scans);
+  }
   return out;
 }
 

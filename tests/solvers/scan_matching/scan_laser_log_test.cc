@@ -1,3 +1,4 @@
+#include <calib/core/scan/laser_scan.h>
 #include <calib/core/scan/scan_simulator.h>
 #include <calib/solvers/scan_matching/robot_bag_log.h>
 #include <calib/solvers/scan_matching/scan_laser_log.h>
@@ -243,6 +244,47 @@ TEST(ScanLaserLog, ASweepLongerThanThePeriodIsTakenAsInstantaneous) {
   EXPECT_NE(warning.find("(beams − 1) = 99."), std::string::npos) << warning;
   EXPECT_NE(warning.find(" s, longer than the scans' period 0.1 s"), std::string::npos) << warning;
   EXPECT_EQ(log->failed_matches, 0);
+}
+
+// A driver that leaves time_increment 0 on a lidar that sweeps for its whole period: its scans are
+// matched as instantaneous, with a warning that gives the motion per scan and the flag; the
+// rotation period gives every beam its time back, the sweeps are de-skewed and the warning goes.
+TEST(ScanLaserLog, ScansWithoutBeamTimesAreNamedAndGivenThemByTheRotationPeriod) {
+  ScanSimOptions o = Robot(600, 5);
+  o.sweep_s = 0.1;
+  const StatusOr<ScanSimulation> sim = SimulateScans(o);
+  ASSERT_TRUE(sim.ok()) << sim.message();
+  RobotMessages bag = ScanSimulationMessages(*sim);
+  bag.source = "no_beam_times.bag";
+  ASSERT_EQ(1u, bag.scans.size());
+  std::vector<LaserScan>& scans = bag.scans.begin()->second;
+  const double beam_time_s = scans.front().time_increment_s;
+  ASSERT_GT(beam_time_s, 0.0);
+  for (LaserScan& scan : scans) scan.time_increment_s = 0.0;
+  const auto warned = [](const RobotBagCalibration& r) {
+    for (const std::string& w : r.log.warnings) {
+      if (w.find("every scan's time_increment is 0") != std::string::npos) return w;
+    }
+    return std::string();
+  };
+  StatusOr<RobotBagCalibration> r = CalibrateRobotMessages(bag, RobotBagOptions(), kTiming);
+  ASSERT_TRUE(r.ok()) << r.message();
+  const std::string warning = warned(*r);
+  EXPECT_NE(warning.find("no_beam_times.bag /scan: "), std::string::npos) << warning;
+  EXPECT_NE(warning.find("its period (100 ms here)"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("--lidar_rotation_period"), std::string::npos) << warning;
+  EXPECT_EQ(r->log.matching_passes, 1);
+  std::printf("matched as instantaneous (b was −15σ off): ");
+  WorstZ(r->result.calibration, sim->truth);
+
+  EXPECT_EQ(600, AssumeRotationPeriod(0.1, &scans));
+  for (const LaserScan& scan : scans) ASSERT_DOUBLE_EQ(beam_time_s, scan.time_increment_s);
+  EXPECT_EQ(0, AssumeRotationPeriod(0.2, &scans));  // Beam times already given are kept.
+  r = CalibrateRobotMessages(bag, RobotBagOptions(), kTiming);
+  ASSERT_TRUE(r.ok()) << r.message();
+  EXPECT_EQ(warned(*r), "");
+  EXPECT_GE(r->log.matching_passes, 2);
+  EXPECT_LE(WorstZ(r->result.calibration, sim->truth), 3.0);
 }
 
 // A lidar mounted upside down: seen from the base its scans turn clockwise, and tf says so (the
