@@ -1,6 +1,7 @@
 #include <calib/core/bag/wheel_angles.h>
 #include <calib/core/laser/wheel_readings.h>
 #include <calib/core/se2.h>
+#include <calib/core/text_number.h>
 
 #include <algorithm>
 #include <cmath>
@@ -57,6 +58,7 @@ StatusOr<WheelAngleStream> WheelAnglesFromJointStates(const std::vector<JointSta
                                 "radians");
   }
   WheelAngleStream out;
+  std::vector<std::pair<double, double>> speeds_rad_s;  // With from_velocities: per sample.
   for (const JointState& m : messages) {
     const int left = IndexOf(m.name, left_joint), right = IndexOf(m.name, right_joint);
     if (left < 0 && right < 0) {
@@ -68,16 +70,44 @@ StatusOr<WheelAngleStream> WheelAnglesFromJointStates(const std::vector<JointSta
       continue;
     }
     const std::string record = where + ": record " + std::to_string(m.record);
-    if (m.position.size() != m.name.size()) {
+    const bool speeds = m.position.empty() && m.velocity.size() == m.name.size();
+    if (m.position.size() != m.name.size() && !speeds) {
       return Status::InvalidInput(record + ": JointState has " + std::to_string(m.name.size()) +
                                   " names but " + std::to_string(m.position.size()) +
-                                  " positions: the wheel angles need positions");
+                                  " positions (and " + std::to_string(m.velocity.size()) +
+                                  " velocities): the wheel angles need positions, or velocities");
     }
-    const double l = m.position[left] * radians_per_unit, r = m.position[right] * radians_per_unit;
+    if (!out.samples.empty() && speeds != out.from_velocities) {
+      return Status::InvalidInput(
+          record + ": JointState carries " + (speeds ? "velocities only" : "positions") +
+          " where the messages before it carried " + (speeds ? "positions" : "velocities only") +
+          ": the wheel angles come from one or the other");
+    }
+    out.from_velocities = speeds;
+    const std::vector<double>& values = speeds ? m.velocity : m.position;
+    double l = values[left] * radians_per_unit, r = values[right] * radians_per_unit;
     if (!std::isfinite(l) || !std::isfinite(r)) {
-      return Status::InvalidInput(record + ": wheel joint position is not finite");
+      return Status::InvalidInput(record + ": wheel joint " + (speeds ? "velocity" : "position") +
+                                  " is not finite");
     }
     const double t = MessageTime(m.stamp_s, m.log_time_s);
+    if (speeds) {  // Angles by trapezoids; speeds[k] keeps each sample's velocities.
+      out.samples.push_back(EncoderSample{t, 0.0, 0.0, static_cast<int>(m.record)});
+      speeds_rad_s.emplace_back(l, r);
+      if (out.samples.size() > 1) {
+        const EncoderSample& before = out.samples[out.samples.size() - 2];
+        const double dt = t - before.t_s;
+        if (!(dt >= 0.0)) {
+          return Status::InvalidInput(record + ": its stamp is " + Num(-dt) +
+                                      " s before the previous message's: velocities cannot be "
+                                      "integrated backwards");
+        }
+        const auto& v0 = speeds_rad_s[speeds_rad_s.size() - 2];
+        out.samples.back().left_rad = before.left_rad + 0.5 * dt * (v0.first + l);
+        out.samples.back().right_rad = before.right_rad + 0.5 * dt * (v0.second + r);
+      }
+      continue;
+    }
     out.samples.push_back(EncoderSample{t, l, r, static_cast<int>(m.record)});
   }
   if (out.samples.size() < 2) {
@@ -86,6 +116,7 @@ StatusOr<WheelAngleStream> WheelAnglesFromJointStates(const std::vector<JointSta
                                 right_joint + "' (" + std::to_string(out.half_messages) +
                                 " carry one of them): at least two are needed");
   }
+  if (out.from_velocities) return out;  // Integrated angles are never wrapped.
   out.unwrapped_turns = Unwrap(&out.samples, &EncoderSample::left_rad) +
                         Unwrap(&out.samples, &EncoderSample::right_rad);
   return out;

@@ -18,12 +18,16 @@ struct WheelAngleStream {
   int unwrapped_turns = 0;   // Whole turns added where a wrapped joint angle jumped by ~2π.
   int skipped_messages = 0;  // Messages that carry neither wheel (other joints' states).
   int half_messages = 0;     // Messages that carry one wheel only: not used.
+  // The messages carry no positions: the angles are their velocities integrated (trapezoids).
+  bool from_velocities = false;
 };
 
 // From the positions of two joints of a sensor_msgs/JointState topic, in radians after
 // multiplying by radians_per_unit (π/180 for degrees, 2π/N for raw counts of N per turn). A joint
 // reported wrapped into (−π, π] or [0, 2π) (every position within it, and steps of more than half
-// a turn) is unwrapped.
+// a turn) is unwrapped. Messages without positions but with a velocity per name (drivers that
+// publish only speeds) give the angles by integrating the velocities over the stamps; a stream
+// that mixes the two is refused.
 StatusOr<WheelAngleStream> WheelAnglesFromJointStates(const std::vector<JointState>& messages,
                                                       const std::string& left_joint,
                                                       const std::string& right_joint,

@@ -45,7 +45,14 @@ Status WheelAngles(const RobotMessages& bag, const RobotBagOptions& options, Rob
         *wheels, WheelAnglesFromJointStates(bag.joint_states.at(t.joint_state_topic), t.left_joint,
                                             t.right_joint, bag.source + " " + t.joint_state_topic,
                                             options.wheel_radians_per_unit));
-    out->wheel_source = t.joint_state_topic + " (" + t.left_joint + ", " + t.right_joint + ")";
+    out->wheel_source = t.joint_state_topic + " (" + t.left_joint + ", " + t.right_joint +
+                        (wheels->from_velocities ? ": velocities integrated" : "") + ")";
+    if (wheels->from_velocities) {
+      out->warnings.push_back(
+          "the JointState messages carry the wheels' velocities but no positions: the wheel "
+          "angles are the velocities integrated over the stamps, whose errors (and the stamps' "
+          "jitter) add up along the log; record the joint positions if the driver has them");
+    }
     if (wheels->unwrapped_turns > 0) {
       out->warnings.push_back("the wheel joints are reported wrapped into (−π, π]: " +
                               std::to_string(wheels->unwrapped_turns) +

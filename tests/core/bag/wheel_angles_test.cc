@@ -55,6 +55,40 @@ TEST(WheelAngles, JointStateErrorsNameTheRecord) {
   EXPECT_NE(s.message().find("carry one of them"), std::string::npos) << s.message();
 }
 
+// A driver that publishes only the wheels' speeds: the angles are their trapezoid integrals (exact
+// for speeds linear in time); positions after speeds are refused, naming the record.
+TEST(WheelAngles, JointStateVelocitiesAreIntegratedWhenThereAreNoPositions) {
+  std::vector<JointState> messages;
+  for (int k = 0; k < 50; ++k) {
+    JointState j;
+    j.stamp_s = 0.02 * k + (k % 3 == 0 ? 0.004 : 0.0);  // Jittered stamps.
+    j.record = k;
+    j.name = {"left_wheel", "right_wheel"};
+    j.velocity = {2.0 + 3.0 * j.stamp_s, -1.0};
+    messages.push_back(j);
+  }
+  const StatusOr<WheelAngleStream> s =
+      WheelAnglesFromJointStates(messages, "left_wheel", "right_wheel", "run.db3 /joint_states");
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_TRUE(s->from_velocities);
+  ASSERT_EQ(s->samples.size(), 50u);
+  const double t0 = messages[0].stamp_s;
+  for (const EncoderSample& e : s->samples) {
+    const double dt = e.t_s - t0;
+    EXPECT_NEAR(e.left_rad, 2.0 * dt + 1.5 * (e.t_s * e.t_s - t0 * t0), 1e-12);
+    EXPECT_NEAR(e.right_rad, -dt, 1e-12);
+  }
+  messages[20].position = {1.0, 2.0};
+  messages[20].velocity.clear();
+  const StatusOr<WheelAngleStream> mixed =
+      WheelAnglesFromJointStates(messages, "left_wheel", "right_wheel", "run.db3 /joint_states");
+  ASSERT_FALSE(mixed.ok());
+  EXPECT_NE(mixed.message().find("record 20: JointState carries positions where the messages "
+                                 "before it carried velocities only"),
+            std::string::npos)
+      << mixed.message();
+}
+
 // A driver's odometry integrated with radius r and wheelbase b: the angles come back exactly.
 TEST(WheelAngles, OdometryPosesGiveTheNominalWheelAngles) {
   const double r = 0.033, b = 0.16;

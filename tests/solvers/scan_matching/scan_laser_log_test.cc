@@ -104,6 +104,36 @@ TEST(ScanLaserLog, RobotMessagesToCalibration) {
   EXPECT_TRUE(odom->wheels_from_odometry);
 }
 
+// A driver that publishes the wheels' speeds but no positions (here the simulated joints'
+// central differences): the angles are the speeds integrated, with a warning, and the
+// calibration is within 3σ.
+TEST(ScanLaserLog, WheelSpeedsWithoutPositionsAreIntegrated) {
+  const StatusOr<ScanSimulation> sim = SimulateScans(Robot(400, 5));
+  ASSERT_TRUE(sim.ok()) << sim.message();
+  RobotMessages bag = ScanSimulationMessages(*sim);
+  bag.source = "speeds.db3";
+  std::vector<JointState>& joints = bag.joint_states.at("/joint_states");
+  std::vector<JointState> speeds = joints;
+  for (size_t k = 0; k < joints.size(); ++k) {
+    const JointState& a = joints[k == 0 ? 0 : k - 1];
+    const JointState& b = joints[std::min(k + 1, joints.size() - 1)];
+    speeds[k].velocity.resize(a.position.size());
+    for (size_t j = 0; j < a.position.size(); ++j) {
+      speeds[k].velocity[j] = (b.position[j] - a.position[j]) / (b.stamp_s - a.stamp_s);
+    }
+    speeds[k].position.clear();
+  }
+  joints = speeds;
+  const StatusOr<RobotBagLog> log = LaserLogFromRobotMessages(bag);
+  ASSERT_TRUE(log.ok()) << log.message();
+  EXPECT_NE(log->wheel_source.find("velocities integrated"), std::string::npos);
+  ASSERT_FALSE(log->warnings.empty());
+  EXPECT_NE(log->warnings.front().find("no positions"), std::string::npos);
+  const StatusOr<LaserTimingResult> r = CalibrateLaserStreams(log->scans.log.streams, kTiming);
+  ASSERT_TRUE(r.ok()) << r.message();
+  EXPECT_LE(WorstZ(r->calibration, sim->truth), 3.0);
+}
+
 // Wheel joints reported in degrees, or as raw encoder counts (4096 per turn, whole counts): with
 // their unit given the calibration is within 3σ; without it the radius is absurd and a warning
 // names the likely unit. A JointState stream with a 2 s hole still calibrates.
