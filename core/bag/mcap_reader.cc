@@ -49,7 +49,7 @@ class BagReader {
   const uint8_t* data_;
   uint64_t size_;
   const BagReadOptions& options_;
-  std::map<uint16_t, std::string> schema_types_;
+  std::map<uint16_t, mcap::SchemaRecord> schemas_;  // Names normalised.
   std::map<uint16_t, Channel> channels_;
   int64_t next_record_ = 0;
   bool count_messages_ = true;  // False when the summary's statistics gave the counts.
@@ -60,10 +60,12 @@ class BagReader {
 Status BagReader::OnChannel(const RecordView& record) {
   ChannelRecord c;
   CALIB_RETURN_IF_ERROR(mcap::ParseChannel(record, &c));
-  const auto schema = schema_types_.find(c.schema_id);
+  const auto schema = schemas_.find(c.schema_id);
   const int64_t count = channels_[c.id].message_count;
-  channels_[c.id] = ros2::MakeChannel(c.topic, schema == schema_types_.end() ? "" : schema->second,
-                                      c.message_encoding, options_);
+  channels_[c.id] = schema == schemas_.end()
+                        ? ros2::MakeChannel(c.topic, "", c.message_encoding, options_)
+                        : ros2::MakeChannel(c.topic, schema->second.name, c.message_encoding,
+                                            options_, schema->second.data);
   channels_[c.id].message_count = count;  // A channel repeated in the summary keeps its count.
   return Status::Ok();
 }
@@ -73,7 +75,8 @@ Status BagReader::OnRecord(const RecordView& record, const std::string& where) {
     case mcap::kSchema: {
       mcap::SchemaRecord schema;
       CALIB_RETURN_IF_ERROR(mcap::ParseSchema(record, &schema).Prefixed(where));
-      if (schema.id != 0) schema_types_[schema.id] = ros2::NormalisedType(schema.name);
+      schema.name = ros2::NormalisedType(schema.name);
+      if (schema.id != 0) schemas_[schema.id] = std::move(schema);
       return Status::Ok();
     }
     case mcap::kChannel:

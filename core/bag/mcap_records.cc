@@ -196,7 +196,10 @@ Status ParseSchema(const RecordView& record, SchemaRecord* schema) {
   schema->id = f.Int<uint16_t>("id");
   schema->name = f.String("name");
   schema->encoding = f.String("encoding");
-  f.Skip(f.Int<uint32_t>("data"), "data");
+  const uint32_t size = f.Int<uint32_t>("data");
+  const uint8_t* data = f.here();
+  f.Skip(size, "data");
+  if (f.status().ok()) schema->data.assign(reinterpret_cast<const char*>(data), size);
   return f.status();
 }
 

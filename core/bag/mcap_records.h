@@ -49,6 +49,7 @@ Status ReadRecordAt(const uint8_t* data, uint64_t size, uint64_t offset, RecordV
 struct SchemaRecord {
   uint16_t id = 0;
   std::string name, encoding;
+  std::string data;  // The definition (for ros2msg and ros1msg, the .msg text).
 };
 
 struct ChannelRecord {

@@ -53,6 +53,21 @@ struct TopicInfo {
   int64_t message_count = 0;
 };
 
+// A topic of a type the readers do not decode themselves, kept as bytes (a robot's own encoder
+// message, decoded through its definition: message_definition.h).
+struct RawMessage {
+  double log_time_s = 0.0;
+  int64_t record = 0;
+  std::vector<uint8_t> data;
+};
+
+struct RawTopic {
+  std::string type;        // Normalised "package/Type".
+  std::string definition;  // As the bag stores it (with dependencies); empty when it stores none.
+  bool cdr = true;         // ROS 2 CDR; else ROS 1 serialization.
+  std::vector<RawMessage> messages;  // In log-time order.
+};
+
 struct RobotMessages {
   std::string source;             // The file read.
   std::vector<TopicInfo> topics;  // Every topic in the bag, whatever its type.
@@ -61,11 +76,15 @@ struct RobotMessages {
   std::map<std::string, std::vector<JointState>> joint_states;
   std::map<std::string, std::vector<Odometry>> odometry;
   std::vector<TransformStamped> tf, tf_static;  // From /tf and /tf_static (tf2_msgs/TFMessage).
+  // Topics kept raw: every topic of a known encoder type (encoder_messages.h) and those asked for.
+  std::map<std::string, RawTopic> raw;
 };
 
 struct BagReadOptions {
   // Topics to decode; empty: every topic of a type above.
   std::set<std::string> topics;
+  // Topics to keep raw whatever their type (in `topics` too when that is not empty).
+  std::set<std::string> raw_topics;
 };
 
 // A ROS 2 bag: an .mcap file, or a bag directory holding one (metadata.yaml beside it).

@@ -1,3 +1,4 @@
+#include <calib/core/bag/encoder_messages.h>
 #include <calib/core/bag/robot_topics.h>
 
 #include <algorithm>
@@ -138,6 +139,56 @@ Status PickJoints(const RobotMessages& bag, const TopicChoice& choice, PickedTop
   return Status::Ok();  // None found: the caller falls back to Odometry.
 }
 
+// "/sensor_state (turtlebot3_msgs/SensorState, 2000 messages), ..." for the raw topics.
+std::string RawCandidates(const RobotMessages& bag) {
+  std::string out;
+  for (const auto& [topic, raw] : bag.raw) {
+    out += (out.empty() ? "" : ", ") + topic + " (" + raw.type + ", " +
+           std::to_string(raw.messages.size()) + " messages)";
+  }
+  return out.empty() ? "none" : out;
+}
+
+// The encoder topic: the one named (then it must be there, and its fields known or named), or
+// the only raw topic of a known encoder type (none found: *out unchanged).
+Status PickEncoderTopic(const RobotMessages& bag, const TopicChoice& choice, PickedTopics* out) {
+  std::string topic = choice.encoder_topic;
+  if (topic.empty()) {
+    for (const auto& [name, raw] : bag.raw) {
+      if (FindEncoderMessageType(raw.type) == nullptr || raw.messages.empty()) continue;
+      if (!topic.empty()) {
+        return Status::InvalidInput(bag.source +
+                                    ": no JointState names the wheels, and several topics carry "
+                                    "encoder counts: " +
+                                    RawCandidates(bag) + "; choose one with --encoder_topic");
+      }
+      topic = name;
+    }
+    if (topic.empty()) return Status::Ok();
+  }
+  const auto raw = bag.raw.find(topic);
+  if (raw == bag.raw.end()) {
+    return Status::InvalidInput(
+        bag.source + ": no topic '" + topic +
+        "' to read encoder counts from; all topics: " + Candidates(bag, ""));
+  }
+  const EncoderMessageType* known = FindEncoderMessageType(raw->second.type);
+  out->encoder_topic = topic;
+  out->left_encoder_field = !choice.left_encoder_field.empty() ? choice.left_encoder_field
+                            : known != nullptr                 ? known->left_field
+                                                               : "";
+  out->right_encoder_field = !choice.right_encoder_field.empty() ? choice.right_encoder_field
+                             : known != nullptr                  ? known->right_field
+                                                                 : "";
+  if (out->left_encoder_field.empty() || out->right_encoder_field.empty()) {
+    return Status::InvalidInput(bag.source + ": topic '" + topic + "' is of type " +
+                                raw->second.type +
+                                ", whose encoder fields calib does not know: name them with "
+                                "--left_encoder_field and --right_encoder_field");
+  }
+  return Status::Ok();
+}
+
 StatusOr<std::string> PickOdomTopic(const RobotMessages& bag, const std::string& wanted,
                                     const std::string& joints_seen) {
   const std::string kType = "nav_msgs/Odometry";
@@ -169,8 +220,16 @@ StatusOr<std::string> PickOdomTopic(const RobotMessages& bag, const std::string&
 StatusOr<PickedTopics> PickRobotTopics(const RobotMessages& bag, const TopicChoice& choice) {
   PickedTopics out;
   CALIB_ASSIGN_OR_RETURN(out.scan_topic, PickScanTopic(bag, choice.scan_topic));
+  if (!choice.encoder_topic.empty()) {
+    CALIB_RETURN_IF_ERROR(PickEncoderTopic(bag, choice, &out));
+    return out;
+  }
   if (choice.odom_topic.empty()) CALIB_RETURN_IF_ERROR(PickJoints(bag, choice, &out));
   if (!out.joint_state_topic.empty()) return out;
+  if (choice.odom_topic.empty() && choice.joint_state_topic.empty()) {
+    CALIB_RETURN_IF_ERROR(PickEncoderTopic(bag, choice, &out));
+    if (!out.encoder_topic.empty()) return out;
+  }
   std::string joints_seen;
   for (const auto& [topic, messages] : bag.joint_states) {
     joints_seen += (joints_seen.empty() ? "" : "; ") + topic + ": " + Join(JointNames(messages));

@@ -1,4 +1,5 @@
 #include <calib/core/bag/cdr_decoder.h>
+#include <calib/core/bag/encoder_messages.h>
 #include <calib/core/bag/ros2_collector.h>
 
 #include <algorithm>
@@ -48,6 +49,9 @@ int64_t LastRecord(const RobotMessages& m) {
   scan(m.scans);
   scan(m.joint_states);
   scan(m.odometry);
+  for (const auto& [topic, raw] : m.raw) {
+    for (const RawMessage& message : raw.messages) last = std::max(last, message.record);
+  }
   for (const auto* list : {&m.tf, &m.tf_static}) {
     for (const TransformStamped& t : *list) last = std::max<int64_t>(last, t.record);
   }
@@ -72,11 +76,18 @@ Kind KindOf(const std::string& topic, const std::string& type, const std::string
 }
 
 Channel MakeChannel(const std::string& topic, const std::string& type, const std::string& encoding,
-                    const BagReadOptions& options) {
+                    const BagReadOptions& options, const std::string& definition) {
   Channel channel;
   channel.topic = topic;
   channel.type = NormalisedType(type);
   channel.kind = KindOf(topic, channel.type, encoding);
+  const bool raw =
+      FindEncoderMessageType(channel.type) != nullptr || options.raw_topics.count(topic) > 0;
+  if (channel.kind == Kind::kNone && raw && (encoding == "cdr" || encoding == "ros1")) {
+    channel.kind = Kind::kRaw;
+    channel.cdr = encoding == "cdr";
+    channel.definition = definition;
+  }
   channel.wanted =
       channel.kind != Kind::kNone && (options.topics.empty() || options.topics.count(topic) > 0);
   return channel;
@@ -122,6 +133,13 @@ Status MessageCollector::Decode(const Channel& channel, uint64_t ns, const uint8
       }
       return Status::Ok();
     }
+    case Kind::kRaw: {
+      auto& [topic, logged] = raw_[channel.topic];
+      if (logged.empty()) topic = RawTopic{channel.type, channel.definition, channel.cdr, {}};
+      logged.emplace_back(ns,
+                          RawMessage{log_time_s, record, std::vector<uint8_t>(data, data + size)});
+      return Status::Ok();
+    }
     case Kind::kNone:
       break;
   }
@@ -134,6 +152,10 @@ void MessageCollector::Finish(RobotMessages* out) {
   for (auto& [topic, logged] : odometry_) out->odometry[topic] = InLogTimeOrder(&logged);
   out->tf = InLogTimeOrder(&tf_);
   out->tf_static = InLogTimeOrder(&tf_static_);
+  for (auto& [name, raw] : raw_) {
+    RawTopic& topic = out->raw[name] = std::move(raw.first);
+    topic.messages = InLogTimeOrder(&raw.second);
+  }
 }
 
 StatusOr<std::vector<std::string>> BagDirectoryFiles(const std::string& directory,
@@ -181,6 +203,15 @@ int64_t AppendBagPart(RobotMessages&& part, int64_t record_base, RobotMessages* 
   AppendTopics(std::move(part.scans), record_base, &all->scans);
   AppendTopics(std::move(part.joint_states), record_base, &all->joint_states);
   AppendTopics(std::move(part.odometry), record_base, &all->odometry);
+  for (auto& [name, raw] : part.raw) {
+    const bool first = all->raw.count(name) == 0;
+    RawTopic& to = all->raw[name];
+    if (first) to = RawTopic{raw.type, raw.definition, raw.cdr, {}};
+    std::map<std::string, std::vector<RawMessage>> appended = {{name, std::move(to.messages)}};
+    AppendTopics(std::map<std::string, std::vector<RawMessage>>{{name, std::move(raw.messages)}},
+                 record_base, &appended);
+    to.messages = std::move(appended[name]);
+  }
   for (auto* list : {&part.tf, &part.tf_static}) {
     for (TransformStamped& t : *list) t.record += record_base;
   }

@@ -18,7 +18,8 @@ namespace calib::ros2 {
 // "sensor_msgs/msg/LaserScan" → "sensor_msgs/LaserScan".
 std::string NormalisedType(const std::string& name);
 
-enum class Kind { kNone, kScan, kJoints, kOdometry, kTf, kTfStatic };
+// kRaw: kept as bytes (RobotMessages::raw).
+enum class Kind { kNone, kScan, kJoints, kOdometry, kTf, kTfStatic, kRaw };
 
 // The kind of a topic of (normalised) `type` whose messages are in `encoding`; kNone for what a
 // calibration does not read.
@@ -26,15 +27,18 @@ Kind KindOf(const std::string& topic, const std::string& type, const std::string
 
 struct Channel {
   std::string topic, type;
+  std::string definition;  // For kRaw: the message definition the bag stores, if any.
+  bool cdr = true;         // For kRaw: CDR (else ROS 1 serialization, in a ROS 1 MCAP).
   Kind kind = Kind::kNone;
   bool wanted = false;
   int64_t message_count = 0;
 };
 
 // A channel of `topic` and `type` (ROS 2 or normalised), wanted when its kind is read and the
-// options name it or name no topic.
+// options name it or name no topic. A topic of another type is kept raw (kRaw, with
+// `definition`) when it is of a known encoder type or the options ask for it.
 Channel MakeChannel(const std::string& topic, const std::string& type, const std::string& encoding,
-                    const BagReadOptions& options);
+                    const BagReadOptions& options, const std::string& definition = "");
 
 // Decodes messages as they come and hands them out sorted by (log time, record).
 class MessageCollector {
@@ -53,6 +57,7 @@ class MessageCollector {
   std::map<std::string, Logged<JointState>> joints_;
   std::map<std::string, Logged<Odometry>> odometry_;
   Logged<TransformStamped> tf_, tf_static_;
+  std::map<std::string, std::pair<RawTopic, Logged<RawMessage>>> raw_;
 };
 
 // A bag directory's files whose names end in `suffix` (several when rosbag2 split the

@@ -1,3 +1,4 @@
+#include <calib/core/bag/encoder_messages.h>
 #include <calib/core/bag/robot_messages.h>
 #include <calib/core/bag/ros1_decoder.h>
 #include <calib/core/bag/rosbag1_records.h>
@@ -16,10 +17,12 @@ namespace {
 
 using rosbag1::Record;
 
-enum class Kind { kSkip, kScan, kJointState, kOdometry, kTf, kTfStatic };
+// kRaw: kept as bytes (RobotMessages::raw).
+enum class Kind { kSkip, kScan, kJointState, kOdometry, kTf, kTfStatic, kRaw };
 
 struct Connection {
   std::string topic, type;
+  std::string definition;  // For kRaw: the connection's message_definition.
   Kind kind = Kind::kSkip;
   int64_t count = 0;
 };
@@ -322,6 +325,15 @@ class Ros1BagReader {
           c.kind = Kind::kTfStatic;
         }
       }
+      if (c.kind == Kind::kSkip &&
+          (FindEncoderMessageType(c.type) != nullptr || options_.raw_topics.count(c.topic) > 0)) {
+        c.kind = Kind::kRaw;
+        std::string_view definition;
+        if (fields->Bytes("message_definition").ok()) {
+          CALIB_RETURN_IF_ERROR(Load(fields->Bytes("message_definition"), &definition));
+        }
+        c.definition = std::string(definition);
+      }
     }
     connections_.emplace(id, std::move(c));
     return Status::Ok();
@@ -389,6 +401,13 @@ class Ros1BagReader {
         for (size_t i = first; i < tf->size(); ++i) Stamp(&(*tf)[i], log_time_s, index);
         return Status::Ok();
       }
+      case Kind::kRaw: {
+        RawTopic& raw = out_.raw[c.topic];
+        if (raw.messages.empty()) raw = RawTopic{c.type, c.definition, false, {}};
+        raw.messages.push_back(
+            RawMessage{log_time_s, index, std::vector<uint8_t>(bytes.begin(), bytes.end())});
+        return Status::Ok();
+      }
     }
     return Status::Internal("unhandled message kind");
   }
@@ -404,6 +423,7 @@ class Ros1BagReader {
     for (auto& [topic, v] : out_.scans) SortByLogTime(&v);
     for (auto& [topic, v] : out_.joint_states) SortByLogTime(&v);
     for (auto& [topic, v] : out_.odometry) SortByLogTime(&v);
+    for (auto& [topic, raw] : out_.raw) SortByLogTime(&raw.messages);
     SortByLogTime(&out_.tf);
     SortByLogTime(&out_.tf_static);
   }

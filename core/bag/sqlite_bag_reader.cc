@@ -170,9 +170,28 @@ std::string Text(sqlite3_stmt* statement, int column) {
   return text == nullptr ? std::string() : reinterpret_cast<const char*>(text);
 }
 
+// The message definitions the bag stores by type (rosbag2 from Jazzy on; none before).
+std::map<std::string, std::string> ReadDefinitions(const Database& database) {
+  std::map<std::string, std::string> definitions;
+  sqlite3_stmt* raw = nullptr;
+  if (sqlite3_prepare_v2(database.db.get(),
+                         "SELECT topic_type, encoded_message_definition FROM message_definitions "
+                         "WHERE encoding = 'ros2msg'",
+                         -1, &raw, nullptr) != SQLITE_OK) {
+    sqlite3_finalize(raw);
+    return definitions;  // No such table.
+  }
+  const StatementPtr statement(raw, sqlite3_finalize);
+  while (sqlite3_step(raw) == SQLITE_ROW) {
+    definitions[ros2::NormalisedType(Text(raw, 0))] = Text(raw, 1);
+  }
+  return definitions;
+}
+
 // The topics by id, each with its message count.
 StatusOr<std::map<int64_t, ros2::Channel>> ReadTopics(const Database& database,
                                                       const BagReadOptions& options) {
+  const std::map<std::string, std::string> definitions = ReadDefinitions(database);
   std::map<int64_t, ros2::Channel> channels;
   CALIB_ASSIGN_OR_RETURN(
       StatementPtr topics,
@@ -180,8 +199,11 @@ StatusOr<std::map<int64_t, ros2::Channel>> ReadTopics(const Database& database,
                        "reading the topics table"));
   int step = SQLITE_ROW;
   while ((step = sqlite3_step(topics.get())) == SQLITE_ROW) {
-    channels[sqlite3_column_int64(topics.get(), 0)] = ros2::MakeChannel(
-        Text(topics.get(), 1), Text(topics.get(), 2), Text(topics.get(), 3), options);
+    const std::string type = ros2::NormalisedType(Text(topics.get(), 2));
+    const auto definition = definitions.find(type);
+    channels[sqlite3_column_int64(topics.get(), 0)] =
+        ros2::MakeChannel(Text(topics.get(), 1), type, Text(topics.get(), 3), options,
+                          definition == definitions.end() ? "" : definition->second);
   }
   if (step != SQLITE_DONE) return database.Error("reading the topics table");
   CALIB_ASSIGN_OR_RETURN(

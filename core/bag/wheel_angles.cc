@@ -1,3 +1,5 @@
+#include <calib/core/bag/encoder_messages.h>
+#include <calib/core/bag/message_definition.h>
 #include <calib/core/bag/wheel_angles.h>
 #include <calib/core/laser/wheel_readings.h>
 #include <calib/core/se2.h>
@@ -119,6 +121,87 @@ StatusOr<WheelAngleStream> WheelAnglesFromJointStates(const std::vector<JointSta
   if (out.from_velocities) return out;  // Integrated angles are never wrapped.
   out.unwrapped_turns = Unwrap(&out.samples, &EncoderSample::left_rad) +
                         Unwrap(&out.samples, &EncoderSample::right_rad);
+  return out;
+}
+
+namespace {
+
+// The range of an integer counter of type `type` ("uint16", "int32"), 0 for one that never wraps
+// in a robot's life (64 bits) or is no integer.
+double CounterRange(const std::string& type) {
+  for (const int bits : {8, 16, 32}) {
+    const std::string width = std::to_string(bits);
+    if (type == "int" + width || type == "uint" + width) return std::ldexp(1.0, bits);
+  }
+  return 0.0;
+}
+
+// The definition of `topic`'s type: the bag's, else calib's own for a known encoder type.
+StatusOr<MessageDefinition> DefinitionOf(const RawTopic& topic, const std::string& where) {
+  std::string text = topic.definition;
+  const EncoderMessageType* known = FindEncoderMessageType(topic.type);
+  if (text.empty() && topic.cdr && known != nullptr) text = known->ros2_definition;
+  if (text.empty()) {
+    return Status::InvalidInput(where + ": the bag stores no definition of " + topic.type +
+                                " (rosbag2's sqlite3 storage before Jazzy stores none), and calib "
+                                "knows no such encoder message");
+  }
+  StatusOr<MessageDefinition> parsed =
+      MessageDefinition::Parse(topic.type, text, topic.cdr ? WireFormat::kCdr : WireFormat::kRos1);
+  if (!parsed.ok()) return parsed.status().Prefixed(where + ": ");
+  return parsed;
+}
+
+}  // namespace
+
+StatusOr<WheelAngleStream> WheelAnglesFromEncoderTopic(const RawTopic& topic,
+                                                       const std::string& left_field,
+                                                       const std::string& right_field,
+                                                       const std::string& where,
+                                                       double radians_per_tick) {
+  if (!(radians_per_tick > 0.0) || !std::isfinite(radians_per_tick)) {
+    return Status::InvalidInput(where + ": the encoder counts need the counts per wheel turn");
+  }
+  CALIB_ASSIGN_OR_RETURN(const MessageDefinition definition, DefinitionOf(topic, where));
+  double range[2];
+  const std::string* fields[2] = {&left_field, &right_field};
+  for (int side = 0; side < 2; ++side) {
+    const StatusOr<std::string> type = definition.FieldType(*fields[side]);
+    if (!type.ok()) return type.status().Prefixed(where + ": ");
+    range[side] = CounterRange(*type);
+  }
+  std::vector<std::string> paths = {left_field, right_field};
+  if (definition.has_header()) paths.push_back("header.stamp");
+  StatusOr<MessageDefinition::ResolvedPaths> resolved = definition.Resolve(paths);
+  if (!resolved.ok()) return resolved.status().Prefixed(where + ": ");
+  WheelAngleStream out;
+  double previous[2] = {0.0, 0.0}, angle[2] = {0.0, 0.0};
+  std::vector<double> values;
+  for (const RawMessage& m : topic.messages) {
+    const Status read = definition.ReadNumbers(m.data.data(), m.data.size(), *resolved, &values);
+    if (!read.ok()) return read.Prefixed(where + ": record " + std::to_string(m.record) + ": ");
+    for (int side = 0; side < 2; ++side) {
+      const double count = values[side];
+      if (!std::isfinite(count)) {
+        return Status::InvalidInput(where + ": record " + std::to_string(m.record) +
+                                    ": a count is not finite");
+      }
+      double step = out.samples.empty() ? count : count - previous[side];
+      if (!out.samples.empty() && range[side] > 0.0 && std::abs(step) > 0.5 * range[side]) {
+        step -= std::copysign(range[side], step);
+        ++out.counter_wraps;
+      }
+      angle[side] += step * radians_per_tick;
+      previous[side] = count;
+    }
+    const double stamp_s = paths.size() > 2 ? values[2] : 0.0;
+    out.samples.push_back(EncoderSample{MessageTime(stamp_s, m.log_time_s), angle[0], angle[1],
+                                        static_cast<int>(m.record)});
+  }
+  if (out.samples.size() < 2) {
+    return Status::InvalidInput(where + ": " + std::to_string(out.samples.size()) +
+                                " encoder message(s): at least two are needed");
+  }
   return out;
 }
 

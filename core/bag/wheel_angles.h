@@ -20,6 +20,7 @@ struct WheelAngleStream {
   int half_messages = 0;     // Messages that carry one wheel only: not used.
   // The messages carry no positions: the angles are their velocities integrated (trapezoids).
   bool from_velocities = false;
+  int counter_wraps = 0;  // Encoder counters that wrapped (WheelAnglesFromEncoderTopic).
 };
 
 // From the positions of two joints of a sensor_msgs/JointState topic, in radians after
@@ -39,6 +40,17 @@ StatusOr<WheelAngleStream> WheelAnglesFromJointStates(const std::vector<JointSta
 // of travel), gives the nominal wheel angles back, so that the calibration returns corrections to
 // the nominal values. Where every pose is zero (a driver that only fills the twist), the twist is
 // integrated instead (trapezoids).
+// From the counts in two integer fields of a robot's own encoder message (a raw topic), in
+// radians after multiplying by radians_per_tick (2π over the counts per wheel turn). A counter
+// that wraps (any integer field narrower than 64 bits) is unwrapped: a step of more than half its
+// range is a wrap. Each sample's time is the message's header stamp, else its log time. The
+// message definition is the bag's, else, for a known type (encoder_messages.h), calib's own.
+StatusOr<WheelAngleStream> WheelAnglesFromEncoderTopic(const RawTopic& topic,
+                                                       const std::string& left_field,
+                                                       const std::string& right_field,
+                                                       const std::string& where,
+                                                       double radians_per_tick);
+
 StatusOr<WheelAngleStream> WheelAnglesFromOdometry(const std::vector<Odometry>& messages,
                                                    double nominal_wheel_radius_m,
                                                    double nominal_wheelbase_m,

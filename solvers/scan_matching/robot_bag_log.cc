@@ -1,4 +1,6 @@
+#include <calib/core/bag/encoder_messages.h>
 #include <calib/core/bag/wheel_angles.h>
+#include <calib/core/text_format.h>
 #include <calib/solvers/laser/laser_input_checks.h>
 #include <calib/solvers/scan_calibration/robot_scan_points.h>
 #include <calib/solvers/scan_matching/robot_bag_log.h>
@@ -37,6 +39,36 @@ std::string BaseFrame(const RobotMessages& bag, const RobotBagOptions& options) 
   return "base_link";
 }
 
+// The wheel angles from the counts of a raw encoder topic: per turn, the user's count
+// (wheel_radians_per_unit from --ticks_per_rev) or the known type's.
+Status EncoderAngles(const RobotMessages& bag, const RobotBagOptions& options, RobotBagLog* out,
+                     WheelAngleStream* wheels) {
+  const PickedTopics& t = out->topics;
+  const RawTopic& topic = bag.raw.at(t.encoder_topic);
+  const EncoderMessageType* known = FindEncoderMessageType(topic.type);
+  const std::string where = bag.source + " " + t.encoder_topic;
+  double radians_per_tick = options.wheel_radians_per_unit;
+  if (radians_per_tick == 1.0) {
+    if (known == nullptr) {
+      return Status::InvalidInput(where + " (" + topic.type +
+                                  "): its encoder counts need the counts per wheel turn: give "
+                                  "--ticks_per_rev");
+    }
+    radians_per_tick = 2.0 * M_PI / known->ticks_per_turn;
+  }
+  CALIB_ASSIGN_OR_RETURN(
+      *wheels, WheelAnglesFromEncoderTopic(topic, t.left_encoder_field, t.right_encoder_field,
+                                           where, radians_per_tick));
+  out->wheel_source = t.encoder_topic + " (" + t.left_encoder_field + ", " + t.right_encoder_field +
+                      Format(": %.6g counts a turn)", 2.0 * M_PI / radians_per_tick);
+  if (wheels->counter_wraps > 0) {
+    out->warnings.push_back("the encoder counters of " + t.encoder_topic + " wrapped " +
+                            std::to_string(wheels->counter_wraps) +
+                            " time(s): unwrapped by their range");
+  }
+  return Status::Ok();
+}
+
 Status WheelAngles(const RobotMessages& bag, const RobotBagOptions& options, RobotBagLog* out,
                    WheelAngleStream* wheels) {
   const PickedTopics& t = out->topics;
@@ -60,6 +92,7 @@ Status WheelAngles(const RobotMessages& bag, const RobotBagOptions& options, Rob
     }
     return Status::Ok();
   }
+  if (!t.encoder_topic.empty()) return EncoderAngles(bag, options, out, wheels);
   if (options.wheel_radians_per_unit != 1.0) {
     return Status::InvalidInput(bag.source +
                                 ": the wheel angles' unit applies to JointState "

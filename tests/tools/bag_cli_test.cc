@@ -79,6 +79,32 @@ TEST_F(BagCliTest, BagsOfTheReferenceWritersCalibrateWithinThreeSigma) {
   }
 }
 
+// The same robot with its wheels as raw encoder counts in the robot's own message, read through
+// the definition the bag stores (or calib's own for a known type when rosbag2's Humble sqlite3
+// stores none): TurtleBot3's counts in an MCAP and a ROS 1 bag, Kobuki's wrapping 16-bit ones in
+// .db3 bags. Every parameter within 3σ; the wraps are named; a topic that is not there is.
+TEST_F(BagCliTest, RawEncoderCountsOfTheRobotsOwnMessageCalibrateWithinThreeSigma) {
+  const nlohmann::json truth =
+      nlohmann::json::parse(ReadFile(kBags / "sim_robot_truth.json"))["estimate"];
+  for (const char* name : {"sim_turtlebot_ticks_zstd.mcap", "sim_turtlebot_ticks_lz4.bag",
+                           "sim_kobuki_ticks_db3", "sim_kobuki_ticks_humble_db3"}) {
+    SCOPED_TRACE(name);
+    const CliRun run = Calibrate(kBags / name);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+    ExpectWithinThreeSigma(json, truth);
+    const std::string wheels = json["recording"]["wheel_angles"];
+    EXPECT_NE(wheels.find("(left_encoder, right_encoder: "), std::string::npos) << wheels;
+    const bool kobuki = std::string(name).find("kobuki") != std::string::npos;
+    EXPECT_EQ(kobuki, json["warnings"].dump().find("wrapped") != std::string::npos)
+        << json["warnings"];
+  }
+  const fs::path bag = kBags / "sim_turtlebot_ticks_zstd.mcap";
+  ExpectFailure(bag, "--encoder_topic /wheel_ticks", {"no topic '/wheel_ticks'", "/sensor_state"});
+  ExpectFailure(bag, "--encoder_topic /sensor_state --left_encoder_field left_ticks",
+                {"no field 'left_ticks'", "left_encoder"});
+}
+
 // The same robot with its lidar upside down (tf_static rolls the laser frame by π), written by
 // @mcap/core: its scans are mirrored and still de-skewed, every parameter within 3σ, and the
 // summary says what was done.

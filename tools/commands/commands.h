@@ -28,6 +28,9 @@ struct CalibrateOptions {
   // base_link, base_footprint), and the driver's nominal wheels (0: unknown; needed when the
   // wheel angles come from its odometry).
   std::string scan_topic, joint_state_topic, odom_topic, left_wheel_joint, right_wheel_joint;
+  // A topic of the robot's own message with raw encoder counts, and its fields (empty: a known
+  // type's).
+  std::string encoder_topic, left_encoder_field, right_encoder_field;
   std::string base_frame;
   double nominal_wheel_radius = 0.0, nominal_wheelbase = 0.0;
   // The lidar's rotation period (s) for scans without beam times (time_increment 0); 0: none.

@@ -50,6 +50,16 @@ DEFINE_double(nominal_wheel_radius, 0.0,
               "odometry, the result gives corrections to it");
 DEFINE_double(nominal_wheelbase, 0.0,
               "calibrate, diagnose (bags): the wheelbase (m) the driver uses");
+DEFINE_string(encoder_topic, "",
+              "calibrate, diagnose (bags): a topic of the robot's own message type whose fields "
+              "hold the wheels' raw encoder counts (read through the message definition the bag "
+              "stores; default: a known type's topic, e.g. turtlebot3_msgs/SensorState, when no "
+              "JointState names the wheels); with --ticks_per_rev unless the type is known");
+DEFINE_string(left_encoder_field, "",
+              "calibrate, diagnose (bags): the field of --encoder_topic's message with the left "
+              "wheel's counts (a.b for a nested one; default: the known type's)");
+DEFINE_string(right_encoder_field, "",
+              "calibrate, diagnose (bags): the field with the right wheel's counts");
 DEFINE_double(lidar_rotation_period, 0.0,
               "calibrate, diagnose (bags, scan directories): the time (s) the lidar takes to turn "
               "once (0.1 for 10 Hz), for scans whose driver leaves time_increment 0: each beam is "
@@ -208,6 +218,9 @@ CalibrateOptions CalibrateOptionsFromFlags() {
   options.nominal_wheel_radius = FLAGS_nominal_wheel_radius;
   options.nominal_wheelbase = FLAGS_nominal_wheelbase;
   options.lidar_rotation_period_s = FLAGS_lidar_rotation_period;
+  options.encoder_topic = FLAGS_encoder_topic;
+  options.left_encoder_field = FLAGS_left_encoder_field;
+  options.right_encoder_field = FLAGS_right_encoder_field;
   options.scan_points = FLAGS_scan_points;
   options.wheel_angle_unit = FLAGS_wheel_angle_unit;
   options.ticks_per_rev = FLAGS_ticks_per_rev;

@@ -31,6 +31,9 @@ StatusOr<RobotInput> ReadRobotInput(const CalibrateOptions& flags) {
   o.topics.odom_topic = flags.odom_topic;
   o.topics.left_wheel_joint = flags.left_wheel_joint;
   o.topics.right_wheel_joint = flags.right_wheel_joint;
+  o.topics.encoder_topic = flags.encoder_topic;
+  o.topics.left_encoder_field = flags.left_encoder_field;
+  o.topics.right_encoder_field = flags.right_encoder_field;
   o.base_frame = flags.base_frame;
   o.nominal_wheel_radius_m = flags.nominal_wheel_radius;
   o.nominal_wheelbase_m = flags.nominal_wheelbase;
@@ -44,8 +47,10 @@ StatusOr<RobotInput> ReadRobotInput(const CalibrateOptions& flags) {
                                 "between 0 (unknown) and " +
                                 Num(kLongestRotationPeriodS));
   }
+  BagReadOptions read;
+  if (!flags.encoder_topic.empty()) read.raw_topics.insert(flags.encoder_topic);
   CALIB_ASSIGN_OR_RETURN(out.bag, IsScanDirectory(flags.input) ? ReadScanDirectory(flags.input)
-                                                               : ReadRobotBag(flags.input));
+                                                               : ReadRobotBag(flags.input, read));
   if (period_s > 0.0) {
     for (auto& [topic, scans] : out.bag.scans) AssumeRotationPeriod(period_s, &scans);
   }

@@ -61,6 +61,38 @@ TEST(RobotTopics, WheelJointsOfRealRobotsArePicked) {
   }
 }
 
+// No JointState names the wheels but a known encoder message is there: its counts are picked
+// before the driver's odometry; an unknown type needs its fields named; a named topic that is
+// not in the bag is listed against every topic.
+TEST(RobotTopics, AKnownEncoderMessageGivesTheWheels) {
+  RobotMessages bag = Bag();
+  bag.joint_states["/joint_states"] = {Joints({"arm_joint"})};
+  bag.raw["/sensor_state"] = RawTopic{"turtlebot3_msgs/SensorState", "", true, {RawMessage{}}};
+  StatusOr<PickedTopics> p = PickRobotTopics(bag, {});
+  ASSERT_TRUE(p.ok()) << p.message();
+  EXPECT_EQ(p->encoder_topic, "/sensor_state");
+  EXPECT_EQ(p->left_encoder_field, "left_encoder");
+  EXPECT_EQ(p->right_encoder_field, "right_encoder");
+  EXPECT_TRUE(p->odom_topic.empty());
+
+  bag.raw["/ticks"] = RawTopic{"my_robot/Ticks", "int32 l\nint32 r\n", true, {RawMessage{}}};
+  TopicChoice choice;
+  choice.encoder_topic = "/ticks";
+  p = PickRobotTopics(bag, choice);
+  ASSERT_FALSE(p.ok());
+  EXPECT_NE(p.message().find("--left_encoder_field"), std::string::npos) << p.message();
+  choice.left_encoder_field = "l";
+  choice.right_encoder_field = "r";
+  p = PickRobotTopics(bag, choice);
+  ASSERT_TRUE(p.ok()) << p.message();
+  EXPECT_EQ(p->encoder_topic, "/ticks");
+  EXPECT_EQ(p->left_encoder_field, "l");
+  choice.encoder_topic = "/wheel_ticks";
+  p = PickRobotTopics(bag, choice);
+  ASSERT_FALSE(p.ok());
+  EXPECT_NE(p.message().find("no topic '/wheel_ticks'"), std::string::npos) << p.message();
+}
+
 TEST(RobotTopics, SeveralScanTopicsAreListedWithTheFlag) {
   RobotMessages bag = Bag();
   bag.topics.push_back({"/scan_rear", "sensor_msgs/LaserScan", 3});
