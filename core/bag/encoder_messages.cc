@@ -3,6 +3,17 @@
 namespace calib {
 namespace {
 
+// The dependencies of both types' std_msgs/Header, as a ROS 2 bag stores them.
+constexpr char kHeaderSections[] =
+    "================================================================================\n"
+    "MSG: std_msgs/Header\n"
+    "builtin_interfaces/Time stamp\n"
+    "string frame_id\n"
+    "================================================================================\n"
+    "MSG: builtin_interfaces/Time\n"
+    "int32 sec\n"
+    "uint32 nanosec\n";
+
 // ROBOTIS' turtlebot3_msgs (Dynamixel XL430 wheels: 4096 counts a turn).
 constexpr char kTurtlebot3[] =
     "std_msgs/Header header\n"
@@ -15,15 +26,7 @@ constexpr char kTurtlebot3[] =
     "bool torque\n"
     "int32 left_encoder\n"
     "int32 right_encoder\n"
-    "float32 battery\n"
-    "================================================================================\n"
-    "MSG: std_msgs/Header\n"
-    "builtin_interfaces/Time stamp\n"
-    "string frame_id\n"
-    "================================================================================\n"
-    "MSG: builtin_interfaces/Time\n"
-    "int32 sec\n"
-    "uint32 nanosec\n";
+    "float32 battery\n";
 
 // Yujin's Kobuki (TurtleBot 2): 16-bit counters that wrap, 2π/0.002436916871363930 counts a turn
 // (the driver's ticks-to-radians factor).
@@ -44,15 +47,7 @@ constexpr char kKobuki[] =
     "uint8[] current\n"
     "uint8 over_current\n"
     "uint16 digital_input\n"
-    "uint16[] analog_input\n"
-    "================================================================================\n"
-    "MSG: std_msgs/Header\n"
-    "builtin_interfaces/Time stamp\n"
-    "string frame_id\n"
-    "================================================================================\n"
-    "MSG: builtin_interfaces/Time\n"
-    "int32 sec\n"
-    "uint32 nanosec\n";
+    "uint16[] analog_input\n";
 
 constexpr double kKobukiTicksPerTurn = 2578.333869740464;
 
@@ -64,6 +59,10 @@ const EncoderMessageType kTypes[] = {
 };
 
 }  // namespace
+
+std::string EncoderMessageType::Ros2Definition() const {
+  return std::string(ros2_fields) + kHeaderSections;
+}
 
 const EncoderMessageType* FindEncoderMessageType(const std::string& type) {
   std::string normalised = type;

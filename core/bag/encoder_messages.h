@@ -12,10 +12,11 @@ struct EncoderMessageType {
   const char* type;  // Normalised "package/Type".
   const char* left_field;
   const char* right_field;
-  double ticks_per_turn;  // The robot's counts per wheel turn.
+  double ticks_per_turn;    // The robot's counts per wheel turn.
+  const char* ros2_fields;  // The ROS 2 .msg text (its first field a std_msgs/Header).
   // The ROS 2 definition as a bag stores it (with its dependencies), for bags that store none
   // (rosbag2's sqlite3 storage before Jazzy).
-  const char* ros2_definition;
+  std::string Ros2Definition() const;
 };
 
 // The known type `type` ("package/Type" or "package/msg/Type"), or null.

@@ -84,6 +84,33 @@ T ByteSwapped(T value) {
 // ---------------------------------------------------------------------------------------------
 // Parsing.
 
+size_t MessageDefinition::PrimitiveBytes(Kind kind) {
+  switch (kind) {
+    case Kind::kBool:
+    case Kind::kInt8:
+    case Kind::kUint8:
+      return 1;
+    case Kind::kInt16:
+    case Kind::kUint16:
+      return 2;
+    case Kind::kInt32:
+    case Kind::kUint32:
+    case Kind::kFloat32:
+      return 4;
+    case Kind::kInt64:
+    case Kind::kUint64:
+    case Kind::kFloat64:
+    case Kind::kTime:
+    case Kind::kDuration:
+      return 8;
+    case Kind::kString:
+    case Kind::kWString:
+      return 4;  // The least: a length.
+    case Kind::kMessage:
+      break;
+  }
+  return 0;
+}
 class MessageDefinition::Parser {
  public:
   Parser(const std::string& type, WireFormat format) : root_(type), format_(format) {}
@@ -247,34 +274,6 @@ class MessageDefinition::Parser {
     return fields.size() == 2 && fields[0].name == "sec" && fields[0].kind == Kind::kInt32 &&
            fields[0].array == Array::kNone && fields[1].name == "nanosec" &&
            fields[1].kind == Kind::kUint32 && fields[1].array == Array::kNone;
-  }
-
-  static size_t PrimitiveBytes(Kind kind) {
-    switch (kind) {
-      case Kind::kBool:
-      case Kind::kInt8:
-      case Kind::kUint8:
-        return 1;
-      case Kind::kInt16:
-      case Kind::kUint16:
-        return 2;
-      case Kind::kInt32:
-      case Kind::kUint32:
-      case Kind::kFloat32:
-        return 4;
-      case Kind::kInt64:
-      case Kind::kUint64:
-      case Kind::kFloat64:
-      case Kind::kTime:
-      case Kind::kDuration:
-        return 8;
-      case Kind::kString:
-      case Kind::kWString:
-        return 4;  // The least: a length.
-      case Kind::kMessage:
-        break;
-    }
-    return 0;
   }
 
   // The type of section `index` built into types_ (with the types it uses), its index in `out`.
@@ -692,28 +691,6 @@ class MessageDefinition::Walker {
         break;
     }
     return false;  // Unreachable: ResolveOne lets only numbers through.
-  }
-
-  static size_t PrimitiveBytes(Kind kind) {
-    switch (kind) {
-      case Kind::kBool:
-      case Kind::kInt8:
-      case Kind::kUint8:
-        return 1;
-      case Kind::kInt16:
-      case Kind::kUint16:
-        return 2;
-      case Kind::kInt32:
-      case Kind::kUint32:
-      case Kind::kFloat32:
-        return 4;
-      case Kind::kInt64:
-      case Kind::kUint64:
-      case Kind::kFloat64:
-        return 8;
-      default:
-        return 0;
-    }
   }
 
   bool Skip(const Field& field) {

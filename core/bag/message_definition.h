@@ -117,6 +117,9 @@ class MessageDefinition {
     size_t fixed_bytes = 0;
   };
   static constexpr size_t kVariable = static_cast<size_t>(-1);
+  // A primitive's bytes on the wire (a ROS 1 time or duration: 8; a string at least its 4-byte
+  // length); 0 for messages.
+  static size_t PrimitiveBytes(Kind kind);
   class Parser;
   class Walker;
 

@@ -140,7 +140,7 @@ double CounterRange(const std::string& type) {
 StatusOr<MessageDefinition> DefinitionOf(const RawTopic& topic, const std::string& where) {
   std::string text = topic.definition;
   const EncoderMessageType* known = FindEncoderMessageType(topic.type);
-  if (text.empty() && topic.cdr && known != nullptr) text = known->ros2_definition;
+  if (text.empty() && topic.cdr && known != nullptr) text = known->Ros2Definition();
   if (text.empty()) {
     return Status::InvalidInput(where + ": the bag stores no definition of " + topic.type +
                                 " (rosbag2's sqlite3 storage before Jazzy stores none), and calib "

@@ -51,6 +51,16 @@ class BagCliTest : public ::testing::Test {
     }
   }
 
+  // A directory of scans.csv and odometry.csv as `calib simulate --beams` writes it (beams at
+  // their own times over a 0.1 s sweep), and its truth.
+  void SimulateScansLog(const fs::path& log, const fs::path& truth) {
+    const CliRun simulated = ::calib::testing::RunCalib(
+        "simulate --beams 180 --intervals 400 --seed 11 --sweep 0.1 --output " + log.string() +
+            " --truth " + truth.string(),
+        dir_);
+    ASSERT_EQ(simulated.exit_code, 0) << simulated.err;
+  }
+
   fs::path dir_;
 };
 
@@ -164,13 +174,8 @@ TEST_F(BagCliTest, RefinedOnTheScanPointsWithinThreeSigma) {
 // Logs from anything that is not a bag: a directory of scans.csv and odometry.csv, as `calib
 // simulate --beams` writes it (beams at their own times over a 0.1 s sweep).
 TEST_F(BagCliTest, AScansCsvDirectoryCalibratesWithinThreeSigma) {
-  const fs::path log = dir_ / "scans_log";
-  const fs::path truth_path = dir_ / "truth.json";
-  const CliRun simulated = ::calib::testing::RunCalib(
-      "simulate --beams 180 --intervals 400 --seed 11 --sweep 0.1 --output " + log.string() +
-          " --truth " + truth_path.string(),
-      dir_);
-  ASSERT_EQ(simulated.exit_code, 0) << simulated.err;
+  const fs::path log = dir_ / "scans_log", truth_path = dir_ / "truth.json";
+  ASSERT_NO_FATAL_FAILURE(SimulateScansLog(log, truth_path));
   ASSERT_TRUE(fs::exists(log / "scans.csv"));
   const CliRun run = Calibrate(log);
   ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -190,13 +195,8 @@ TEST_F(BagCliTest, AScansCsvDirectoryCalibratesWithinThreeSigma) {
 // A driver that leaves time_increment 0 on a lidar that sweeps: calibrate warns (b was 4.9σ off on
 // this log, the verdict "check"), and --lidar_rotation_period gives the beams their times back.
 TEST_F(BagCliTest, ScansWithoutBeamTimesGetThemFromTheRotationPeriod) {
-  const fs::path log = dir_ / "scans_log";
-  const fs::path truth_path = dir_ / "truth.json";
-  const CliRun simulated = ::calib::testing::RunCalib(
-      "simulate --beams 180 --intervals 400 --seed 11 --sweep 0.1 --output " + log.string() +
-          " --truth " + truth_path.string(),
-      dir_);
-  ASSERT_EQ(simulated.exit_code, 0) << simulated.err;
+  const fs::path log = dir_ / "scans_log", truth_path = dir_ / "truth.json";
+  ASSERT_NO_FATAL_FAILURE(SimulateScansLog(log, truth_path));
   std::istringstream in(ReadFile(log / "scans.csv"));
   std::string line, text;
   for (int row = 0; std::getline(in, line); ++row) {
