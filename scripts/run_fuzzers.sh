@@ -24,8 +24,8 @@ else
   seconds="${1:-60}"
   runs="${2:--1}"
 fi
-harnesses=(${FUZZ_HARNESSES:-laser_tuples laser_csv laser_stream bearing_log scan_csv mcap sqlite_bag rosbag1
-  laser_calibrate})
+harnesses=(${FUZZ_HARNESSES:-laser_tuples laser_csv laser_stream bearing_log scan_csv mcap sqlite_bag
+  message_definition rosbag1 laser_calibrate})
 
 # The project's packages, and clang with its libFuzzer and sanitizer runtimes (Debian 12:
 # clang-14, libclang-rt-14-dev), each only when missing.

@@ -120,6 +120,7 @@ class MessageDefinition {
   // A primitive's bytes on the wire (a ROS 1 time or duration: 8; a string at least its 4-byte
   // length); 0 for messages.
   static size_t PrimitiveBytes(Kind kind);
+  static size_t SaturatingMul(size_t a, size_t b);  // a·b, or SIZE_MAX when it overflows.
   class Parser;
   class Walker;
 
