@@ -1,3 +1,4 @@
+#include <calib/core/bag/byte_order.h>
 #include <calib/core/bag/cdr_decoder.h>
 
 #include <cstring>
@@ -7,31 +8,19 @@
 namespace calib {
 namespace {
 
-constexpr bool kHostLittleEndian = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;
-constexpr size_t kHeaderBytes = 4;
-
-template <typename T>
-T ByteSwapped(T value) {
-  unsigned char bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));
-  for (size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(bytes[i], bytes[sizeof(T) - 1 - i]);
-  std::memcpy(&value, bytes, sizeof(T));
-  return value;
-}
-
 // A cursor over one CDR message. The first failure sticks: later reads do nothing and status()
 // names the field and byte where the message fell short.
 class CdrReader {
  public:
   CdrReader(const uint8_t* data, size_t size) : data_(data), size_(size) {
-    if (size < kHeaderBytes) {
+    if (size < kCdrHeaderBytes) {
       Fail("encapsulation header");
     } else if (data[0] != 0 || data[1] > 1) {
       error_ = "unsupported CDR encapsulation 0x" + Hex(data[0]) + Hex(data[1]) +
                " (plain CDR, XCDR1, is read)";
     } else {
       swap_ = (data[1] == 1) != kHostLittleEndian;
-      pos_ = kHeaderBytes;
+      pos_ = kCdrHeaderBytes;
     }
   }
 
@@ -93,7 +82,7 @@ class CdrReader {
   }
   bool Align(size_t n, const char* field) {
     if (!ok()) return false;
-    const size_t pad = (n - (pos_ - kHeaderBytes) % n) % n;
+    const size_t pad = (n - (pos_ - kCdrHeaderBytes) % n) % n;
     return Need(pad, field) && (pos_ += pad, true);
   }
   bool Need(size_t n, const char* field) {

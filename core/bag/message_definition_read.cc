@@ -1,3 +1,4 @@
+#include <calib/core/bag/byte_order.h>
 #include <calib/core/bag/message_definition.h>
 
 #include <algorithm>
@@ -8,21 +9,6 @@
 
 // Reading a message's numeric fields by walking its bytes through the definition.
 namespace calib {
-namespace {
-
-constexpr bool kHostLittleEndian = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;
-constexpr size_t kCdrHeaderBytes = 4;
-
-template <typename T>
-T ByteSwapped(T value) {
-  unsigned char bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));
-  std::reverse(bytes, bytes + sizeof(T));
-  std::memcpy(&value, bytes, sizeof(T));
-  return value;
-}
-
-}  // namespace
 
 // A cursor over one message that reads the wanted fields and skips the others. Each read checks
 // the bytes left; on failure the path of the field is built up as the recursion unwinds.

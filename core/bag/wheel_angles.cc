@@ -87,7 +87,7 @@ StatusOr<WheelAngleStream> WheelAnglesFromJointStates(const std::vector<JointSta
     }
     out.from_velocities = speeds;
     const std::vector<double>& values = speeds ? m.velocity : m.position;
-    double l = values[left] * radians_per_unit, r = values[right] * radians_per_unit;
+    const double l = values[left] * radians_per_unit, r = values[right] * radians_per_unit;
     if (!std::isfinite(l) || !std::isfinite(r)) {
       return Status::InvalidInput(record + ": wheel joint " + (speeds ? "velocity" : "position") +
                                   " is not finite");

@@ -1,4 +1,5 @@
 #include <calib/core/laser/laser_log_io.h>
+#include <calib/core/order_statistic.h>
 #include <calib/core/se2.h>
 #include <calib/core/text_format.h>
 #include <calib/core/text_number.h>
@@ -117,9 +118,7 @@ double ScanPeriod(const std::vector<const LaserScan*>& scans) {
   for (size_t i = 1; i < scans.size(); ++i) {
     steps.push_back(scans[i]->stamp_s - scans[i - 1]->stamp_s);
   }
-  if (steps.empty()) return 0.0;
-  std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
-  return steps[steps.size() / 2];
+  return UpperMedian(&steps);
 }
 
 // The longest sweep taken as one (max_sweep_periods of the scans' period), and a warning when
@@ -151,9 +150,7 @@ double MaxSweep(const std::vector<const LaserScan*>& scans, const ScanLogOptions
 // The q-quantile of `values` (0 when empty).
 double Quantile(std::vector<double> values, double q) {
   if (values.empty()) return 0.0;
-  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * values.size()));
-  std::nth_element(values.begin(), values.begin() + k, values.end());
-  return values[k];
+  return KthSmallest(&values, std::min(values.size() - 1, static_cast<size_t>(q * values.size())));
 }
 
 // Below these motions per scan period (95th percentile) an unknown sweep smears a scan by less
