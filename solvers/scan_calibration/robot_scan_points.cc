@@ -37,8 +37,12 @@ StatusOr<ScanPointCalibration> RefineRobotOnScanPoints(const RobotMessages& bag,
     std::nth_element(corrections.begin(), middle, corrections.end());
     median_correction_s = *middle;
   }
-  std::vector<LaserScan> mirrored;
-  if (log.mirrored) mirrored.reserve(log.scans.distinct_scans.size());
+  // The scans as the matching saw them: mirrored (an upside-down sensor), their beams in the order
+  // measured when the check of their timing changed it.
+  const bool changed = log.beam_timing && log.beam_timing->changed;
+  const bool prepare = log.mirrored || changed;
+  std::vector<LaserScan> prepared;
+  if (prepare) prepared.reserve(log.scans.distinct_scans.size());
   ScanPointInput input;
   input.encoders = &log.scans.log.streams.odometry;
   input.source = bag.source + " " + log.topics.scan_topic;
@@ -47,8 +51,11 @@ StatusOr<ScanPointCalibration> RefineRobotOnScanPoints(const RobotMessages& bag,
     const double t = it != time_of_line.end() ? it->second : scans[i].stamp_s + median_correction_s;
     // A scan the timing did not place may fall out of order with its timed neighbours.
     if (!input.first_beam_time_s.empty() && !(t > input.first_beam_time_s.back())) continue;
-    if (log.mirrored) mirrored.push_back(MirroredScan(scans[i]));
-    input.scans.push_back(log.mirrored ? &mirrored.back() : &scans[i]);
+    if (prepare) {
+      const LaserScan scan = log.mirrored ? MirroredScan(scans[i]) : scans[i];
+      prepared.push_back(changed ? WithBeamTiming(scan, log.beam_timing->chosen) : scan);
+    }
+    input.scans.push_back(prepare ? &prepared.back() : &scans[i]);
     input.first_beam_time_s.push_back(t);
   }
   StatusOr<ScanPointCalibration> out =

@@ -196,6 +196,16 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
       out.wheels_from_odometry ? out.topics.odom_topic : out.topics.joint_state_topic;
   const ScanLogNames names{bag.source, bag.source + " " + wheel_topic,
                            bag.source + " " + out.topics.scan_topic};
+  out.beam_timing = options.beam_timing;
+  if (!out.beam_timing && options.check_beam_timing && options.calibrated) {
+    out.beam_timing =
+        CheckBeamTiming(scans, wheels.samples,
+                        {scan_options.nominal, scan_options.nominal_base_T_sensor}, names.scans);
+  }
+  if (out.beam_timing && out.beam_timing->changed) {
+    for (LaserScan& scan : scans) scan = WithBeamTiming(scan, out.beam_timing->chosen);
+    out.warnings.push_back(out.beam_timing->warning);
+  }
   CALIB_ASSIGN_OR_RETURN(out.scans, LaserLogFromScans(scans, wheels.samples, names, scan_options));
   out.warnings.insert(out.warnings.end(), out.scans.warnings.begin(), out.scans.warnings.end());
   return out;
@@ -260,6 +270,7 @@ StatusOr<RobotBagCalibration> CalibrateTwoStage(const RobotMessages& bag,
   for (bool settled = false; !settled && passes < kMaxPasses;) {
     deskewed.calibrated = out.result.calibration.estimate;
     const LaserCalibrationResult before = out.result.calibration;
+    if (!deskewed.beam_timing) deskewed.beam_timing = out.log.beam_timing;
     CALIB_RETURN_IF_ERROR(CalibratePass(probe, deskewed, timing, &out));
     ++passes;
     moved = MovedSigmas(before, out.result.calibration);

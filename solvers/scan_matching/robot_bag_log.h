@@ -7,6 +7,7 @@
 #include <calib/core/laser/laser_params.h>
 #include <calib/core/status.h>
 #include <calib/solvers/scan_calibration/scan_point_calibration.h>
+#include <calib/solvers/scan_matching/beam_timing.h>
 #include <calib/solvers/scan_matching/scan_laser_log.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 
@@ -39,6 +40,10 @@ struct RobotBagOptions {
   // the nominal wheels (CalibrateOnScanPointsAlone).
   std::optional<ScanPointOptions> scan_points;
   bool keep_unmatched = false;  // ScanLogOptions::keep_unmatched, for the scan points alone.
+  // With `calibrated` set: check the beams' timing against the data (beam_timing.h) unless
+  // `beam_timing` already holds a check, whose timing then applies to every scan.
+  bool check_beam_timing = true;
+  std::optional<BeamTimingCheck> beam_timing;
 };
 
 struct RobotBagLog {
@@ -52,6 +57,7 @@ struct RobotBagLog {
   // How often the scans were matched: where they sweep, each pass de-skewed through the previous
   // pass's calibration, until it settled.
   int matching_passes = 1;
+  std::optional<BeamTimingCheck> beam_timing;  // The check of the beams' timing, once made.
   std::vector<std::string> warnings;
 };
 

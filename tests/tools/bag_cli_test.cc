@@ -220,6 +220,16 @@ TEST_F(BagCliTest, ScansWithoutBeamTimesGetThemFromTheRotationPeriod) {
   ExpectWithinThreeSigma(json, nlohmann::json::parse(ReadFile(truth_path))["estimate"]);
   EXPECT_EQ(json["verdict"], "trusted") << json["warnings"];
   ExpectFailure(log, "--lidar_rotation_period -0.1", {"--lidar_rotation_period -0.1", "one turn"});
+  // The beams' timing was checked against the scans (and kept); --lidar_beam_timing driver trusts
+  // it unchecked.
+  const nlohmann::json& checked = json["recording"]["beam_timing"];
+  EXPECT_EQ(checked["changed"], false) << checked;
+  EXPECT_EQ(checked["used"], checked["recorded"]) << checked;
+  run = Calibrate(log, "--lidar_rotation_period 0.1 --lidar_beam_timing driver");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+  EXPECT_FALSE(json["recording"].contains("beam_timing")) << json["recording"];
+  ExpectFailure(log, "--lidar_beam_timing sometimes", {"--lidar_beam_timing sometimes", "auto"});
 }
 
 // `calib diagnose` on raw scans: the scans are matched and timed as calibrate does, then

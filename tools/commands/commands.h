@@ -35,7 +35,8 @@ struct CalibrateOptions {
   double nominal_wheel_radius = 0.0, nominal_wheelbase = 0.0;
   // The lidar's rotation period (s) for scans without beam times (time_increment 0); 0: none.
   double lidar_rotation_period_s = 0.0;
-  std::string wheel_angle_unit = "rad";  // rad, deg, or ticks:N.
+  std::string lidar_beam_timing = "auto";  // auto: checked against the scans; driver: trusted.
+  std::string wheel_angle_unit = "rad";    // rad, deg, or ticks:N.
   double ticks_per_rev = 0.0;  // > 0: wheel readings are encoder ticks, this many per turn.
   bool scan_points = false;    // Refine against the scan points after the two-stage route.
   // A known sensor latency: a sample stamped t was taken at t + this (raw streams, bags, bearing

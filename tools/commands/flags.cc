@@ -65,6 +65,14 @@ DEFINE_double(lidar_rotation_period, 0.0,
               "once (0.1 for 10 Hz), for scans whose driver leaves time_increment 0: each beam is "
               "then placed at its own time (period × angle_increment / 2π after the previous), so "
               "that the sweeps are de-skewed; scans with a time_increment keep theirs");
+DEFINE_string(
+    lidar_beam_timing, "auto",
+    "calibrate, diagnose (bags, scan directories): auto checks a full-circle lidar's beam "
+    "order and time_increment against the scans of the fastest turns (where each sweep "
+    "closes, only the right timing makes its first and last beams continue each other's "
+    "walls) and uses the timing they show, with a warning, when the driver's clearly "
+    "loses (the LDS-01's driver lists its beams against their order); driver trusts the "
+    "driver's");
 DEFINE_string(base_frame, "",
               "calibrate, diagnose (bags): the robot's base frame in tf (default base_link, else "
               "base_footprint)");
@@ -218,6 +226,7 @@ CalibrateOptions CalibrateOptionsFromFlags() {
   options.nominal_wheel_radius = FLAGS_nominal_wheel_radius;
   options.nominal_wheelbase = FLAGS_nominal_wheelbase;
   options.lidar_rotation_period_s = FLAGS_lidar_rotation_period;
+  options.lidar_beam_timing = FLAGS_lidar_beam_timing;
   options.encoder_topic = FLAGS_encoder_topic;
   options.left_encoder_field = FLAGS_left_encoder_field;
   options.right_encoder_field = FLAGS_right_encoder_field;

@@ -47,6 +47,11 @@ StatusOr<RobotInput> ReadRobotInput(const CalibrateOptions& flags) {
                                 "between 0 (unknown) and " +
                                 Num(kLongestRotationPeriodS));
   }
+  if (flags.lidar_beam_timing != "auto" && flags.lidar_beam_timing != "driver") {
+    return Status::InvalidInput("--lidar_beam_timing " + flags.lidar_beam_timing +
+                                ": auto (checked against the scans) or driver (trusted)");
+  }
+  o.check_beam_timing = flags.lidar_beam_timing == "auto";
   BagReadOptions read;
   if (!flags.encoder_topic.empty()) read.raw_topics.insert(flags.encoder_topic);
   CALIB_ASSIGN_OR_RETURN(out.bag, IsScanDirectory(flags.input) ? ReadScanDirectory(flags.input)

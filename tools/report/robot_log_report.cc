@@ -15,6 +15,25 @@ std::string Format(const char* format, double a, double b = 0.0, double c = 0.0,
   return text;
 }
 
+// The check of the beams' timing (beam_timing.h): the driver's, the one used, and each candidate's
+// seam distance (null where it could not be judged).
+nlohmann::ordered_json BeamTimingJson(const BeamTimingCheck& check) {
+  nlohmann::ordered_json candidates = nlohmann::ordered_json::array();
+  for (const auto& [timing, distance_m] : check.candidates) {
+    candidates.push_back(
+        {{"timing", timing.description},
+         {"reversed", timing.reversed},
+         {"time_increment_s", timing.time_increment_s},
+         {"seam_distance_m", std::isfinite(distance_m) ? nlohmann::ordered_json(distance_m)
+                                                       : nlohmann::ordered_json()}});
+  }
+  return {{"recorded", check.recorded.description},
+          {"used", check.chosen.description},
+          {"changed", check.changed},
+          {"scans_compared", check.scans},
+          {"candidates", candidates}};
+}
+
 }  // namespace
 
 nlohmann::ordered_json RobotLogJson(const RobotBagLog& log, const LaserCalibrationResult& result,
@@ -48,6 +67,7 @@ nlohmann::ordered_json RobotLogJson(const RobotBagLog& log, const LaserCalibrati
                           {"r_r", v(1) / nominal.wheel_radius_m},
                           {"b", v(2) / nominal.wheelbase_m}};
   }
+  if (log.beam_timing) out["beam_timing"] = BeamTimingJson(*log.beam_timing);
   out["warnings"] = log.warnings;
   return out;
 }
