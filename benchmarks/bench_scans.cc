@@ -166,6 +166,7 @@ nlohmann::ordered_json RunScansBench(const BenchConfig& config) {
   out["coverage"].push_back(CoverageRow(0.0, seeds, 600));
   out["coverage"].push_back(CoverageRow(0.1, seeds, 600));
   out["scan_points"] = RunScanPointComparison(config);
+  out["beam_timing"] = RunBeamTimingBench(config);
   std::printf("End to end in process:\n");
   out["end_to_end"] = EndToEnd(config.quick ? 1200 : 18000, 1081);
   return out;

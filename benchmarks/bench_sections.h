@@ -46,6 +46,8 @@ int RunSpeedChild(const std::string& path, int64_t intervals);
 nlohmann::ordered_json RunScansBench(const BenchConfig& config);
 // Part of it: the two-stage route against the refinement on the scan points.
 nlohmann::ordered_json RunScanPointComparison(const BenchConfig& config);
+// Part of it: a lidar's beam timing as drivers misstate it, trusted against checked.
+nlohmann::ordered_json RunBeamTimingBench(const BenchConfig& config);
 
 // Section robust_scale: the bias that slip outliers leave against the reported σ as N grows
 // (10⁴, 10⁵, 10⁶ intervals; 5 % and 20 % slips), Cauchy alone against Cauchy then Tukey's biweight:

@@ -213,6 +213,12 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
 
 namespace {
 
+bool FullCircle(const LaserScan& scan) {
+  const double increment = std::abs(scan.angle_increment_rad);
+  return scan.ranges_m.size() > 2 &&
+         increment * scan.ranges_m.size() >= 2.0 * M_PI - 0.5 * increment;
+}
+
 // The passes of a long log before its last, which only have to de-skew that one, are calibrated
 // on this many scans from its start (300 s at 10 Hz).
 constexpr size_t kFirstPassScans = 3000;
@@ -247,7 +253,8 @@ StatusOr<RobotBagCalibration> CalibrateTwoStage(const RobotMessages& bag,
                                                 const LaserTimingOptions& timing) {
   CALIB_ASSIGN_OR_RETURN(const PickedTopics topics, PickRobotTopics(bag, options.topics));
   const std::vector<LaserScan>& scans = bag.scans.at(topics.scan_topic);
-  bool sweeps = false;
+  // A full circle without beam times may still sweep: the check of its timing decides.
+  bool sweeps = options.check_beam_timing && !scans.empty() && FullCircle(scans.front());
   for (const LaserScan& scan : scans) sweeps = sweeps || scan.time_increment_s != 0.0;
   const bool long_log = sweeps && scans.size() > 2 * kFirstPassScans;
   RobotMessages start;

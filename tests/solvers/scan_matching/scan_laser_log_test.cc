@@ -276,9 +276,10 @@ TEST(ScanLaserLog, ASweepLongerThanThePeriodIsTakenAsInstantaneous) {
   EXPECT_EQ(log->failed_matches, 0);
 }
 
-// A driver that leaves time_increment 0 on a lidar that sweeps for its whole period: its scans are
-// matched as instantaneous, with a warning that gives the motion per scan and the flag; the
-// rotation period gives every beam its time back, the sweeps are de-skewed and the warning goes.
+// A driver that leaves time_increment 0 on a lidar that sweeps for its whole period. Trusted, its
+// scans are matched as instantaneous (b was 15σ off on 600 scans), with a warning that gives the
+// motion per scan and the flag; the rotation period gives every beam its time back. Checked (the
+// default), the sweeps' seams show one turn per scan period, and the calibration is right.
 TEST(ScanLaserLog, ScansWithoutBeamTimesAreNamedAndGivenThemByTheRotationPeriod) {
   ScanSimOptions o = Robot(600, 5);
   o.sweep_s = 0.1;
@@ -291,15 +292,18 @@ TEST(ScanLaserLog, ScansWithoutBeamTimesAreNamedAndGivenThemByTheRotationPeriod)
   const double beam_time_s = scans.front().time_increment_s;
   ASSERT_GT(beam_time_s, 0.0);
   for (LaserScan& scan : scans) scan.time_increment_s = 0.0;
-  const auto warned = [](const RobotBagCalibration& r) {
+  const auto warned = [](const RobotBagCalibration& r, const std::string& what) {
     for (const std::string& w : r.log.warnings) {
-      if (w.find("every scan's time_increment is 0") != std::string::npos) return w;
+      if (w.find(what) != std::string::npos) return w;
     }
     return std::string();
   };
-  StatusOr<RobotBagCalibration> r = CalibrateRobotMessages(bag, RobotBagOptions(), kTiming);
+  const std::string instant = "every scan's time_increment is 0";
+  RobotBagOptions trusting;
+  trusting.check_beam_timing = false;
+  StatusOr<RobotBagCalibration> r = CalibrateRobotMessages(bag, trusting, kTiming);
   ASSERT_TRUE(r.ok()) << r.message();
-  const std::string warning = warned(*r);
+  std::string warning = warned(*r, instant);
   EXPECT_NE(warning.find("no_beam_times.bag /scan: "), std::string::npos) << warning;
   EXPECT_NE(warning.find("its period (100 ms here)"), std::string::npos) << warning;
   EXPECT_NE(warning.find("--lidar_rotation_period"), std::string::npos) << warning;
@@ -307,12 +311,23 @@ TEST(ScanLaserLog, ScansWithoutBeamTimesAreNamedAndGivenThemByTheRotationPeriod)
   std::printf("matched as instantaneous (b was −15σ off): ");
   WorstZ(r->result.calibration, sim->truth);
 
+  r = CalibrateRobotMessages(bag, RobotBagOptions(), kTiming);
+  ASSERT_TRUE(r.ok()) << r.message();
+  EXPECT_EQ(warned(*r, instant), "");
+  warning = warned(*r, "the beams' timing is not what the driver says");
+  EXPECT_EQ(warning.rfind("no_beam_times.bag /scan: ", 0), 0u) << warning;
+  EXPECT_NE(warning.find("ends that never overlap"), std::string::npos) << warning;
+  ASSERT_TRUE(r->log.beam_timing.has_value());
+  EXPECT_FALSE(r->log.beam_timing->chosen.reversed);
+  EXPECT_NEAR(r->log.beam_timing->chosen.time_increment_s, beam_time_s, 0.01 * beam_time_s);
+  EXPECT_LE(WorstZ(r->result.calibration, sim->truth), 3.0);
+
   EXPECT_EQ(600, AssumeRotationPeriod(0.1, &scans));
   for (const LaserScan& scan : scans) ASSERT_DOUBLE_EQ(beam_time_s, scan.time_increment_s);
   EXPECT_EQ(0, AssumeRotationPeriod(0.2, &scans));  // Beam times already given are kept.
-  r = CalibrateRobotMessages(bag, RobotBagOptions(), kTiming);
+  r = CalibrateRobotMessages(bag, trusting, kTiming);
   ASSERT_TRUE(r.ok()) << r.message();
-  EXPECT_EQ(warned(*r), "");
+  EXPECT_EQ(warned(*r, instant), "");
   EXPECT_GE(r->log.matching_passes, 2);
   EXPECT_LE(WorstZ(r->result.calibration, sim->truth), 3.0);
 }
@@ -493,7 +508,8 @@ INSTANTIATE_TEST_SUITE_P(Drivers, BeamTimingTest,
                          ::testing::Values(BeamTimingCase{"true", false, 1.0, false},
                                            BeamTimingCase{"lds01", true, 1.0 / 18.0, true},
                                            BeamTimingCase{"too_small", false, 1.0 / 18.0, true},
-                                           BeamTimingCase{"reversed", true, 1.0, true}),
+                                           BeamTimingCase{"reversed", true, 1.0, true},
+                      BeamTimingCase{"none", false, 0.0, true}),
                          [](const ::testing::TestParamInfo<BeamTimingCase>& info) {
                            return info.param.name;
                          });
