@@ -55,22 +55,26 @@ std::vector<BeamTiming> Candidates(double recorded_s, double rotation_s) {
   return out;
 }
 
-// The scans (indices) whose sensor turns most over one scan period through `robot`, at most
-// max_scans, each turning at least min_turn_rad.
+// The scans (indices) whose sensor turns most over one scan period through `robot`, half of
+// max_scans each way, each turning at least min_turn_rad. Both ways: only the turns with the
+// spin make a sweep's ends overlap, and which way that is depends on the timing under test.
 std::vector<size_t> TurningScans(const std::vector<LaserScan>& scans,
                                  const std::vector<EncoderSample>& encoders,
                                  const WheelsAndMounting& robot, double period_s,
                                  const BeamTimingOptions& options) {
-  std::vector<std::pair<double, size_t>> turns;
+  std::vector<std::pair<double, size_t>> turns[2];  // Left, right; the largest first after sorting.
   for (size_t i = 0; i < scans.size(); ++i) {
     const double t = scans[i].stamp_s;
-    const double turn = std::abs(SensorMotionBetween(encoders, t, t + period_s, robot)(2));
-    if (turn >= options.min_turn_rad) turns.emplace_back(-turn, i);
+    const double turn = SensorMotionBetween(encoders, t, t + period_s, robot)(2);
+    if (std::abs(turn) >= options.min_turn_rad) turns[turn < 0.0].emplace_back(-std::abs(turn), i);
   }
-  const size_t kept = std::min(turns.size(), static_cast<size_t>(std::max(options.max_scans, 0)));
-  std::partial_sort(turns.begin(), turns.begin() + kept, turns.end());
   std::vector<size_t> chosen;
-  for (size_t k = 0; k < kept; ++k) chosen.push_back(turns[k].second);
+  for (auto& way : turns) {
+    const size_t kept =
+        std::min(way.size(), static_cast<size_t>(std::max(options.max_scans / 2, 0)));
+    std::partial_sort(way.begin(), way.begin() + kept, way.end());
+    for (size_t k = 0; k < kept; ++k) chosen.push_back(way[k].second);
+  }
   return chosen;
 }
 

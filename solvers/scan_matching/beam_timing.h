@@ -42,7 +42,7 @@ struct BeamTimingCheck {
 };
 
 struct BeamTimingOptions {
-  int max_scans = 60;  // The scans whose sensor turns most over a scan period.
+  int max_scans = 60;  // The scans whose sensor turns most over a scan period (half each way).
   // Below this turn over a scan period a sweep's skew is within the range noise.
   double min_turn_rad = 1.0 * M_PI / 180.0;
   int min_scans = 10;

@@ -192,11 +192,14 @@ TEST_F(BagCliTest, AScansCsvDirectoryCalibratesWithinThreeSigma) {
   ExpectFailure(log, "", {"scans.csv:3"});
 }
 
-// A driver that leaves time_increment 0 on a lidar that sweeps: calibrate warns (b was 4.9σ off on
-// this log, the verdict "check"), and --lidar_rotation_period gives the beams their times back.
+// A driver that leaves time_increment 0 on a lidar that sweeps. Trusted (--lidar_beam_timing
+// driver), calibrate warns (b was 4.9σ off on this log, the verdict "check"), and
+// --lidar_rotation_period gives the beams their times back. Checked (the default), the sweeps'
+// seams show one turn per scan period: a warning says so, and the calibration is right.
 TEST_F(BagCliTest, ScansWithoutBeamTimesGetThemFromTheRotationPeriod) {
   const fs::path log = dir_ / "scans_log", truth_path = dir_ / "truth.json";
   ASSERT_NO_FATAL_FAILURE(SimulateScansLog(log, truth_path));
+  const nlohmann::json truth = nlohmann::json::parse(ReadFile(truth_path))["estimate"];
   std::istringstream in(ReadFile(log / "scans.csv"));
   std::string line, text;
   for (int row = 0; std::getline(in, line); ++row) {
@@ -208,27 +211,34 @@ TEST_F(BagCliTest, ScansWithoutBeamTimesGetThemFromTheRotationPeriod) {
     text += line + "\n";
   }
   std::ofstream(log / "scans.csv") << text;
-  CliRun run = Calibrate(log);
+  const std::string instant = "every scan's time_increment is 0";
+  CliRun run = Calibrate(log, "--lidar_beam_timing driver");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
-  EXPECT_NE(json["warnings"].dump().find("every scan's time_increment is 0"), std::string::npos)
-      << json["warnings"];
+  EXPECT_NE(json["warnings"].dump().find(instant), std::string::npos) << json["warnings"];
   EXPECT_NE(json["verdict"], "trusted");
+  EXPECT_FALSE(json["recording"].contains("beam_timing")) << json["recording"];
+
+  run = Calibrate(log);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+  EXPECT_EQ(json["warnings"].dump().find(instant), std::string::npos) << json["warnings"];
+  EXPECT_NE(json["warnings"].dump().find("the beams' timing is not what the driver says"),
+            std::string::npos)
+      << json["warnings"];
+  const nlohmann::json& checked = json["recording"]["beam_timing"];
+  EXPECT_EQ(checked["changed"], true) << checked;
+  EXPECT_NE(checked["used"].get<std::string>().find("in listed order"), std::string::npos)
+      << checked;
+  ExpectWithinThreeSigma(json, truth);
+
   run = Calibrate(log, "--lidar_rotation_period 0.1");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
-  ExpectWithinThreeSigma(json, nlohmann::json::parse(ReadFile(truth_path))["estimate"]);
+  ExpectWithinThreeSigma(json, truth);
   EXPECT_EQ(json["verdict"], "trusted") << json["warnings"];
+  EXPECT_EQ(json["recording"]["beam_timing"]["changed"], false) << json["recording"];
   ExpectFailure(log, "--lidar_rotation_period -0.1", {"--lidar_rotation_period -0.1", "one turn"});
-  // The beams' timing was checked against the scans (and kept); --lidar_beam_timing driver trusts
-  // it unchecked.
-  const nlohmann::json& checked = json["recording"]["beam_timing"];
-  EXPECT_EQ(checked["changed"], false) << checked;
-  EXPECT_EQ(checked["used"], checked["recorded"]) << checked;
-  run = Calibrate(log, "--lidar_rotation_period 0.1 --lidar_beam_timing driver");
-  ASSERT_EQ(run.exit_code, 0) << run.err;
-  json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
-  EXPECT_FALSE(json["recording"].contains("beam_timing")) << json["recording"];
   ExpectFailure(log, "--lidar_beam_timing sometimes", {"--lidar_beam_timing sometimes", "auto"});
 }
 
