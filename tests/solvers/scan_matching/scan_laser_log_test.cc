@@ -509,7 +509,7 @@ INSTANTIATE_TEST_SUITE_P(Drivers, BeamTimingTest,
                                            BeamTimingCase{"lds01", true, 1.0 / 18.0, true},
                                            BeamTimingCase{"too_small", false, 1.0 / 18.0, true},
                                            BeamTimingCase{"reversed", true, 1.0, true},
-                      BeamTimingCase{"none", false, 0.0, true}),
+                                           BeamTimingCase{"none", false, 0.0, true}),
                          [](const ::testing::TestParamInfo<BeamTimingCase>& info) {
                            return info.param.name;
                          });
