@@ -58,6 +58,7 @@ void Misstate(const Misstatement& m, std::vector<LaserScan>* scans) {
 
 struct Route {
   LaserParamVector sum_z = LaserParamVector::Zero();
+  double worst_z = 0.0;  // The largest |z| of any run.
   int within = 0, runs = 0, found = 0;
 
   nlohmann::ordered_json Print(const char* name, bool checked) const {
@@ -65,14 +66,16 @@ struct Route {
     int worst = 0;
     const double largest = (sum_z / n).cwiseAbs().maxCoeff(&worst);
     const double coverage = 100.0 * within / (kNumLaserParams * n);
-    std::printf("    %-8s %2d runs: within 2σ %3.0f %%, largest |mean z| %5.2f (%s)", name, runs,
-                coverage, largest, kLaserParamNames[worst].c_str());
+    std::printf(
+        "    %-8s %2d runs: within 2σ %3.0f %%, largest |mean z| %5.2f (%s), largest |z| %5.1f",
+        name, runs, coverage, largest, kLaserParamNames[worst].c_str(), worst_z);
     if (checked) std::printf(", true timing found %d of %d", found, runs);
     std::printf("\n");
     nlohmann::ordered_json row = {{"runs", runs},
                                   {"within_2_sigma", coverage / 100.0},
                                   {"largest_abs_mean_z", largest},
-                                  {"largest_parameter", kLaserParamNames[worst]}};
+                                  {"largest_parameter", kLaserParamNames[worst]},
+                                  {"largest_abs_z", worst_z}};
     if (checked) row["true_timing_found"] = found;
     return row;
   }
@@ -116,6 +119,7 @@ nlohmann::ordered_json RunBeamTimingBench(const BenchConfig& config) {
             (c.estimate.ToVector() - truth.ToVector()).cwiseQuotient(c.stddev);
         Route& route = check ? checked : trusted;
         route.sum_z += z;
+        route.worst_z = std::max(route.worst_z, z.cwiseAbs().maxCoeff());
         for (int p = 0; p < kNumLaserParams; ++p) route.within += std::abs(z(p)) <= 2.0;
         ++route.runs;
         const std::optional<BeamTimingCheck>& b = r->log.beam_timing;

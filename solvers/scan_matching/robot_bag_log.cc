@@ -187,6 +187,7 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
   if (options.calibrated) {
     scan_options.nominal = options.calibrated->odometry;
     scan_options.nominal_base_T_sensor = options.calibrated->base_T_sensor;
+    scan_options.sweep_time_offset_s = options.calibrated_time_offset_s;
   } else if (options.nominal_wheel_radius_m > 0.0 && options.nominal_wheelbase_m > 0.0) {
     scan_options.nominal =
         OdometryParams{options.nominal_wheel_radius_m, options.nominal_wheel_radius_m,
@@ -198,9 +199,9 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
                            bag.source + " " + out.topics.scan_topic};
   out.beam_timing = options.beam_timing;
   if (!out.beam_timing && options.check_beam_timing && options.calibrated) {
-    out.beam_timing =
-        CheckBeamTiming(scans, wheels.samples,
-                        {scan_options.nominal, scan_options.nominal_base_T_sensor}, names.scans);
+    out.beam_timing = CheckBeamTiming(scans, wheels.samples,
+                                      {scan_options.nominal, scan_options.nominal_base_T_sensor},
+                                      scan_options.sweep_time_offset_s, names.scans);
   }
   if (out.beam_timing && out.beam_timing->changed) {
     for (LaserScan& scan : scans) scan = WithBeamTiming(scan, out.beam_timing->chosen);
@@ -276,6 +277,7 @@ StatusOr<RobotBagCalibration> CalibrateTwoStage(const RobotMessages& bag,
   double moved = 0.0;
   for (bool settled = false; !settled && passes < kMaxPasses;) {
     deskewed.calibrated = out.result.calibration.estimate;
+    deskewed.calibrated_time_offset_s = out.result.time_offset_s;
     const LaserCalibrationResult before = out.result.calibration;
     if (!deskewed.beam_timing) deskewed.beam_timing = out.log.beam_timing;
     CALIB_RETURN_IF_ERROR(CalibratePass(probe, deskewed, timing, &out));
@@ -285,6 +287,7 @@ StatusOr<RobotBagCalibration> CalibrateTwoStage(const RobotMessages& bag,
   }
   if (long_log) {
     deskewed.calibrated = out.result.calibration.estimate;
+    deskewed.calibrated_time_offset_s = out.result.time_offset_s;
     CALIB_RETURN_IF_ERROR(CalibratePass(bag, deskewed, timing, &out));
     ++passes;
   }

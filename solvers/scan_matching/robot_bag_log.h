@@ -35,6 +35,9 @@ struct RobotBagOptions {
   // A calibration of this robot (a first pass): the matcher's guesses and the de-skewing of each
   // sweep then go through it instead of the nominal values.
   std::optional<LaserCalibration> calibrated;
+  // With `calibrated`: its estimate of when the scans were taken after their stamps (the wheels'
+  // clock), where the de-skewing follows the sensor (a stamp at the sweep's end, not its start).
+  double calibrated_time_offset_s = 0.0;
   // When set, the calibration is refined against the scan points after the two-stage route; and
   // where that route cannot calibrate (too few matches), the scan points calibrate alone from
   // the nominal wheels (CalibrateOnScanPointsAlone).

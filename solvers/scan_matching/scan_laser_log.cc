@@ -144,17 +144,19 @@ StatusOr<ScanOdometryResult> MatchRun(const std::vector<const LaserScan*>& scans
                                       const ScanLogOptions& options, double max_sweep_s) {
   const WheelsAndMounting robot = Nominal(options);
   const bool nominal = robot.known();
+  const double offset_s = options.sweep_time_offset_s;
   ScanOdometry odometry(options.matching);
   for (size_t i = begin; i < end; ++i) {
     const LaserScan& scan = *scans[i];
     Pose2d guess = Pose2d::Zero();
     if (i > begin && nominal) {
-      guess = SensorMotionBetween(encoders, scans[i - 1]->stamp_s, scan.stamp_s, robot);
+      guess = SensorMotionBetween(encoders, scans[i - 1]->stamp_s + offset_s,
+                                  scan.stamp_s + offset_s, robot);
     }
     std::optional<SweepMotion> sweep;
     const double sweep_s = scan.SweepSeconds();
     if (options.deskew && nominal && sweep_s > 0.0 && sweep_s <= max_sweep_s) {
-      sweep = SweepMotionOver(encoders, scan.stamp_s, sweep_s, robot);
+      sweep = SweepMotionOver(encoders, scan.stamp_s + offset_s, sweep_s, robot);
     }
     CALIB_RETURN_IF_ERROR(odometry.AddScan(scan, guess, sweep));
   }
