@@ -40,9 +40,14 @@ std::vector<bool> Inliers(const std::vector<Eigen::Vector3d>& errors,
 bool EstimateBaseFitJitter(const std::vector<const std::vector<LaserInterval>*>& logs,
                            const LaserCalibrationOptions& options, LaserCalibrationResult* result) {
   bool any = false;
+  // A significant jitter is estimated again by the refit, σ of σ_j with it: none here.
+  IntervalJitterOptions base = options.jitter;
+  base.stddev_wanted = [given = options.jitter.stddev_wanted](const IntervalJitterEstimate& e) {
+    return !e.significant && (!given || given(e));
+  };
   for (size_t d = 0; d < logs.size(); ++d) {
     result->interval_jitter.push_back(EstimateIntervalJitter(
-        *logs[d], result->estimate, result->noise_sigma[d], result->is_inlier[d], options.jitter));
+        *logs[d], result->estimate, result->noise_sigma[d], result->is_inlier[d], base));
     any = any || result->interval_jitter.back().significant;
   }
   return any;
