@@ -88,7 +88,8 @@ class ScoreTester {
   RobustFitBlocks blocks_;
   int hac_lag_;
   bool ok_ = false;
-  Eigen::LDLT<Eigen::MatrixXd> a_nuisance_;  // A_θθ.
+  Eigen::MatrixXd a_;                        // A_θθ.
+  Eigen::LDLT<Eigen::MatrixXd> a_nuisance_;  // Its factors.
   Eigen::MatrixXd gradients_;                // N × p: g_k = ρ'_k·J_kᵀr_k.
   Eigen::VectorXd gradient_sum_;             // Σ g_k (≈ 0 at the optimum).
   Eigen::MatrixXd gradient_outer_;           // Σ g_k g_kᵀ.
