@@ -63,7 +63,9 @@ void AddConfirmation(const Finding& f, Json* out) {
 }  // namespace
 
 std::string FindingPlotName(const Finding& finding) {
-  return finding.name + "_vs_" + finding.location.covariate + ".svg";
+  // A finding located along no covariate (the stamp jitter) is named alone.
+  const std::string& covariate = finding.location.covariate;
+  return finding.name + (covariate.empty() ? "" : "_vs_" + covariate) + ".svg";
 }
 
 Json FitReportJson(const FitReport& fit) {
