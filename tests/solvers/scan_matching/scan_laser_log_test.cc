@@ -28,6 +28,15 @@ ScanSimOptions Robot(int scans, uint64_t seed) {
   return o;
 }
 
+// Wheels to 12 rad/s: up to 0.5 rad per 0.1 s sweep of 360 beams, 1 cm range noise.
+ScanSimOptions FastTurningRobot() {
+  ScanSimOptions o = Robot(600, 9);
+  o.laser.max_wheel_speed = 12.0;
+  o.sweep_s = 0.1;
+  o.range_noise_sigma_m = 0.01;
+  return o;
+}
+
 // |estimate − truth| / σ, largest over the six parameters.
 double WorstZ(const LaserCalibrationResult& r, const ScanSimTruth& truth) {
   LaserCalibration t;
@@ -202,10 +211,7 @@ TEST(ScanLaserLog, SweepingScansAreDeskewedThroughAFirstCalibration) {
 // −5.3σ off (τ +2 ms, following the net turn); passes until settled leave every parameter
 // within 3σ, as de-skewing through the truth does.
 TEST(ScanLaserLog, FastTurnsAreDeskewedUntilThePassesSettle) {
-  ScanSimOptions o = Robot(600, 9);
-  o.laser.max_wheel_speed = 12.0;
-  o.sweep_s = 0.1;
-  o.range_noise_sigma_m = 0.01;
+  ScanSimOptions o = FastTurningRobot();
   o.missing_probability = 0.02;
   ScanSimTruth truth;
   const StatusOr<RobotBagCalibration> r = CalibrateSimulatedBag(o, "fast_turns.bag", &truth);
@@ -402,6 +408,13 @@ TEST(ScanLaserLog, TooFewScansOrStampsOutOfOrderAreErrors) {
   EXPECT_NE(log.message().find("does not follow"), std::string::npos) << log.message();
 }
 
+// The same beams listed from the last measured to the first (each keeps its angle and range).
+void ListAgainstTheirOrder(LaserScan* scan) {
+  scan->angle_min_rad += (scan->ranges_m.size() - 1.0) * scan->angle_increment_rad;
+  scan->angle_increment_rad = -scan->angle_increment_rad;
+  std::reverse(scan->ranges_m.begin(), scan->ranges_m.end());
+}
+
 // How a driver may misstate its beams' timing: the LDS-01's (hls_lfcd_lds_driver) lists its beams
 // against the order they were measured in and gives a time_increment ~18× too small.
 struct BeamTimingCase {
@@ -418,10 +431,7 @@ class BeamTimingTest : public ::testing::TestWithParam<BeamTimingCase> {};
 // misstatement trusted: b 15σ and sensor_x 5σ off); a true one is kept.
 TEST_P(BeamTimingTest, AMisstatedBeamTimingIsFoundAndUsed) {
   const BeamTimingCase& c = GetParam();
-  ScanSimOptions o = Robot(600, 9);
-  o.laser.max_wheel_speed = 12.0;
-  o.sweep_s = 0.1;
-  o.range_noise_sigma_m = 0.01;
+  ScanSimOptions o = FastTurningRobot();
   const StatusOr<ScanSimulation> sim = SimulateScans(o);
   ASSERT_TRUE(sim.ok()) << sim.message();
   RobotMessages bag = ScanSimulationMessages(*sim);
@@ -429,11 +439,7 @@ TEST_P(BeamTimingTest, AMisstatedBeamTimingIsFoundAndUsed) {
   std::vector<LaserScan>& scans = bag.scans.begin()->second;
   const double true_increment_s = scans.front().time_increment_s;
   for (LaserScan& scan : scans) {
-    if (c.reversed) {
-      scan.angle_min_rad += (scan.ranges_m.size() - 1.0) * scan.angle_increment_rad;
-      scan.angle_increment_rad = -scan.angle_increment_rad;
-      std::reverse(scan.ranges_m.begin(), scan.ranges_m.end());
-    }
+    if (c.reversed) ListAgainstTheirOrder(&scan);
     scan.time_increment_s *= c.scale;
   }
   const StatusOr<RobotBagCalibration> r = CalibrateRobotMessages(bag, RobotBagOptions(), kTiming);
@@ -477,9 +483,7 @@ TEST(ScanLaserLog, ATurtleBotsLds01IsDeskewedTheWayItSpins) {
   RobotMessages bag = ScanSimulationMessages(*sim);
   bag.source = "burger.bag";
   for (LaserScan& scan : bag.scans.begin()->second) {
-    scan.angle_min_rad += (scan.ranges_m.size() - 1.0) * scan.angle_increment_rad;
-    scan.angle_increment_rad = -scan.angle_increment_rad;
-    std::reverse(scan.ranges_m.begin(), scan.ranges_m.end());
+    ListAgainstTheirOrder(&scan);
     scan.time_increment_s /= 18.0;
   }
   RobotBagOptions trusting;
@@ -518,10 +522,7 @@ INSTANTIATE_TEST_SUITE_P(Drivers, BeamTimingTest,
 // turns: the passes de-skew each sweep where the previous pass's time offset puts it, not at the
 // stamp. De-skewed at the stamps, the offset came out −92.2 ± 0.3 ms and the radii and b 2.7σ off.
 TEST(ScanLaserLog, AScanStampedAtItsSweepsEndIsDeskewedWhereItWasTaken) {
-  ScanSimOptions o = Robot(600, 9);
-  o.laser.max_wheel_speed = 12.0;
-  o.sweep_s = 0.1;
-  o.range_noise_sigma_m = 0.01;
+  ScanSimOptions o = FastTurningRobot();
   LoggingModel logging;
   logging.pickup_latency_s = 0.1;
   logging.encoder_period_s = 0.02;
