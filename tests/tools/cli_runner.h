@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "tests/scratch_dir.h"
+
 // Runs build/bin/calib as a user would (no standard input) and captures what it says.
 namespace calib::testing {
 
@@ -28,21 +30,6 @@ inline std::string ReadFile(const std::filesystem::path& path) {
   std::stringstream buffer;
   buffer << in.rdbuf();
   return buffer.str();
-}
-
-// A fresh folder in the temporary directory, named `prefix`, the process id and the running
-// test's name (so that concurrent runs do not meet); the caller removes it.
-inline std::filesystem::path MakeScratchDir(const std::string& prefix) {
-  // Outside a test (a suite's set-up) there is no running test: the suite's name instead.
-  const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
-  const ::testing::TestSuite* suite = ::testing::UnitTest::GetInstance()->current_test_suite();
-  std::string name = test != nullptr ? test->name() : suite != nullptr ? suite->name() : "setup";
-  std::replace(name.begin(), name.end(), '/', '_');  // Parameterized names hold slashes.
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / (prefix + std::to_string(::getpid()) + "_" + name);
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
 }
 
 // `scratch` receives the captured stdout.txt and stderr.txt; `working_dir`: where it runs (empty:

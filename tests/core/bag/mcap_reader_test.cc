@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "tests/core/bag/small_robot_expectations.h"
+#include "tests/scratch_dir.h"
 
 namespace calib {
 namespace {
@@ -94,8 +95,14 @@ std::string Fixture(const std::string& name) {
   return bytes;
 }
 
+// This test's folder for altered copies, made on first use.
+const std::filesystem::path& ScratchFolder() {
+  static const std::filesystem::path dir = testing::MakeScratchDir("mcap_reader_test_");
+  return dir;
+}
+
 std::string Scratch(const std::string& name, const std::string& bytes) {
-  const std::string path = ::testing::TempDir() + "mcap_reader_test_" + name;
+  const std::string path = (ScratchFolder() / name).string();
   EXPECT_TRUE(WriteWholeFile(path, bytes).ok());
   return path;
 }
@@ -141,9 +148,7 @@ TEST(McapReaderTest, IndexedReadSkipsChunksWithoutWantedTopics) {
 }
 
 TEST(McapReaderTest, ReadsABagDirectory) {
-  const std::string dir = ::testing::TempDir() + "mcap_reader_test_bag_dir";
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  const std::string dir = testing::MakeScratchDir("mcap_reader_test_bag_dir_").string();
   ASSERT_TRUE(WriteWholeFile(dir + "/metadata.yaml", "rosbag2_bagfile_information:\n").ok());
   const auto empty = ReadMcapBag(dir);
   ASSERT_FALSE(empty.ok());
@@ -203,7 +208,7 @@ TEST(McapReaderTest, BadMagicIsNotAnMcapFile) {
 TEST(McapReaderTest, TruncatedFilesFailNamingTheByte) {
   for (const std::string& name : kFixtures) {
     const std::string bytes = Fixture(name);
-    const std::string path = ::testing::TempDir() + "mcap_reader_test_truncated.mcap";
+    const std::string path = (ScratchFolder() / "truncated.mcap").string();
     std::vector<size_t> cuts = {0, 5, 8, 9, 16, bytes.size() - 9, bytes.size() - 1};
     for (size_t cut = 17; cut < bytes.size(); cut += 211) cuts.push_back(cut);
     for (size_t cut : cuts) {
@@ -294,7 +299,7 @@ TEST(McapReaderTest, CdrSequenceLongerThanTheMessageNamesTopicAndRecord) {
 TEST(McapReaderTest, ScribbledBytesNeverCrash) {
   for (const std::string name : {"small_robot_zstd.mcap", "small_robot_nosummary.mcap"}) {
     const std::string original = Fixture(name);
-    const std::string path = ::testing::TempDir() + "mcap_reader_test_scribbled.mcap";
+    const std::string path = (ScratchFolder() / "scribbled.mcap").string();
     for (size_t at = 8; at < original.size();
          at += (at < 90 || at + 250 > original.size()) ? 3 : 401) {
       std::string bytes = original;

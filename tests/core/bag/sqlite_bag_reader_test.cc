@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "tests/core/bag/small_robot_expectations.h"
+#include "tests/scratch_dir.h"
 
 namespace calib {
 namespace {
@@ -107,11 +108,7 @@ TEST(SqliteBagReaderTest, ReadsASplitBagAsOne) {
 
 class SqliteBagErrorTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::path(::testing::TempDir()) / "sqlite_bag_reader_test";
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
+  void SetUp() override { dir_ = testing::MakeScratchDir("sqlite_bag_reader_test_"); }
   void TearDown() override { fs::remove_all(dir_); }
 
   // A copy of the uncompressed small robot's database, changed by `sql`.

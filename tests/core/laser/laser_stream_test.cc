@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "tests/scratch_dir.h"
+
 namespace calib {
 namespace {
 
@@ -15,13 +17,7 @@ namespace fs = std::filesystem;
 
 class LaserStreamReadTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::path(::testing::TempDir()) /
-           ("laser_stream_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
+  void SetUp() override { dir_ = testing::MakeScratchDir("laser_stream_"); }
   void TearDown() override { fs::remove_all(dir_); }
   void Write(const std::string& odometry, const std::string& poses) {
     std::ofstream(dir_ / "odometry.csv") << odometry;

@@ -10,6 +10,8 @@
 #include <random>
 #include <string>
 
+#include "tests/scratch_dir.h"
+
 namespace calib {
 namespace {
 
@@ -235,8 +237,7 @@ TEST(MartinelliClosedFormTest, SameAnswerThroughTheFileFormat) {
   o.bearing_noise_rad = M_PI / 180;
   o.initial_distance_run = 2;
   const BearingLog log = SimulateBearingLog(o);
-  const std::string dir =
-      (std::filesystem::path(::testing::TempDir()) / "martinelli_roundtrip").string();
+  const std::string dir = testing::MakeScratchDir("martinelli_roundtrip_").string();
   ASSERT_TRUE(WriteBearingLog(log, dir).ok());
   const StatusOr<BearingLog> read = ReadBearingLog(dir);
   ASSERT_TRUE(read.ok()) << read.message();

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "tests/scratch_dir.h"
+
 namespace calib {
 namespace {
 
@@ -22,13 +24,7 @@ std::string Slurp(const fs::path& path) {
 
 class JsonOutputTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("json_output_test_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
+  void SetUp() override { dir_ = testing::MakeScratchDir("json_output_test_"); }
   void TearDown() override { fs::remove_all(dir_); }
   fs::path dir_;
 };
