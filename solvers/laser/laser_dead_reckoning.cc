@@ -51,11 +51,11 @@ std::vector<Eigen::Vector3d> LaserIntervalErrors(const std::vector<LaserInterval
   const double odometry[3] = {calibration.odometry.left_radius_m,
                               calibration.odometry.right_radius_m,
                               calibration.odometry.wheelbase_m};
-  const Pose2d& mounting = calibration.base_T_sensor;
+  const SensorMounting mounting(calibration.base_T_sensor.data());
   std::vector<Eigen::Vector3d> errors;
   errors.reserve(intervals.size());
   for (const LaserInterval& interval : intervals) {
-    errors.push_back(LaserResidual::Error(interval, odometry, mounting.data()));
+    errors.push_back(LaserResidual::Error(interval, odometry, mounting));
   }
   return errors;
 }

@@ -1,7 +1,7 @@
-#include <calib/problems/laser/laser_residual.h>
 #include <calib/solvers/diagnosis/confirmation.h>
 #include <calib/solvers/diagnosis/multiple_testing.h>
 #include <calib/solvers/diagnosis/statement.h>
+#include <calib/solvers/laser/laser_dead_reckoning.h>
 #include <calib/solvers/laser/laser_diagnosis.h>
 #include <calib/solvers/laser/laser_diagnosis_internal.h>
 
@@ -45,11 +45,7 @@ namespace {
 Eigen::Matrix3d SqrtInformation(const std::vector<LaserInterval>& intervals,
                                 const LaserCalibration& estimate,
                                 const LaserDiagnosisOptions& options) {
-  std::vector<Eigen::Vector3d> errors(intervals.size());
-  const LaserParamVector v = estimate.ToVector();
-  for (size_t k = 0; k < intervals.size(); ++k) {
-    errors[k] = LaserResidual::Error(intervals[k], v.data(), v.data() + 3);
-  }
+  const std::vector<Eigen::Vector3d> errors = LaserIntervalErrors(intervals, estimate);
   const Eigen::Vector3d sigma =
       options.calibration.noise_sigma ? *options.calibration.noise_sigma : RobustNoiseSigma(errors);
   return sigma.cwiseInverse().asDiagonal();

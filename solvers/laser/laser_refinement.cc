@@ -299,11 +299,11 @@ LaserInterval ShiftIncrements(LaserInterval interval, const Eigen::Vector2d& inc
 
 // ψ = ρ'·Jᵀr of one interval (ρ' given), and its Gauss–Newton Hessian ρ'·JᵀJ when asked.
 LaserParamVector Score(const LaserInterval& interval, const Eigen::Matrix3d& root,
-                       const double* const* parameters, double weight,
+                       const double* odometry, const SensorMounting& mounting, double weight,
                        LaserParamMatrix* hessian = nullptr) {
   Eigen::Matrix<double, 3, kNumLaserParams> j;
   Eigen::Vector3d r;
-  LaserResidual::Linearize(interval, root, parameters[0], parameters[1], &r, &j);
+  LaserResidual::Linearize(interval, root, odometry, mounting, &r, &j);
   if (hessian) *hessian += weight * j.transpose() * j;
   return weight * j.transpose() * r;
 }
@@ -312,7 +312,7 @@ LaserParamVector Score(const LaserInterval& interval, const Eigen::Matrix3d& roo
 
 StatusOr<LaserParamVector> LaserProblem::IncrementNoiseCorrection(
     const std::vector<std::vector<Eigen::Matrix2d>>& increment_covariance) const {
-  const double* parameters[2] = {odometry_, base_T_sensor_};
+  const SensorMounting mounting(base_T_sensor_);
   LaserParamMatrix hessian = LaserParamMatrix::Zero();
   LaserParamVector correction = LaserParamVector::Zero();
   for (size_t d = 0; d < datasets_.size(); ++d) {
@@ -321,16 +321,18 @@ StatusOr<LaserParamVector> LaserProblem::IncrementNoiseCorrection(
     for (size_t k = 0; k < intervals.size(); ++k) {
       const Eigen::Matrix3d& root = IntervalSqrtInformation(d, k);
       const double weight = LossWeight(s[k]);
-      const LaserParamVector center = Score(intervals[k], root, parameters, weight, &hessian);
+      const LaserParamVector center =
+          Score(intervals[k], root, odometry_, mounting, weight, &hessian);
       if (d >= increment_covariance.size() || k >= increment_covariance[d].size()) continue;
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(increment_covariance[d][k]);
       for (int i = 0; i < 2; ++i) {
         const double variance = eigen.eigenvalues()(i);
         if (!(variance > 0.0)) continue;
         const Eigen::Vector2d u = std::sqrt(variance) * eigen.eigenvectors().col(i);
-        correction += 0.5 * (Score(ShiftIncrements(intervals[k], u), root, parameters, weight) +
-                             Score(ShiftIncrements(intervals[k], -u), root, parameters, weight) -
-                             2.0 * center);
+        correction +=
+            0.5 * (Score(ShiftIncrements(intervals[k], u), root, odometry_, mounting, weight) +
+                   Score(ShiftIncrements(intervals[k], -u), root, odometry_, mounting, weight) -
+                   2.0 * center);
       }
     }
   }

@@ -312,11 +312,10 @@ IntervalJitterEstimate EstimateIntervalJitter(const std::vector<LaserInterval>& 
   const std::vector<size_t> sample =
       JitterSampleIndices(intervals.size(), is_inlier, options.max_intervals);
   const LaserParamVector p = calibration.ToVector();
+  const SensorMounting mounting(p.data() + 3);
   std::vector<Eigen::Vector3d> errors;
   errors.reserve(sample.size());
-  for (size_t k : sample) {
-    errors.push_back(LaserResidual::Error(intervals[k], p.data(), p.data() + 3));
-  }
+  for (size_t k : sample) errors.push_back(LaserResidual::Error(intervals[k], p.data(), mounting));
   IntervalJitterOptions all = options;
   all.max_intervals = std::max<int>(options.max_intervals, static_cast<int>(sample.size()));
   return EstimateIntervalJitter(errors, IntervalTimeSensitivities(intervals, calibration, sample),
