@@ -253,10 +253,13 @@ IntervalJitterEstimate EstimateIntervalJitter(
 
   // Each evaluation starts the scoring where the previous one ended (nearby σ_j: a few steps).
   Eigen::Vector3d warm = theta;
+  double warm_at = -1.0;  // The σ_j whose profiled θ `warm` holds (to full tolerance), if any.
   const auto profile = [&](double jitter_s) {
+    warm_at = jitter_s;
     return ProfileLogLikelihood(data, jitter_s, options.estimate_noise, &warm);
   };
   const auto rank = [&](double jitter_s) {
+    warm_at = -1.0;
     return ProfileLogLikelihood(data, jitter_s, options.estimate_noise, &warm, kGridTolerance);
   };
   // Joint scoring from σ_j = start, with θ profiled there first (the grid's warm θ belongs to
@@ -267,19 +270,22 @@ IntervalJitterEstimate EstimateIntervalJitter(
     ProfileLogLikelihood(data, start, true, &start_theta, kGridTolerance);
     double found = start;
     if (!JointMaximum(data, lo, hi, &start_theta, &found)) return false;
-    warm = start_theta;
+    warm = start_theta, warm_at = -1.0;
     *jitter_s = found;
     return true;
   };
   double jitter_s = 0.0, value = 0.0;
   if (!(options.previous_jitter_s > 0.0) ||
       !NearPrevious(profile, joint, options.previous_jitter_s, &jitter_s, &value)) {
-    warm = theta;
+    warm = theta, warm_at = -1.0;
     SearchFromGrid(profile, rank, joint, scale, options.grid_points,
                    estimate.log_likelihood_without_jitter, &jitter_s, &value);
   }
+  // θ at the chosen σ_j: `warm` already, unless the search ended on a grid point.
   Eigen::Vector3d theta_best = warm;
-  ProfileLogLikelihood(data, jitter_s, options.estimate_noise, &theta_best);
+  if (warm_at != jitter_s) {
+    ProfileLogLikelihood(data, jitter_s, options.estimate_noise, &theta_best);
+  }
 
   estimate.jitter_s = jitter_s;
   estimate.noise_sigma = theta_best.cwiseSqrt();

@@ -31,7 +31,8 @@ double LogLikelihood(const JitterData& data, const Eigen::Vector3d& theta, doubl
                      Eigen::Vector3d* score = nullptr, Eigen::Matrix3d* fisher = nullptr);
 
 // max over θ of the log-likelihood at σ_j² (Fisher scoring from *theta, which it updates, until
-// θ moves by less than `tolerance`, relative).
+// the next step would move θ by less than `tolerance`, relative: θ and the value are then those
+// of the last pass, without the step).
 double ProfileLogLikelihood(const JitterData& data, double jitter_s, bool estimate_noise,
                             Eigen::Vector3d* theta, double tolerance = 1e-10);
 
