@@ -324,7 +324,9 @@ StatusOr<LaserParamVector> LaserProblem::IncrementNoiseCorrection(
       const LaserParamVector center =
           Score(intervals[k], root, odometry_, mounting, weight, &hessian);
       if (d >= increment_covariance.size() || k >= increment_covariance[d].size()) continue;
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(increment_covariance[d][k]);
+      // 2×2: the closed-form eigen decomposition (the iterative one cost as much as a residual).
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen;
+      eigen.computeDirect(increment_covariance[d][k]);
       for (int i = 0; i < 2; ++i) {
         const double variance = eigen.eigenvalues()(i);
         if (!(variance > 0.0)) continue;
