@@ -36,10 +36,10 @@ double LogLikelihood(const JitterData& data, const Eigen::Vector3d& theta, doubl
 double ProfileLogLikelihood(const JitterData& data, double jitter_s, bool estimate_noise,
                             Eigen::Vector3d* theta, double tolerance = 1e-10);
 
-// Fisher scoring jointly in (θ, σ_j²) from (*theta, *jitter_s): the profile's maximum in a few
-// passes instead of a search along σ_j with a scoring at every point. False, leaving the outputs,
-// when it does not settle at a σ_j strictly within (lo, hi) (a maximum on the boundary σ_j = 0 or
-// beyond the bracket: the search decides then).
+// Fisher scoring, then Newton, jointly in (θ, σ_j²) from (*theta, *jitter_s): the profile's
+// maximum in a few passes instead of a search along σ_j with a scoring at every point. False,
+// leaving the outputs, when it does not settle at a σ_j strictly within (lo, hi) (a maximum on the
+// boundary σ_j = 0 or beyond the bracket: the search decides then).
 bool JointMaximum(const JitterData& data, double lo, double hi, Eigen::Vector3d* theta,
                   double* jitter_s);
 
