@@ -297,52 +297,75 @@ LaserInterval ShiftIncrements(LaserInterval interval, const Eigen::Vector2d& inc
   return interval;
 }
 
-// ψ = ρ'·Jᵀr of one interval (ρ' given), and its Gauss–Newton Hessian ρ'·JᵀJ when asked.
+// ψ = ρ'·Jᵀr of one interval (ρ' given).
 LaserParamVector Score(const LaserInterval& interval, const Eigen::Matrix3d& root,
-                       const double* odometry, const SensorMounting& mounting, double weight,
-                       LaserParamMatrix* hessian = nullptr) {
+                       const double* odometry, const SensorMounting& mounting, double weight) {
   Eigen::Matrix<double, 3, kNumLaserParams> j;
   Eigen::Vector3d r;
   LaserResidual::Linearize(interval, root, odometry, mounting, &r, &j);
-  if (hessian) *hessian += weight * j.transpose() * j;
   return weight * j.transpose() * r;
 }
 
+// Below this many intervals a chunk of the correction's pass (five linearizations an interval)
+// costs less than a thread.
+constexpr size_t kMinCorrectionChunk = 1000;
+
 }  // namespace
+
+void LaserProblem::AddIncrementCorrection(size_t d, size_t k, const Eigen::Matrix2d* covariance,
+                                          const SensorMounting& mounting, LaserParamMatrix* hessian,
+                                          LaserParamVector* correction) const {
+  const LaserInterval& interval = (*datasets_[d].intervals)[k];
+  const Eigen::Matrix3d& root = IntervalSqrtInformation(d, k);
+  Eigen::Matrix<double, 3, kNumLaserParams> j;
+  Eigen::Vector3d r;
+  LaserResidual::Linearize(interval, root, odometry_, mounting, &r, &j);
+  const double weight = LossWeight(r.squaredNorm());
+  *hessian += weight * j.transpose() * j;
+  if (covariance == nullptr) return;
+  const LaserParamVector center = weight * j.transpose() * r;
+  // 2×2: the closed-form eigen decomposition (the iterative one cost as much as a residual).
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen;
+  eigen.computeDirect(*covariance);
+  for (int i = 0; i < 2; ++i) {
+    const double variance = eigen.eigenvalues()(i);
+    if (!(variance > 0.0)) continue;
+    const Eigen::Vector2d u = std::sqrt(variance) * eigen.eigenvectors().col(i);
+    *correction += 0.5 * (Score(ShiftIncrements(interval, u), root, odometry_, mounting, weight) +
+                          Score(ShiftIncrements(interval, -u), root, odometry_, mounting, weight) -
+                          2.0 * center);
+  }
+}
 
 StatusOr<LaserParamVector> LaserProblem::IncrementNoiseCorrection(
     const std::vector<std::vector<Eigen::Matrix2d>>& increment_covariance) const {
   const SensorMounting mounting(base_T_sensor_);
-  LaserParamMatrix hessian = LaserParamMatrix::Zero();
-  LaserParamVector correction = LaserParamVector::Zero();
-  for (size_t d = 0; d < datasets_.size(); ++d) {
-    const std::vector<LaserInterval>& intervals = *datasets_[d].intervals;
-    const std::vector<double> s = WhitenedSquaredNorms(d);
-    for (size_t k = 0; k < intervals.size(); ++k) {
-      const Eigen::Matrix3d& root = IntervalSqrtInformation(d, k);
-      const double weight = LossWeight(s[k]);
-      const LaserParamVector center =
-          Score(intervals[k], root, odometry_, mounting, weight, &hessian);
-      if (d >= increment_covariance.size() || k >= increment_covariance[d].size()) continue;
-      // 2×2: the closed-form eigen decomposition (the iterative one cost as much as a residual).
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen;
-      eigen.computeDirect(increment_covariance[d][k]);
-      for (int i = 0; i < 2; ++i) {
-        const double variance = eigen.eigenvalues()(i);
-        if (!(variance > 0.0)) continue;
-        const Eigen::Vector2d u = std::sqrt(variance) * eigen.eigenvectors().col(i);
-        correction +=
-            0.5 * (Score(ShiftIncrements(intervals[k], u), root, odometry_, mounting, weight) +
-                   Score(ShiftIncrements(intervals[k], -u), root, odometry_, mounting, weight) -
-                   2.0 * center);
-      }
-    }
+  struct Sums {
+    LaserParamMatrix hessian = LaserParamMatrix::Zero();
+    LaserParamVector correction = LaserParamVector::Zero();
+  };
+  std::vector<Sums> sums(ChunkCount(num_intervals(), options_.num_threads, kMinCorrectionChunk));
+  ParallelChunks(num_intervals(), options_.num_threads, kMinCorrectionChunk,
+                 [&](size_t chunk, size_t begin, size_t end) {
+                   Sums own;  // On the thread's stack (see SandwichCovariance).
+                   for (size_t i = begin; i < end; ++i) {
+                     const size_t d = DatasetOf(i), k = i - dataset_begin_[d];
+                     const bool given =
+                         d < increment_covariance.size() && k < increment_covariance[d].size();
+                     AddIncrementCorrection(d, k, given ? &increment_covariance[d][k] : nullptr,
+                                            mounting, &own.hessian, &own.correction);
+                   }
+                   sums[chunk] = own;
+                 });
+  for (size_t c = 1; c < sums.size(); ++c) {
+    sums[0].hessian += sums[c].hessian;
+    sums[0].correction += sums[c].correction;
   }
-  const Eigen::LDLT<LaserParamMatrix> ldlt(hessian);
+  const Eigen::LDLT<LaserParamMatrix> ldlt(sums[0].hessian);
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
     return Status::NotObservable(kSingular);
   }
-  return LaserParamVector(ldlt.solve(correction));
+  return LaserParamVector(ldlt.solve(sums[0].correction));
 }
 
 Eigen::Vector3d RobustNoiseSigma(const std::vector<Eigen::Vector3d>& errors) {

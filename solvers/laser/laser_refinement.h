@@ -134,6 +134,11 @@ class LaserProblem {
   // r and J of interval k of dataset d at the current parameters.
   void Linearize(size_t d, size_t k, const SensorMounting& mounting, Eigen::Vector3d* r,
                  Eigen::Matrix<double, 3, 6>* j) const;
+  // Interval k of dataset d's share of IncrementNoiseCorrection: ρ'JᵀJ into *hessian, and c_k
+  // into *correction when its increments' `covariance` is given.
+  void AddIncrementCorrection(size_t d, size_t k, const Eigen::Matrix2d* covariance,
+                              const SensorMounting& mounting, LaserParamMatrix* hessian,
+                              LaserParamVector* correction) const;
   void AddResidualBlocks(ceres::LossFunction* block_loss);
   void AddFusedBlock(ceres::LossFunction* block_loss);
   const Eigen::Matrix3d& IntervalSqrtInformation(size_t dataset, size_t k) const {
