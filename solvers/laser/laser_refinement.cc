@@ -306,10 +306,6 @@ LaserParamVector Score(const LaserInterval& interval, const Eigen::Matrix3d& roo
   return weight * j.transpose() * r;
 }
 
-// Below this many intervals a chunk of the correction's pass (five linearizations an interval)
-// costs less than a thread.
-constexpr size_t kMinCorrectionChunk = 1000;
-
 }  // namespace
 
 void LaserProblem::AddIncrementCorrection(size_t d, size_t k, const Eigen::Matrix2d* covariance,
@@ -344,8 +340,8 @@ StatusOr<LaserParamVector> LaserProblem::IncrementNoiseCorrection(
     LaserParamMatrix hessian = LaserParamMatrix::Zero();
     LaserParamVector correction = LaserParamVector::Zero();
   };
-  std::vector<Sums> sums(ChunkCount(num_intervals(), options_.num_threads, kMinCorrectionChunk));
-  ParallelChunks(num_intervals(), options_.num_threads, kMinCorrectionChunk,
+  std::vector<Sums> sums(ChunkCount(num_intervals(), options_.num_threads, kMinChunk));
+  ParallelChunks(num_intervals(), options_.num_threads, kMinChunk,
                  [&](size_t chunk, size_t begin, size_t end) {
                    Sums own;  // On the thread's stack (see SandwichCovariance).
                    for (size_t i = begin; i < end; ++i) {
