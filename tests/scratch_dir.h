@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <string>
+#include <system_error>
 
 namespace calib::testing {
 
@@ -25,6 +26,22 @@ inline std::filesystem::path MakeScratchDir(const std::string& prefix) {
   std::filesystem::create_directories(dir);
   return dir;
 }
+
+// MakeScratchDir's folder, removed with this object.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& prefix) : path_(MakeScratchDir(prefix)) {}
+  ~ScratchDir() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
 
 }  // namespace calib::testing
 

@@ -244,6 +244,7 @@ double ProfileLogLikelihood(const JitterData& data, double jitter_s, bool estima
     // Settled: θ is within `tolerance` of the maximum, and its value is at hand (no extra pass).
     if (!(change > tolerance) && std::isfinite(value)) return value;
     *theta = next;
+    if (!(change > tolerance)) break;
   }
   return LogLikelihood(data, *theta, jitter2);
 }

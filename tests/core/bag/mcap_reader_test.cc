@@ -95,10 +95,10 @@ std::string Fixture(const std::string& name) {
   return bytes;
 }
 
-// This test's folder for altered copies, made on first use.
+// This test's folder for altered copies, made on first use and removed at exit.
 const std::filesystem::path& ScratchFolder() {
-  static const std::filesystem::path dir = testing::MakeScratchDir("mcap_reader_test_");
-  return dir;
+  static const testing::ScratchDir dir("mcap_reader_test_");
+  return dir.path();
 }
 
 std::string Scratch(const std::string& name, const std::string& bytes) {
@@ -148,7 +148,8 @@ TEST(McapReaderTest, IndexedReadSkipsChunksWithoutWantedTopics) {
 }
 
 TEST(McapReaderTest, ReadsABagDirectory) {
-  const std::string dir = testing::MakeScratchDir("mcap_reader_test_bag_dir_").string();
+  const testing::ScratchDir scratch("mcap_reader_test_bag_dir_");
+  const std::string dir = scratch.path().string();
   ASSERT_TRUE(WriteWholeFile(dir + "/metadata.yaml", "rosbag2_bagfile_information:\n").ok());
   const auto empty = ReadMcapBag(dir);
   ASSERT_FALSE(empty.ok());

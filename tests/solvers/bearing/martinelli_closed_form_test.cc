@@ -237,7 +237,8 @@ TEST(MartinelliClosedFormTest, SameAnswerThroughTheFileFormat) {
   o.bearing_noise_rad = M_PI / 180;
   o.initial_distance_run = 2;
   const BearingLog log = SimulateBearingLog(o);
-  const std::string dir = testing::MakeScratchDir("martinelli_roundtrip_").string();
+  const testing::ScratchDir scratch("martinelli_roundtrip_");
+  const std::string dir = scratch.path().string();
   ASSERT_TRUE(WriteBearingLog(log, dir).ok());
   const StatusOr<BearingLog> read = ReadBearingLog(dir);
   ASSERT_TRUE(read.ok()) << read.message();
@@ -247,7 +248,6 @@ TEST(MartinelliClosedFormTest, SameAnswerThroughTheFileFormat) {
   EXPECT_EQ(a->params.phi_rad, b->params.phi_rad);
   EXPECT_EQ(a->params.xi_per_m, b->params.xi_per_m);
   EXPECT_EQ(a->metric.rho_m, b->metric.rho_m);
-  std::filesystem::remove_all(dir);
 }
 
 // ---------------------------------------------------------------------------------------------
