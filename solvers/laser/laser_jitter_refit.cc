@@ -4,12 +4,17 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 namespace calib {
 namespace {
 
-// The rounds end when no log's jitter or noise level moves by this much (relative).
+// The rounds end when no log's jitter or noise level moves by this much (relative), or when the
+// next round is expected to move no parameter by kSettledStddevs σ: a round moves the parameters
+// in proportion to the whitening's change in the round before, so the next movement is this
+// round's times the ratio of the two changes.
 constexpr double kSettled = 0.01;
+constexpr double kSettledStddevs = 0.02;
 
 // The jitter each log's whitening uses: its estimate when significant, none otherwise.
 double UsedJitter(const IntervalJitterEstimate& estimate) {
@@ -24,6 +29,35 @@ double Change(const IntervalJitterEstimate& a, const IntervalJitterEstimate& b) 
   if (jitter > 0.0) change = std::max(change, std::abs(UsedJitter(a) - UsedJitter(b)) / jitter);
   return change;
 }
+
+// Whether the rounds have settled (see kSettled): fed each round's corrected estimate, with the
+// parameters' σ, and the change of the jitter and noise levels it led to.
+class RoundsSettling {
+ public:
+  explicit RoundsSettling(const LaserCalibration& start) : previous_(start) {}
+
+  // The estimate's movement in this round (the largest, in σ); none known in the first, whose
+  // movement is the jitter's whole effect, no guide to the next round's.
+  void Moved(const LaserCalibration& estimate, const LaserParamVector& stddev) {
+    if (rounds_++ > 0) {
+      movement_ = ((estimate.ToVector() - previous_.ToVector()).cwiseAbs().array() /
+                   stddev.array().max(1e-300))
+                      .maxCoeff();
+    }
+    previous_ = estimate;
+  }
+  bool Settled(double change) const {
+    return change < kSettled ||
+           (change < previous_change_ && movement_ * change < kSettledStddevs * previous_change_);
+  }
+  void NextRound(double change) { previous_change_ = change; }
+
+ private:
+  LaserCalibration previous_;
+  int rounds_ = 0;
+  double movement_ = std::numeric_limits<double>::infinity();
+  double previous_change_ = 0.0;
+};
 
 // Inliers under the per-interval whitening (squared whitened norm below the cut).
 std::vector<bool> Inliers(const std::vector<Eigen::Vector3d>& errors,
@@ -70,7 +104,9 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
   LaserProblem problem(datasets, result->estimate, options.refinement);
   problem.Redescend();  // It starts at the robust estimate: no first, convex stage.
   std::vector<std::vector<bool>> inliers(logs.size());
-  for (int round = 0; round < std::max(1, options.noise_rounds); ++round) {
+  const int rounds = std::max(1, options.noise_rounds);
+  RoundsSettling settling(result->estimate);
+  for (int round = 0; round < rounds; ++round) {
     ceres::Solver::Summary summary;
     CALIB_RETURN_IF_ERROR(problem.Solve(&summary));
     result->iterations += static_cast<int>(summary.iterations.size());
@@ -81,10 +117,12 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
     for (size_t d = 0; d < logs.size(); ++d) {
       increment_covariance[d] = JitterIncrementCovariances(*logs[d], UsedJitter(jitter[d]));
     }
-    CALIB_ASSIGN_OR_RETURN(const LaserParamVector step,
+    CALIB_ASSIGN_OR_RETURN(const LaserProblem::IncrementCorrection correction,
                            problem.IncrementNoiseCorrection(increment_covariance));
-    problem.set_calibration(LaserCalibration::FromVector(problem.calibration().ToVector() + step));
+    problem.set_calibration(
+        LaserCalibration::FromVector(problem.calibration().ToVector() + correction.step));
     const LaserCalibration estimate = problem.calibration();
+    settling.Moved(estimate, correction.stddev);
     double change = 0.0;
     for (size_t d = 0; d < logs.size(); ++d) {
       sensitivities[d] = IntervalTimeSensitivities(*logs[d], estimate);
@@ -96,9 +134,9 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
       IntervalJitterOptions near = options.jitter;
       near.previous_jitter_s = jitter[d].jitter_s;  // The refit moves σ_j little.
       // σ of σ_j only where this round may be the last (see the loop's end).
-      const bool last_round = round + 1 == std::max(1, options.noise_rounds);
+      const bool last_round = round + 1 == rounds;
       near.stddev_wanted = [&, last_round](const IntervalJitterEstimate& e) {
-        return last_round || Change(e, jitter[d]) < kSettled;
+        return last_round || settling.Settled(std::max(change, Change(e, jitter[d])));
       };
       IntervalJitterEstimate next =
           EstimateIntervalJitter(errors, sensitivities[d], jitter[d].noise_sigma, inliers[d], near);
@@ -107,7 +145,8 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
       change = std::max(change, Change(next, jitter[d]));
       jitter[d] = next;
     }
-    if (change < kSettled || round + 1 == std::max(1, options.noise_rounds)) break;
+    if (settling.Settled(change) || round + 1 == rounds) break;
+    settling.NextRound(change);
     for (size_t d = 0; d < logs.size(); ++d) {
       CALIB_RETURN_IF_ERROR(problem.SetIntervalSqrtInformation(
           d,

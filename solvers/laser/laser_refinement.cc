@@ -333,7 +333,7 @@ void LaserProblem::AddIncrementCorrection(size_t d, size_t k, const Eigen::Matri
   }
 }
 
-StatusOr<LaserParamVector> LaserProblem::IncrementNoiseCorrection(
+StatusOr<LaserProblem::IncrementCorrection> LaserProblem::IncrementNoiseCorrection(
     const std::vector<std::vector<Eigen::Matrix2d>>& increment_covariance) const {
   const SensorMounting mounting(base_T_sensor_);
   struct Sums {
@@ -361,7 +361,9 @@ StatusOr<LaserParamVector> LaserProblem::IncrementNoiseCorrection(
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
     return Status::NotObservable(kSingular);
   }
-  return LaserParamVector(ldlt.solve(sums[0].correction));
+  const LaserParamMatrix inverse = ldlt.solve(LaserParamMatrix::Identity());
+  return IncrementCorrection{ldlt.solve(sums[0].correction),
+                             inverse.diagonal().cwiseMax(0.0).cwiseSqrt()};
 }
 
 Eigen::Vector3d RobustNoiseSigma(const std::vector<Eigen::Vector3d>& errors) {

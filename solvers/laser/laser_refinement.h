@@ -114,8 +114,12 @@ class LaserProblem {
   // attenuation bias of a noisy regressor. Returns Δp = H⁻¹·Σ_k c_k (H = Σρ'JᵀJ), with c_k that
   // term from second differences along the columns u of C_k's square root:
   // c_k = ½Σ_u [ψ_k(Δφ + u) + ψ_k(Δφ − u) − 2ψ_k(Δφ)]; p + Δp solves the corrected score to
-  // first order.
-  StatusOr<LaserParamVector> IncrementNoiseCorrection(
+  // first order. Also returns √diag(H⁻¹), the parameters' σ under the model's weights.
+  struct IncrementCorrection {
+    LaserParamVector step;
+    LaserParamVector stddev;
+  };
+  StatusOr<IncrementCorrection> IncrementNoiseCorrection(
       const std::vector<std::vector<Eigen::Matrix2d>>& increment_covariance) const;
 
   // The loss's weight ρ'(s) for a squared whitened norm s (1 without a robust loss).
