@@ -98,6 +98,25 @@ auto EffectLinearization(const LaserEffectData& data,
   };
 }
 
+// The residual at γ = 0 and its derivatives in γ (odometry and mounting held constant).
+Eigen::Vector3d EffectColumnsAtBase(
+    const LaserEffectResidual& functor, const double* odometry, const double* mounting,
+    Eigen::Matrix<double, 3, kNumLaserEffectParams, Eigen::RowMajor>* j_effects) {
+  using Jet = ceres::Jet<double, kNumLaserEffectParams>;
+  const Jet odometry_jet[3] = {Jet(odometry[0]), Jet(odometry[1]), Jet(odometry[2])};
+  const Jet mounting_jet[3] = {Jet(mounting[0]), Jet(mounting[1]), Jet(mounting[2])};
+  Jet gamma[kNumLaserEffectParams];
+  for (int i = 0; i < kNumLaserEffectParams; ++i) gamma[i] = Jet(0.0, i);
+  Jet residual[3];
+  functor(odometry_jet, mounting_jet, gamma, residual);
+  Eigen::Vector3d r;
+  for (int i = 0; i < 3; ++i) {
+    r(i) = residual[i].a;
+    j_effects->row(i) = residual[i].v.transpose();
+  }
+  return r;
+}
+
 }  // namespace
 
 StatusOr<LaserEffectFit> FitLaserEffects(const LaserEffectData& data, const LaserEffectModel& model,
@@ -199,8 +218,13 @@ LaserEffectEvaluation EvaluateLaserEffects(const LaserEffectData& data,
   const double mounting[3] = {calibration.base_T_sensor(0), calibration.base_T_sensor(1),
                               calibration.base_T_sensor(2)};
   const double* parameters[3] = {odometry, mounting, model.gamma.data()};
-  // Each interval's automatic differentiation (15 directions) costs microseconds: in chunks on
-  // the problem's threads.
+  // At γ = 0 the residual is LaserResidual's in (r_l, r_r, b, mounting) whatever their values,
+  // so its six columns are that residual's closed form; only the effects' nine columns need
+  // automatic derivatives, in γ alone (a third fewer directions than all fifteen).
+  const bool at_base = with_jacobian && (model.gamma.array() == 0.0).all();
+  const SensorMounting sensor_mounting(mounting);
+  // Each interval's automatic differentiation costs microseconds: in chunks on the problem's
+  // threads.
   constexpr size_t kMinChunk = 256;
   ParallelChunks(n, data.options().num_threads, kMinChunk, [&](size_t, size_t begin, size_t end) {
     Eigen::Matrix<double, 3, 3, Eigen::RowMajor> j_odometry, j_mounting;
@@ -208,16 +232,26 @@ LaserEffectEvaluation EvaluateLaserEffects(const LaserEffectData& data,
     double* jacobians[3] = {j_odometry.data(), j_mounting.data(), j_effects.data()};
     for (size_t k = begin; k < end; ++k) {
       LaserEffectResidual functor(contexts[k], &data.sqrt_information(k));
-      const ceres::AutoDiffCostFunction<LaserEffectResidual, 3, 3, 3, kNumLaserEffectParams> cost(
-          &functor, ceres::DO_NOT_TAKE_OWNERSHIP);
       Eigen::Vector3d r;
-      cost.Evaluate(parameters, r.data(), with_jacobian ? jacobians : nullptr);
-      evaluation.residual.row(k) = r.transpose();
-      if (with_jacobian) {
-        evaluation.jacobian.block<3, 3>(3 * k, 0) = j_odometry;
-        evaluation.jacobian.block<3, 3>(3 * k, 3) = j_mounting;
+      if (at_base) {
+        Eigen::Matrix<double, 3, kNumLaserParams> j_base;
+        Eigen::Vector3d r_base;
+        LaserResidual::Linearize(*contexts[k].interval, data.sqrt_information(k), odometry,
+                                 sensor_mounting, &r_base, &j_base);
+        r = EffectColumnsAtBase(functor, odometry, mounting, &j_effects);
+        evaluation.jacobian.block<3, kNumLaserParams>(3 * k, 0) = j_base;
         evaluation.jacobian.block<3, kNumLaserEffectParams>(3 * k, kNumLaserParams) = j_effects;
+      } else {
+        const ceres::AutoDiffCostFunction<LaserEffectResidual, 3, 3, 3, kNumLaserEffectParams> cost(
+            &functor, ceres::DO_NOT_TAKE_OWNERSHIP);
+        cost.Evaluate(parameters, r.data(), with_jacobian ? jacobians : nullptr);
+        if (with_jacobian) {
+          evaluation.jacobian.block<3, 3>(3 * k, 0) = j_odometry;
+          evaluation.jacobian.block<3, 3>(3 * k, 3) = j_mounting;
+          evaluation.jacobian.block<3, kNumLaserEffectParams>(3 * k, kNumLaserParams) = j_effects;
+        }
       }
+      evaluation.residual.row(k) = r.transpose();
       double rho[3];
       data.Loss(r.squaredNorm(), rho);
       evaluation.rho0(k) = rho[0];

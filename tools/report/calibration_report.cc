@@ -13,6 +13,15 @@
 namespace calib {
 namespace {
 
+// The screen runs beside the calibration, which keeps the other core busy: on one thread (split,
+// its passes waited on halves queued behind the calibration's). Run in turn, the same way, so
+// that both give the same figures.
+LaserCalibrationOptions ScreenOptions(const LaserReportOptions& options) {
+  LaserCalibrationOptions screen = options.screen;
+  screen.refinement.num_threads = 1;
+  return screen;
+}
+
 // The quick look for physics the model leaves out (laser_model_screen.h): its JSON, and its
 // sentence for the verdict when it finds something.
 // Returns a summary line when the screen did not run on a long log.
@@ -32,7 +41,7 @@ std::string ScreenModel(const std::vector<LaserInterval>& intervals,
   const StatusOr<LaserModelScreen> screen =
       options.started_screen.valid()
           ? options.started_screen.get()
-          : ScreenLaserModel(intervals, options.screen, sample_times_estimated);
+          : ScreenLaserModel(intervals, ScreenOptions(options), sample_times_estimated);
   nlohmann::ordered_json& out = (*json)["model_screen"];
   if (!screen.ok()) {
     out["error"] = screen.message();
@@ -79,7 +88,7 @@ std::shared_future<StatusOr<LaserModelScreen>> StartLaserModelScreen(
     return {};
   }
   try {
-    return std::async(std::launch::async, [&intervals, screen = options.screen] {
+    return std::async(std::launch::async, [&intervals, screen = ScreenOptions(options)] {
       return ScreenLaserModel(intervals, screen, false);
     });
   } catch (const std::system_error&) {  // No thread to be had: the report screens in turn.
