@@ -63,6 +63,29 @@ inline std::vector<double> DerivativeWeights(const std::vector<double>& nodes, d
   return weights;
 }
 
+// The same weights at the node x0 = nodes[k], in O(n²) from the barycentric weights
+// b_j = 1/Π_{l≠j}(x_j − x_l): L_j'(x_k) = (b_j/b_k)/(x_k − x_j) for j ≠ k, and
+// L_k'(x_k) = Σ_{l≠k} 1/(x_k − x_l).
+inline std::vector<double> NodeDerivativeWeights(const std::vector<double>& nodes, size_t k) {
+  const size_t n = nodes.size();
+  std::vector<double> barycentric(n, 1.0);
+  for (size_t j = 0; j < n; ++j) {
+    double product = 1.0;
+    for (size_t l = 0; l < n; ++l) {
+      if (l != j) product *= nodes[j] - nodes[l];
+    }
+    barycentric[j] = 1.0 / product;
+  }
+  std::vector<double> weights(n, 0.0);
+  for (size_t j = 0; j < n; ++j) {
+    if (j == k) continue;
+    const double difference = nodes[k] - nodes[j];
+    weights[j] = barycentric[j] / (barycentric[k] * difference);
+    weights[k] += 1.0 / difference;
+  }
+  return weights;
+}
+
 namespace context_internal {
 
 // The interval's wheel speeds at its start and at its end: of its first and last step, or its
@@ -114,7 +137,7 @@ inline void SetSmoothBoundarySpeeds(const std::vector<LaserInterval>& intervals,
       size_t lo = i >= 3 ? i - 3 : 0;
       if (lo + width > count + 1) lo = count + 1 - width;
       std::vector<double> nodes(times.begin() + lo, times.begin() + lo + width);
-      const std::vector<double> weights = DerivativeWeights(nodes, times[i]);
+      const std::vector<double> weights = NodeDerivativeWeights(nodes, i - lo);
       speeds[i].setZero();
       for (size_t j = 0; j < width; ++j) speeds[i] += weights[j] * angles[lo + j];
     }

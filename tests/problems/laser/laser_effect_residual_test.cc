@@ -235,6 +235,15 @@ TEST(LaserEffectResidualTest, BoundarySpeedsFromPolynomialsAreExact) {
     derivative += weights[j] * (std::pow(nodes[j], 3) - nodes[j]);
   }
   EXPECT_NEAR(derivative, 3 * 2.4 * 2.4 - 1.0, 1e-10);
+  // At each node, the barycentric form gives the same weights.
+  for (size_t k = 0; k < nodes.size(); ++k) {
+    const std::vector<double> general = DerivativeWeights(nodes, nodes[k]);
+    const std::vector<double> at_node = NodeDerivativeWeights(nodes, k);
+    for (size_t j = 0; j < nodes.size(); ++j) {
+      EXPECT_NEAR(at_node[j], general[j], 1e-12 * (1.0 + std::abs(general[j])))
+          << "node " << k << " weight " << j;
+    }
+  }
   // At an isolated speed jump the smooth model takes the mean of the two sides.
   std::vector<LaserInterval> intervals(8);
   for (size_t k = 0; k < intervals.size(); ++k) {
