@@ -263,15 +263,17 @@ IntervalJitterEstimate EstimateIntervalJitter(
     return ProfileLogLikelihood(data, jitter_s, options.estimate_noise, &warm, kGridTolerance);
   };
   // Joint scoring from σ_j = start, with θ profiled there first (the grid's warm θ belongs to
-  // its last point).
+  // its last point). Its observed information at the maximum gives σ of σ_j below.
+  Eigen::Matrix4d joint_information = Eigen::Matrix4d::Zero();
+  double joint_at = -1.0;
   const auto joint = [&](double lo, double hi, double start, double* jitter_s) {
     if (!options.estimate_noise || !options.joint_scoring) return false;
     Eigen::Vector3d start_theta = warm;
     ProfileLogLikelihood(data, start, true, &start_theta, kGridTolerance);
     double found = start;
-    if (!JointMaximum(data, lo, hi, &start_theta, &found)) return false;
+    if (!JointMaximum(data, lo, hi, &start_theta, &found, &joint_information)) return false;
     warm = start_theta, warm_at = -1.0;
-    *jitter_s = found;
+    *jitter_s = joint_at = found;
     return true;
   };
   double jitter_s = 0.0, value = 0.0;
@@ -299,7 +301,18 @@ IntervalJitterEstimate EstimateIntervalJitter(
     estimate.jitter_stddev_s = std::numeric_limits<double>::quiet_NaN();
     return estimate;
   }
-  // σ of σ_j from the profile's curvature (ℓ is even in σ_j, so at 0 the one-sided difference).
+  // σ of σ_j: at the joint scoring's maximum, from its observed information in (θ, σ_j²) (the
+  // profile's curvature in σ_j² is the Schur complement of θ's block; σ_j = √σ_j² by the delta
+  // method); else from the profile's curvature by differences (ℓ is even in σ_j, so at 0 the
+  // one-sided difference).
+  if (joint_at == jitter_s && jitter_s > 0.0) {
+    const Eigen::LDLT<Eigen::Matrix4d> ldlt(joint_information);
+    if (ldlt.info() == Eigen::Success && (ldlt.vectorD().array() > 0.0).all()) {
+      const double variance = ldlt.solve(Eigen::Vector4d::UnitW())(3);
+      estimate.jitter_stddev_s = std::sqrt(variance) / (2.0 * jitter_s);
+      return estimate;
+    }
+  }
   const double h = std::max(0.1 * jitter_s, 0.01 * scale);
   const double curvature =
       jitter_s > h ? (profile(jitter_s + h) - 2.0 * value + profile(jitter_s - h)) / (h * h)

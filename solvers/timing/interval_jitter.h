@@ -94,8 +94,9 @@ struct IntervalJitterOptions {
   // back to a golden-section search of the profile when that does not settle inside the bracket;
   // false: the golden section always (the reference the tests compare with).
   bool joint_scoring = true;
-  // Whether σ of σ_j (two more profiles, a third of a refit round's passes) is wanted, asked
-  // with the estimate otherwise complete; empty: always. A refit wants it for its last round only.
+  // Whether σ of σ_j is wanted (from the joint scoring's observed information; without it, two
+  // more profiles, a third of a refit round's passes), asked with the estimate otherwise
+  // complete; empty: always. A refit wants it for its last round only.
   std::function<bool(const IntervalJitterEstimate&)> stddev_wanted;
 };
 
@@ -112,7 +113,8 @@ struct IntervalJitterEstimate {
 
 // σ_j by profile likelihood over the inliers' errors e_k: ℓ(σ_j) = max over σ_n of
 // −½Σ[log det Σ_k + e_kᵀΣ_k⁻¹e_k] on a grid, refined by golden section; the LR test against σ_j = 0
-// (on the boundary: ½χ²₀ + ½χ²₁); σ of σ_j from the profile's curvature. `noise_sigma` starts
+// (on the boundary: ½χ²₀ + ½χ²₁); σ of σ_j from the profile's curvature (the joint scoring's
+// observed information where it found the maximum, else differences). `noise_sigma` starts
 // the noise re-estimation (or is kept with estimate_noise = false).
 // The intervals the estimate uses: every stride-th inlier, so that at most about
 // `max_intervals` remain (the stride the smallest that does).

@@ -254,7 +254,7 @@ double ProfileLogLikelihood(const JitterData& data, double jitter_s, bool estima
 // leaving the outputs, when it does not settle at a σ_j strictly within (lo, hi) (a maximum on the
 // boundary σ_j = 0 or beyond the bracket: the search decides then).
 bool JointMaximum(const JitterData& data, double lo, double hi, Eigen::Vector3d* theta,
-                  double* jitter_s) {
+                  double* jitter_s, Eigen::Matrix4d* information) {
   Eigen::Vector4d phi;
   phi << *theta, *jitter_s * *jitter_s;
   // Fisher scoring converges linearly here (about 12× a pass); near the maximum, where the
@@ -268,7 +268,9 @@ bool JointMaximum(const JitterData& data, double lo, double hi, Eigen::Vector3d*
     if (!JointScore(data, phi, &score, &fisher, newton ? &observed : nullptr)) return false;
     Eigen::LDLT<Eigen::Matrix4d> ldlt;
     if (newton) ldlt.compute(observed);
+    bool observed_used = newton;
     if (!newton || ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
+      observed_used = false;
       ldlt.compute(fisher);
       if (ldlt.info() != Eigen::Success) return false;
     }
@@ -284,6 +286,9 @@ bool JointMaximum(const JitterData& data, double lo, double hi, Eigen::Vector3d*
     if (!(jitter > lo && jitter < hi)) return false;
     *theta = phi.head<3>();
     *jitter_s = jitter;
+    if (information != nullptr) {
+      *information = observed_used ? observed : Eigen::Matrix4d::Zero().eval();
+    }
     return true;
   }
   return false;

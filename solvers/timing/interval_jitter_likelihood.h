@@ -41,9 +41,11 @@ double ProfileLogLikelihood(const JitterData& data, double jitter_s, bool estima
 // Fisher scoring, then Newton, jointly in (θ, σ_j²) from (*theta, *jitter_s): the profile's
 // maximum in a few passes instead of a search along σ_j with a scoring at every point. False,
 // leaving the outputs, when it does not settle at a σ_j strictly within (lo, hi) (a maximum on the
-// boundary σ_j = 0 or beyond the bracket: the search decides then).
+// boundary σ_j = 0 or beyond the bracket: the search decides then). *information (when given)
+// receives the observed information in (θ, σ_j²) of the last step, at the maximum to 1e-10, or
+// zero when that step was not Newton's.
 bool JointMaximum(const JitterData& data, double lo, double hi, Eigen::Vector3d* theta,
-                  double* jitter_s);
+                  double* jitter_s, Eigen::Matrix4d* information = nullptr);
 
 }  // namespace calib::jitter_internal
 

@@ -85,5 +85,27 @@ TEST(IntervalJitterLikelihoodTest, TheJointScoringEndsAtTheProfilesMaximum) {
   }
 }
 
+// Its observed information gives σ_j²'s variance: the inverse of the profile's curvature in σ_j²
+// (by central differences of a small step).
+TEST(IntervalJitterLikelihoodTest, TheJointInformationIsTheProfilesCurvature) {
+  const Eigen::Vector3d truth(1e-6, 4e-6, 1e-5);
+  const JitterData data = Draw(3000, truth, 0.01, false, 4);
+  Eigen::Vector3d theta = truth;
+  double jitter_s = 0.005;
+  Eigen::Matrix4d information = Eigen::Matrix4d::Constant(std::nan(""));
+  ASSERT_TRUE(JointMaximum(data, 0.001, 0.1, &theta, &jitter_s, &information));
+  ASSERT_TRUE(information.allFinite());
+  const double variance = information.inverse()(3, 3);
+  ASSERT_GT(variance, 0.0);
+  const double square = jitter_s * jitter_s, h = 1e-3 * square;
+  const auto profile = [&](double s) {
+    Eigen::Vector3d warm = theta;
+    return ProfileLogLikelihood(data, std::sqrt(s), true, &warm, 1e-13);
+  };
+  const double curvature =
+      (profile(square + h) - 2.0 * profile(square) + profile(square - h)) / (h * h);
+  EXPECT_NEAR(variance, -1.0 / curvature, 1e-3 * variance);
+}
+
 }  // namespace
 }  // namespace calib::jitter_internal

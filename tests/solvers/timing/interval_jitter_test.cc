@@ -155,7 +155,9 @@ TEST(IntervalJitterTest, JointScoringGivesTheProfileSearchsAnswer) {
     const IntervalJitterEstimate b = jittered.Estimate(joint);
     ASSERT_TRUE(a.significant && b.significant);
     EXPECT_NEAR(b.jitter_s, a.jitter_s, 1e-3 * a.jitter_stddev_s) << previous;
-    EXPECT_NEAR(b.jitter_stddev_s, a.jitter_stddev_s, 1e-3 * a.jitter_stddev_s);
+    // σ of σ_j: the observed information's against the search's difference quotient of the
+    // profile over ±10 % of σ_j (a curvature O(h²) off: within 1 %).
+    EXPECT_NEAR(b.jitter_stddev_s, a.jitter_stddev_s, 1e-2 * a.jitter_stddev_s);
     EXPECT_LT((b.noise_sigma - a.noise_sigma).cwiseQuotient(a.noise_sigma).cwiseAbs().maxCoeff(),
               1e-4);
     // The joint maximum is the profile's: no lower than the search's.
