@@ -276,9 +276,14 @@ IntervalJitterEstimate EstimateIntervalJitter(
     *jitter_s = joint_at = found;
     return true;
   };
+  // Without a nearby estimate, the moments' σ_j starts the search when clearly positive (the
+  // grid runs when the maximum is not within a factor of 3 of it).
+  double previous = options.previous_jitter_s;
+  if (!(previous > 0.0) && options.estimate_noise && options.joint_scoring) {
+    previous = MomentJitter(data);
+  }
   double jitter_s = 0.0, value = 0.0;
-  if (!(options.previous_jitter_s > 0.0) ||
-      !NearPrevious(profile, joint, options.previous_jitter_s, &jitter_s, &value)) {
+  if (!(previous > 0.0) || !NearPrevious(profile, joint, previous, &jitter_s, &value)) {
     warm = theta, warm_at = -1.0;
     SearchFromGrid(profile, rank, joint, scale, options.grid_points,
                    estimate.log_likelihood_without_jitter, &jitter_s, &value);

@@ -294,4 +294,31 @@ bool JointMaximum(const JitterData& data, double lo, double hi, Eigen::Vector3d*
   return false;
 }
 
+double MomentJitter(const JitterData& data, double min_t) {
+  // Unknowns (θ_x, θ_y, θ_θ, σ_j²); one equation per interval and component.
+  constexpr int kDiagonal[3] = {0, 3, 5};  // G_ii in the packed layout.
+  Eigen::Matrix4d normal = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d right = Eigen::Vector4d::Zero();
+  double squares = 0.0;
+  for (size_t k = 0; k < data.size(); ++k) {
+    for (int i = 0; i < 3; ++i) {
+      const double g = data.gram[kDiagonal[i]][k], y = data.error[i][k] * data.error[i][k];
+      normal(i, i) += 1.0, normal(i, 3) += g, normal(3, 3) += g * g;
+      right(i) += y, right(3) += g * y;
+      squares += y * y;
+    }
+  }
+  normal.bottomLeftCorner<1, 3>() = normal.topRightCorner<3, 1>().transpose();
+  const Eigen::LDLT<Eigen::Matrix4d> ldlt(normal);
+  const double equations = 3.0 * static_cast<double>(data.size());
+  if (equations <= 4.0 || ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
+    return 0.0;
+  }
+  const Eigen::Vector4d x = ldlt.solve(right);
+  const double scatter = std::max(0.0, (squares - x.dot(right)) / (equations - 4.0));
+  const double variance = scatter * ldlt.solve(Eigen::Vector4d::UnitW())(3);
+  if (!(x(3) > 0.0) || !(x(3) > min_t * std::sqrt(variance))) return 0.0;
+  return std::sqrt(x(3));
+}
+
 }  // namespace calib::jitter_internal

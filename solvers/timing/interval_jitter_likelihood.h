@@ -47,6 +47,11 @@ double ProfileLogLikelihood(const JitterData& data, double jitter_s, bool estima
 bool JointMaximum(const JitterData& data, double lo, double hi, Eigen::Vector3d* theta,
                   double* jitter_s, Eigen::Matrix4d* information = nullptr);
 
+// A start for the search: σ_j from least squares of the squared errors on their expectation,
+// e_{k,i}² ≈ θ_i + σ_j²·G_k,ii (one pass); 0 when that σ_j² is not positive by `min_t` standard
+// errors (of the regression's scatter).
+double MomentJitter(const JitterData& data, double min_t = 3.0);
+
 }  // namespace calib::jitter_internal
 
 #endif  // CALIB_SOLVERS_TIMING_INTERVAL_JITTER_LIKELIHOOD_H_

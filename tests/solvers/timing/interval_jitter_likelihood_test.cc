@@ -107,5 +107,20 @@ TEST(IntervalJitterLikelihoodTest, TheJointInformationIsTheProfilesCurvature) {
   EXPECT_NEAR(variance, -1.0 / curvature, 1e-3 * variance);
 }
 
+// The moments' start lies near the maximum where the jitter is clear, and is withheld (0) where
+// there is none, nearly always at 3 standard errors.
+TEST(IntervalJitterLikelihoodTest, TheMomentsStartNearTheJitterOnlyWhenThereIsOne) {
+  const Eigen::Vector3d truth(1e-6, 4e-6, 1e-5);
+  for (unsigned seed = 5; seed < 10; ++seed) {
+    const double start = MomentJitter(Draw(3000, truth, 0.01, false, seed));
+    EXPECT_GT(start, 0.01 / 1.2) << seed;  // Well inside the search's factor of 3.
+    EXPECT_LT(start, 0.01 * 1.2) << seed;
+  }
+  int withheld = 0;
+  for (unsigned seed = 20; seed < 40; ++seed)
+    withheld += MomentJitter(Draw(3000, truth, 0.0, false, seed)) == 0.0;
+  EXPECT_GE(withheld, 19);
+}
+
 }  // namespace
 }  // namespace calib::jitter_internal
