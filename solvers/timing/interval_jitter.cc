@@ -4,7 +4,6 @@
 #include <calib/problems/laser/laser_residual.h>
 #include <calib/solvers/timing/interval_jitter.h>
 #include <calib/solvers/timing/interval_jitter_likelihood.h>
-#include <ceres/jet.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -49,19 +48,34 @@ Eigen::Vector2d Interpolate(const SideSpeed& before, const SideSpeed& after) {
          (before.duration_s + after.duration_s);
 }
 
-// The sensor displacement with the interval's start moved by ε_s and its end by ε_e.
-template <typename T>
-Eigen::Matrix<T, 3, 1> ShiftedSensorMotion(const LaserCalibration& c, const Pose2d& robot_motion,
-                                           const IntervalBoundarySpeeds& speeds, const T& eps_s,
-                                           const T& eps_e) {
-  const OdometryParams& p = c.odometry;
-  const T rl(p.left_radius_m), rr(p.right_radius_m), b(p.wheelbase_m);
-  const Pose2<T> before =
-      WheelStepDisplacement(rl, rr, b, T(-speeds.start(0)) * eps_s, T(-speeds.start(1)) * eps_s);
-  const Pose2<T> after =
-      WheelStepDisplacement(rl, rr, b, T(speeds.end(0)) * eps_e, T(speeds.end(1)) * eps_e);
-  const Pose2<T> robot = Compose(Compose(before, robot_motion.cast<T>().eval()), after);
-  return SensorMotionFromRobotMotion(c.base_T_sensor.cast<T>().eval(), robot);
+// ∂ŝ/∂ε of the sensor displacement ŝ = ℓ⁻¹∘M∘ℓ when the interval's start moves by ε_s and its
+// end by ε_e, in closed form. M = (t, θ) is the robot motion; ξ = (v, ω) the twist of the wheel
+// speeds at an end. The end's shift appends Exp(ε_e·ξ_e): ∂M = (R(θ)·(v_e, 0), ω_e). The start's
+// prepends Exp(−ε_s·ξ_s): ∂M = (−v_s + ω_s·t_y, −ω_s·t_x, −ω_s). Through ℓ:
+//   ∂ŝ_xy = R(−ℓ_θ)·[∂t + ∂θ·R'(θ)·ℓ_p],  ∂ŝ_θ = ∂θ.
+IntervalTimeSensitivity ShiftSensitivity(const OdometryParams& p, const Pose2d& robot_motion,
+                                         const IntervalBoundarySpeeds& speeds,
+                                         const Eigen::Matrix2d& to_sensor,
+                                         const Eigen::Vector2d& mount) {
+  const auto twist = [&](const Eigen::Vector2d& wheel) {
+    return Eigen::Vector2d(
+        (p.left_radius_m * wheel(0) + p.right_radius_m * wheel(1)) / 2.0,
+        (p.right_radius_m * wheel(1) - p.left_radius_m * wheel(0)) / p.wheelbase_m);
+  };
+  const Eigen::Vector2d xi_s = twist(speeds.start), xi_e = twist(speeds.end);
+  const double c = std::cos(robot_motion(2)), s = std::sin(robot_motion(2));
+  // R'(θ)·ℓ_p: what a unit turn of M does to the mounting's offset.
+  const Eigen::Vector2d turned(-s * mount(0) - c * mount(1), c * mount(0) - s * mount(1));
+  const auto through_mounting = [&](const Eigen::Vector2d& dt, double dtheta) {
+    Eigen::Vector3d g;
+    g << to_sensor * (dt + dtheta * turned), dtheta;
+    return g;
+  };
+  IntervalTimeSensitivity g;
+  g.end = through_mounting(Eigen::Vector2d(c * xi_e(0), s * xi_e(0)), xi_e(1));
+  g.start = through_mounting(
+      Eigen::Vector2d(-xi_s(0) + xi_s(1) * robot_motion(1), -xi_s(1) * robot_motion(0)), -xi_s(1));
+  return g;
 }
 
 // Golden-section maximum of f on [lo, hi].
@@ -145,20 +159,18 @@ std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
 std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
     const std::vector<LaserInterval>& intervals, const LaserCalibration& calibration,
     const std::vector<size_t>& indices) {
-  using Jet = ceres::Jet<double, 2>;
   const std::vector<IntervalBoundarySpeeds> speeds = BoundaryWheelSpeeds(intervals);
   const OdometryParams& p = calibration.odometry;
+  const Pose2d& mounting = calibration.base_T_sensor;
+  const double cl = std::cos(mounting(2)), sl = std::sin(mounting(2));
+  const Eigen::Matrix2d to_sensor = (Eigen::Matrix2d() << cl, sl, -sl, cl).finished();
+  const Eigen::Vector2d mount(mounting(0), mounting(1));
   std::vector<IntervalTimeSensitivity> sensitivities(indices.size());
   for (size_t i = 0; i < indices.size(); ++i) {
     const size_t k = indices[i];
     const Pose2d robot_motion =
         IntervalRobotMotion(p.left_radius_m, p.right_radius_m, p.wheelbase_m, intervals[k]);
-    const Eigen::Matrix<Jet, 3, 1> motion =
-        ShiftedSensorMotion(calibration, robot_motion, speeds[k], Jet(0.0, 0), Jet(0.0, 1));
-    for (int j = 0; j < 3; ++j) {
-      sensitivities[i].start(j) = motion(j).v(0);
-      sensitivities[i].end(j) = motion(j).v(1);
-    }
+    sensitivities[i] = ShiftSensitivity(p, robot_motion, speeds[k], to_sensor, mount);
   }
   return sensitivities;
 }

@@ -60,6 +60,40 @@ TEST(IntervalJitterTest, SensitivitiesAreTheDerivativesInTime) {
   }
 }
 
+// On any log, stepped intervals included: moving an end by ε composes the motion of the wheel
+// speeds there (BoundaryWheelSpeeds) onto that end; the sensitivities are its central differences.
+TEST(IntervalJitterTest, SensitivitiesDifferentiateTheShiftedEnds) {
+  LaserSimOptions sim;
+  sim.num_intervals = 60;
+  sim.record_steps = 3;
+  sim.base_T_sensor = Pose2d(0.12, -0.05, 2.5);
+  LaserLog log = SimulateLaserLog(sim);
+  for (size_t k = 0; k < log.intervals.size(); k += 3) log.intervals[k].steps.clear();
+  log.intervals[30].gap_before = true;
+  const LaserCalibration truth = Truth(sim);
+  const OdometryParams& o = truth.odometry;
+  const std::vector<IntervalTimeSensitivity> g = IntervalTimeSensitivities(log.intervals, truth);
+  const std::vector<IntervalBoundarySpeeds> speeds = BoundaryWheelSpeeds(log.intervals);
+  const auto shifted = [&](size_t k, double eps_s, double eps_e) {
+    const Pose2d before =
+        WheelStepDisplacement(o.left_radius_m, o.right_radius_m, o.wheelbase_m,
+                              -speeds[k].start(0) * eps_s, -speeds[k].start(1) * eps_s);
+    const Pose2d after = WheelStepDisplacement(o.left_radius_m, o.right_radius_m, o.wheelbase_m,
+                                               speeds[k].end(0) * eps_e, speeds[k].end(1) * eps_e);
+    const Pose2d motion =
+        IntervalRobotMotion(o.left_radius_m, o.right_radius_m, o.wheelbase_m, log.intervals[k]);
+    return SensorMotionFromRobotMotion(truth.base_T_sensor,
+                                       Compose(Compose(before, motion), after));
+  };
+  const double h = 1e-6;
+  for (size_t k = 0; k < log.intervals.size(); ++k) {
+    const Eigen::Vector3d end = (shifted(k, 0, h) - shifted(k, 0, -h)) / (2 * h);
+    const Eigen::Vector3d start = (shifted(k, h, 0) - shifted(k, -h, 0)) / (2 * h);
+    EXPECT_LT((g[k].end - end).norm(), 1e-7 * (1.0 + end.norm())) << k;
+    EXPECT_LT((g[k].start - start).norm(), 1e-7 * (1.0 + start.norm())) << k;
+  }
+}
+
 TEST(IntervalJitterTest, BoundarySpeedsInterpolateTheNeighbours) {
   std::vector<LaserInterval> intervals(3);
   intervals[0].duration_s = 1.0, intervals[0].left_speed = 1.0, intervals[0].right_speed = 2.0;
