@@ -131,6 +131,26 @@ bool NearPrevious(const F& profile, const J& joint, double previous, double* jit
   return *jitter_s > 1.01 * lo && *jitter_s < 0.99 * hi;
 }
 
+// σ of σ_j at the maximum (σ_j, value). With the joint scoring's observed information there in
+// (θ, σ_j²): σ_j² by that information (the profile's curvature in σ_j² is the Schur complement of
+// θ's block), σ_j = √σ_j² by the delta method. Else from the profile's curvature by differences
+// (ℓ is even in σ_j, so at 0 the one-sided difference).
+template <typename F>
+double JitterStddev(const F& profile, double jitter_s, double value, double scale,
+                    const Eigen::Matrix4d* information) {
+  if (information != nullptr && jitter_s > 0.0) {
+    const Eigen::LDLT<Eigen::Matrix4d> ldlt(*information);
+    if (ldlt.info() == Eigen::Success && (ldlt.vectorD().array() > 0.0).all()) {
+      return std::sqrt(ldlt.solve(Eigen::Vector4d::UnitW())(3)) / (2.0 * jitter_s);
+    }
+  }
+  const double h = std::max(0.1 * jitter_s, 0.01 * scale);
+  const double curvature =
+      jitter_s > h ? (profile(jitter_s + h) - 2.0 * value + profile(jitter_s - h)) / (h * h)
+                   : 2.0 * (profile(jitter_s + h) - profile(jitter_s)) / (h * h);
+  return curvature < 0.0 ? 1.0 / std::sqrt(-curvature) : std::numeric_limits<double>::infinity();
+}
+
 }  // namespace
 
 std::vector<IntervalBoundarySpeeds> BoundaryWheelSpeeds(
@@ -318,24 +338,8 @@ IntervalJitterEstimate EstimateIntervalJitter(
     estimate.jitter_stddev_s = std::numeric_limits<double>::quiet_NaN();
     return estimate;
   }
-  // σ of σ_j: at the joint scoring's maximum, from its observed information in (θ, σ_j²) (the
-  // profile's curvature in σ_j² is the Schur complement of θ's block; σ_j = √σ_j² by the delta
-  // method); else from the profile's curvature by differences (ℓ is even in σ_j, so at 0 the
-  // one-sided difference).
-  if (joint_at == jitter_s && jitter_s > 0.0) {
-    const Eigen::LDLT<Eigen::Matrix4d> ldlt(joint_information);
-    if (ldlt.info() == Eigen::Success && (ldlt.vectorD().array() > 0.0).all()) {
-      const double variance = ldlt.solve(Eigen::Vector4d::UnitW())(3);
-      estimate.jitter_stddev_s = std::sqrt(variance) / (2.0 * jitter_s);
-      return estimate;
-    }
-  }
-  const double h = std::max(0.1 * jitter_s, 0.01 * scale);
-  const double curvature =
-      jitter_s > h ? (profile(jitter_s + h) - 2.0 * value + profile(jitter_s - h)) / (h * h)
-                   : 2.0 * (profile(jitter_s + h) - profile(jitter_s)) / (h * h);
-  estimate.jitter_stddev_s =
-      curvature < 0.0 ? 1.0 / std::sqrt(-curvature) : std::numeric_limits<double>::infinity();
+  estimate.jitter_stddev_s = JitterStddev(profile, jitter_s, value, scale,
+                                          joint_at == jitter_s ? &joint_information : nullptr);
   return estimate;
 }
 
