@@ -132,7 +132,6 @@ class LaserResidual {
         new LaserResidual(interval, sqrt_information));
   }
 
- private:
   // The wheels turn by φ = (φ_l, φ_r); the arc has length d = (r_l·φ_l + r_r·φ_r)/2 and angle
   // a = (r_r·φ_r − r_l·φ_l)/b, o = (S·d, C·d, a) (S, C as in Exp), and with ℓ = (ℓ_p, ℓ_θ)
   //   s_p = R(−ℓ_θ)·[o_p + (R(a) − I)·ℓ_p],  s_θ = a,  e = ŝ − s (θ wrapped),  r = L·e, J = −L·∂s.
@@ -180,6 +179,7 @@ class LaserResidual {
     ds_dp->col(5) << sensor_xy(1), -sensor_xy(0), 0.0;
   }
 
+ private:
   const LaserInterval* interval_;
   const Eigen::Matrix3d* sqrt_information_;
 };

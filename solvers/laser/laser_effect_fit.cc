@@ -1,3 +1,4 @@
+#include <calib/problems/laser/laser_effect_columns.h>
 #include <calib/problems/laser/laser_residual.h>
 #include <calib/problems/positive_manifold.h>
 #include <calib/solvers/common/fused_normal_cost.h>
@@ -235,10 +236,13 @@ LaserEffectEvaluation EvaluateLaserEffects(const LaserEffectData& data,
       Eigen::Vector3d r;
       if (at_base) {
         Eigen::Matrix<double, 3, kNumLaserParams> j_base;
-        Eigen::Vector3d r_base;
-        LaserResidual::Linearize(*contexts[k].interval, data.sqrt_information(k), odometry,
-                                 sensor_mounting, &r_base, &j_base);
-        r = EffectColumnsAtBase(functor, odometry, mounting, &j_effects);
+        if (!EffectColumnsAtZero(contexts[k], data.sqrt_information(k), odometry, sensor_mounting,
+                                 &r, &j_base, &j_effects)) {
+          Eigen::Vector3d r_base;
+          LaserResidual::Linearize(*contexts[k].interval, data.sqrt_information(k), odometry,
+                                   sensor_mounting, &r_base, &j_base);
+          r = EffectColumnsAtBase(functor, odometry, mounting, &j_effects);
+        }
         evaluation.jacobian.block<3, kNumLaserParams>(3 * k, 0) = j_base;
         evaluation.jacobian.block<3, kNumLaserEffectParams>(3 * k, kNumLaserParams) = j_effects;
       } else {

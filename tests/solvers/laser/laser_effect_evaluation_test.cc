@@ -1,5 +1,6 @@
-// The effect fits' evaluation at γ = 0, which takes the base residual's closed-form columns and
-// differentiates in γ alone, against automatic derivatives in all fifteen parameters.
+// The effect fits' evaluation at γ = 0 (the base residual's closed-form columns; the effects'
+// in closed form on constant-speed intervals, differentiated in γ alone on stepped ones) against
+// automatic derivatives in all fifteen parameters.
 #include <calib/core/laser/laser_simulator.h>
 #include <calib/problems/laser/laser_effect_residual.h>
 #include <calib/solvers/laser/laser_effect_fit.h>
@@ -11,12 +12,8 @@
 namespace calib {
 namespace {
 
-TEST(LaserEffectEvaluationTest, AtZeroEffectsMatchesDerivativesInAllParameters) {
-  LaserSimOptions sim;
-  sim.num_intervals = 400;
-  sim.seed = 11;
-  sim.record_steps = 3;  // The stepped model, as logs with encoder sub-steps.
-  const LaserLog log = SimulateLaserLog(sim);
+// Every residual and column of the evaluation at γ = 0 against 15-wide automatic derivatives.
+void ExpectDerivativesInAllParameters(const LaserLog& log, double change_time_s) {
   const Eigen::Matrix3d sqrt_information = Eigen::Vector3d(1e3, 2e3, 5e2).asDiagonal();
   const LaserEffectData data(log.intervals, sqrt_information, LaserRefinementOptions());
   LaserCalibration calibration;
@@ -26,7 +23,7 @@ TEST(LaserEffectEvaluationTest, AtZeroEffectsMatchesDerivativesInAllParameters) 
        {BoundarySpeedModel::kPiecewiseConstant, BoundarySpeedModel::kSmooth}) {
     LaserEffectModel model;
     model.boundary = boundary;
-    model.change_time_s = log.intervals[150].start_s;  // Inside: γ = 0 must not mind.
+    model.change_time_s = change_time_s;
     const LaserEffectEvaluation evaluation = EvaluateLaserEffects(data, model, calibration);
     const std::vector<LaserEffectContext> contexts = data.Contexts(model);
     const double odometry[3] = {0.021, 0.0205, 0.09};
@@ -43,7 +40,8 @@ TEST(LaserEffectEvaluationTest, AtZeroEffectsMatchesDerivativesInAllParameters) 
       ASSERT_TRUE(cost.Evaluate(parameters, r, jacobians));
       const int widths[3] = {3, 3, kNumLaserEffectParams};
       for (int i = 0; i < 3; ++i) {
-        EXPECT_EQ(evaluation.residual(k, i), r[i]) << "interval " << k;
+        EXPECT_NEAR(evaluation.residual(k, i), r[i], 1e-12 * (1.0 + std::abs(r[i])))
+            << "interval " << k;
         int column = 0;
         for (int b = 0; b < 3; ++b) {
           for (int c = 0; c < widths[b]; ++c, ++column) {
@@ -54,6 +52,22 @@ TEST(LaserEffectEvaluationTest, AtZeroEffectsMatchesDerivativesInAllParameters) 
           }
         }
       }
+    }
+  }
+}
+
+TEST(LaserEffectEvaluationTest, AtZeroEffectsMatchesDerivativesInAllParameters) {
+  LaserSimOptions sim;
+  sim.num_intervals = 400;
+  sim.seed = 11;
+  for (int steps : {3, 0}) {  // Logs with encoder sub-steps, and constant-speed intervals.
+    sim.record_steps = steps;
+    const LaserLog log = SimulateLaserLog(sim);
+    SCOPED_TRACE(steps);
+    // A radius change at an interval's start, and inside one (γ = 0 must not mind either).
+    const LaserInterval& inside = log.intervals[200];
+    for (double change : {log.intervals[150].start_s, inside.start_s + inside.duration_s / 3.0}) {
+      ExpectDerivativesInAllParameters(log, change);
     }
   }
 }
