@@ -97,8 +97,8 @@ inline bool EffectColumnsAtZero(
            After(cos_a, sin_a, twist(0) - m_end(0), 0.0, 0.0));
   const int change = column(LaserEffect::kWheelRadiusChange);
   for (int i = 0; i < 2; ++i) {
-    ds_dgamma.col(change + i) = changed ? Eigen::Vector3d(odometry[i] * ds_dp.col(i))
-                                        : Eigen::Vector3d::Zero();
+    ds_dgamma.col(change + i) =
+        changed ? Eigen::Vector3d(odometry[i] * ds_dp.col(i)) : Eigen::Vector3d::Zero();
   }
   const double reference = context.reference_speed;
   ds_dgamma.col(column(LaserEffect::kSpeedDependentRadius)) =
