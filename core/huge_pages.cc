@@ -23,6 +23,17 @@ void AdviseHugePages(const void* data, size_t bytes) {
 #endif
 }
 
+bool PopulateForWriting(void* data, size_t bytes) {
+#if defined(__linux__)
+  constexpr int kPopulateWrite = 23;  // MADV_POPULATE_WRITE, absent from older headers.
+  return data != nullptr && madvise(data, bytes, kPopulateWrite) == 0;
+#else
+  (void)data;
+  (void)bytes;
+  return false;
+#endif
+}
+
 void* MapMemory(size_t bytes) {
   if (bytes == 0) bytes = 1;
 #if defined(__linux__)

@@ -17,6 +17,12 @@ namespace calib {
 // first touched. A hint: nothing happens on other systems, below 4 MB, or when the kernel says no.
 void AdviseHugePages(const void* data, size_t bytes);
 
+// Faults in the pages of [data, data + bytes) for writing without changing what they hold
+// (MADV_POPULATE_WRITE, Linux 5.14): safe while other threads use the memory, so that a helper
+// thread can pay the faults (and the zeroing of 2 MB pages) ahead of the threads that will write
+// there. Returns false where the kernel does not offer it (nothing happens then).
+bool PopulateForWriting(void* data, size_t bytes);
+
 // v->reserve(n) with the new storage advised as above. An estimate that asks for more memory than
 // there is leaves the vector to grow as its elements come.
 template <typename T>
