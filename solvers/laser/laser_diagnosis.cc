@@ -308,7 +308,11 @@ StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& interva
       data, StepEvaluationModel(search.current.model), search.current.calibration);
   LaserDiagnosis diagnosis;
   diagnosis.samples = static_cast<int>(intervals.size());
-  diagnosis.baseline = MakeReport(context, search.current, base_evaluation, 0.0);
+  if (options.screen_only) {
+    diagnosis.baseline.estimate = search.current.calibration;
+  } else {
+    diagnosis.baseline = MakeReport(context, search.current, base_evaluation, 0.0);
+  }
   const LaserEffectModel diagnosis_base_model = search.current.model;
   const LaserCalibration diagnosis_base_calibration = search.current.calibration;
   if (options.progress) {
@@ -342,6 +346,12 @@ StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& interva
   }
   for (const std::string& note : Notes(intervals, search.current.model)) {
     diagnosis.notes.push_back(note);
+  }
+  if (options.screen_only) {
+    diagnosis.structure_before =
+        StructureAt(context, diagnosis_base_calibration, base_evaluation_now);
+    diagnosis.findings = Ordered(candidates, diagnosis.adopted);
+    return diagnosis;
   }
 
   // 4. The final fit, location and residual structure, then each finding's value and sentence.

@@ -75,6 +75,10 @@ struct LaserDiagnosisOptions {
   // streams), not between stamps.
   bool sample_times_estimated = false;
   LaserPlausibility plausibility;
+  // Only what the model screen reads (laser_model_screen.h): the findings' score tests and the
+  // base fit's residual structure. No fit reports (their covariances), covariate profiles,
+  // values or statements.
+  bool screen_only = false;
   std::function<void(const std::string&)> progress;
 };
 

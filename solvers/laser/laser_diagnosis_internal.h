@@ -106,6 +106,9 @@ LaserFitReport MakeReport(const Context& context, const LaserEffectFit& fit,
 std::vector<std::vector<double>> Covariates(const Context& context,
                                             const LaserCalibration& calibration);
 Eigen::MatrixXd Unwhitened(const LaserEffectData& data, const Eigen::MatrixXd& residual);
+// The residual structure of the fit at `calibration` (whose covariates it reads).
+ResidualStructure StructureAt(const Context& context, const LaserCalibration& calibration,
+                              const LaserEffectEvaluation& evaluation);
 // The residual structure, the covariate profiles of the baseline and final fits and the location
 // of each adopted effect.
 void DescribeResiduals(const Context& context, const LaserEffectEvaluation& base_evaluation,

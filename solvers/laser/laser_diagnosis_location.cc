@@ -65,6 +65,14 @@ ResidualStructure Structure(const Context& context,
   return TestResidualStructure(series, options, words);
 }
 
+std::vector<std::vector<size_t>> Orders(const std::vector<std::vector<double>>& covariates) {
+  std::vector<std::vector<size_t>> orders;
+  for (const std::vector<double>& covariate : covariates) {
+    orders.push_back(CovariateOrder(covariate));
+  }
+  return orders;
+}
+
 // Where an adopted effect lives: the covariate along which its signal energy ‖d_k‖² varies most
 // (share of its variance explained by binned means), the time windows where its score accrues,
 // and the residuals against that covariate with the component along the signal d_k.
@@ -193,16 +201,19 @@ std::vector<std::vector<double>> Covariates(const Context& context,
   return covariates;
 }
 
+ResidualStructure StructureAt(const Context& context, const LaserCalibration& calibration,
+                              const LaserEffectEvaluation& evaluation) {
+  const std::vector<std::vector<double>> covariates = Covariates(context, calibration);
+  return Structure(context, covariates, Orders(covariates), evaluation);
+}
+
 void DescribeResiduals(const Context& context, const LaserEffectEvaluation& base_evaluation,
                        const LaserEffectEvaluation& final_evaluation, const Search& search,
                        std::vector<CandidateState>* candidates, LaserDiagnosis* diagnosis) {
   const std::vector<std::vector<double>> covariates =
       Covariates(context, diagnosis->baseline.estimate);
   // Each covariate sorted once for its profile, the structure tests and the adoptions' places.
-  std::vector<std::vector<size_t>> orders;
-  for (const std::vector<double>& covariate : covariates) {
-    orders.push_back(CovariateOrder(covariate));
-  }
+  const std::vector<std::vector<size_t>> orders = Orders(covariates);
   const Eigen::MatrixXd before_errors = Unwhitened(context.data, base_evaluation.residual);
   const Eigen::MatrixXd after_errors = Unwhitened(context.data, final_evaluation.residual);
   for (size_t c = 0; c < covariates.size(); ++c) {

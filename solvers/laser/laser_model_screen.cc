@@ -20,6 +20,7 @@ StatusOr<LaserModelScreen> ScreenLaserModel(const std::vector<LaserInterval>& in
   options.calibration = calibration;
   options.calibration.progress = nullptr;
   options.max_effects = 0;
+  options.screen_only = true;
   // Stamp jitter is calibrate's own business (its interval-jitter treatment).
   options.timing_candidates = false;
   options.sample_times_estimated = sample_times_estimated;
