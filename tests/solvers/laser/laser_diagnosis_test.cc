@@ -113,6 +113,32 @@ TEST_P(DataLogTest, DiagnoseFindsTheEffect) {
   }
 }
 
+// The model screen's diagnosis (screen_only) gives the full diagnosis' score tests and base
+// residual structure exactly: it only leaves out what the screen does not read.
+TEST_P(DataLogTest, ScreenOnlyGivesTheFullDiagnosisTests) {
+  const Recipe& recipe = GetParam();
+  const StatusOr<LaserLog> log = ReadLaserLog((kDataDir / (recipe.name + ".tuple")).string());
+  ASSERT_TRUE(log.ok()) << log.message();
+  LaserDiagnosisOptions options;  // As the screen asks (laser_model_screen.cc).
+  options.max_effects = 0;
+  options.timing_candidates = false;
+  const StatusOr<LaserDiagnosis> full = DiagnoseLaser(log->intervals, options);
+  options.screen_only = true;
+  const StatusOr<LaserDiagnosis> screen = DiagnoseLaser(log->intervals, options);
+  ASSERT_TRUE(full.ok() && screen.ok()) << full.message() << screen.message();
+  ASSERT_EQ(screen->findings.size(), full->findings.size());
+  for (size_t i = 0; i < full->findings.size(); ++i) {
+    const LaserFinding &a = full->findings[i], &b = screen->findings[i];
+    EXPECT_EQ(b.name, a.name) << recipe.name;
+    EXPECT_EQ(b.p_value, a.p_value) << recipe.name << " " << a.name;
+    EXPECT_EQ(b.score_significant, a.score_significant) << recipe.name << " " << a.name;
+    EXPECT_EQ(b.confounded, a.confounded) << recipe.name << " " << a.name;
+  }
+  EXPECT_EQ(screen->structure_before.found, full->structure_before.found) << recipe.name;
+  EXPECT_EQ(screen->structure_before.statement, full->structure_before.statement) << recipe.name;
+  EXPECT_EQ(screen->structure_before.p_value, full->structure_before.p_value) << recipe.name;
+}
+
 // The data logs' effects at the sizes they had before issue 10's bounds (−2.5 % per 0.1 rad/s;
 // a +4 % step), with the noise they had: significant, but sizes a wheel does not have, so each is
 // a structure that follows speed or time, not adopted, and the base parameters stay as fitted.
