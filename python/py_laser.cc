@@ -260,6 +260,9 @@ py::dict IntervalResult(const std::string& source, const std::string& loss,
   const StatusOr<CalibrationReport> report = [&]() -> StatusOr<CalibrationReport> {
     py::gil_scoped_release release;
     LaserReportOptions report_options = ReportOptions(source, loss, options);
+    ScreenClosedForms closed_forms;  // After report_options: released before the screen is awaited.
+    report_options.calibration_closed_forms = closed_forms.future();
+    options.closed_forms_done = closed_forms.Giver();
     report_options.started_screen = StartLaserModelScreen(log.intervals, report_options);
     CALIB_ASSIGN_OR_RETURN(const LaserCalibrationResult result, CalibrateLaser(intervals, options));
     return LaserIntervalReport(result, {&log}, report_options);

@@ -136,6 +136,17 @@ Status ClosedFormWithoutGross(const std::vector<LaserInterval>& intervals,
   return Status::Ok();
 }
 
+// The closed forms' share of a result (ClosedFormWithoutGross, SeedFromTrimmedClosedForm), from
+// a calibration of the same log; its warnings so far are the trimming's.
+void CopyClosedForms(const LaserCalibrationResult& from, LaserCalibrationResult* result) {
+  result->closed_form = from.closed_form;
+  result->gross_intervals = from.gross_intervals;
+  result->gross_note = from.gross_note;
+  result->closed_form_trimmed = from.closed_form_trimmed;
+  result->seed_trimmed = from.seed_trimmed;
+  result->warnings = from.warnings;
+}
+
 // Fewer moving intervals than this per unknown give neither an estimate nor error bars worth
 // reporting (3 intervals fit 6 unknowns with 3 residual degrees of freedom: σ is then noise).
 constexpr int kMinIntervalsPerUnknown = 4;
@@ -295,18 +306,25 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   CALIB_RETURN_IF_ERROR(CheckEnoughIntervals(result.census));
 
   auto start = std::chrono::steady_clock::now();
-  ConsensusScreen screen;
-  const ConsensusScreen* given = logs.size() == 1 ? options.consensus_screen.get() : nullptr;
-  CALIB_RETURN_IF_ERROR(ClosedFormWithoutGross(joined, given, &screen, &result));
-  // On huge logs an evenly spread subset suffices for a seed.
   const size_t total = joined.size();
   const size_t stride = (total + kWarmStartSubset - 1) / kWarmStartSubset;
-  if (total > kWarmStartAbove) {
-    SeedFromTrimmedClosedForm(EvenSubsets({&joined}, stride).front(), nullptr, &result);
+  const LaserCalibrationResult* given_closed_forms = options.closed_forms.get();
+  if (given_closed_forms != nullptr && logs.size() == 1 &&
+      given_closed_forms->samples == result.samples) {
+    CopyClosedForms(*given_closed_forms, &result);
   } else {
-    SeedFromTrimmedClosedForm(joined, &screen, &result);
+    ConsensusScreen screen;
+    const ConsensusScreen* given = logs.size() == 1 ? options.consensus_screen.get() : nullptr;
+    CALIB_RETURN_IF_ERROR(ClosedFormWithoutGross(joined, given, &screen, &result));
+    // On huge logs an evenly spread subset suffices for a seed.
+    if (total > kWarmStartAbove) {
+      SeedFromTrimmedClosedForm(EvenSubsets({&joined}, stride).front(), nullptr, &result);
+    } else {
+      SeedFromTrimmedClosedForm(joined, &screen, &result);
+    }
   }
   result.closed_form_seconds = SecondsSince(start);
+  if (options.closed_forms_done) options.closed_forms_done(result);
   report("closed form done in " + std::to_string(result.closed_form_seconds) + " s");
 
   start = std::chrono::steady_clock::now();

@@ -26,6 +26,8 @@
 //   if (result.ok()) use(result->estimate, result->stddev);
 namespace calib {
 
+struct LaserCalibrationResult;
+
 struct LaserCalibrationOptions {
   LaserRefinementOptions refinement;
   // Fit, re-estimate the scan noise from the residuals, fit again while it changes by more than
@@ -48,6 +50,13 @@ struct LaserCalibrationOptions {
   // The intervals' consensus screen when already computed under the default options (the input
   // checks do: LaserInputCheckOptions::consensus_screen); one log only. Null: computed here.
   std::shared_ptr<const ConsensusScreen> consensus_screen;
+  // The closed forms of the same single log from another calibration (the model screen takes its
+  // calibration's): the result's closed_form … seed_trimmed, and a failed trimming's warning, are
+  // copied from it instead of computed. Null: computed here.
+  std::shared_ptr<const LaserCalibrationResult> closed_forms;
+  // Called with the result once its closed forms are in (for another calibration that waits for
+  // them); may be empty.
+  std::function<void(const LaserCalibrationResult&)> closed_forms_done;
   // Called with a line of progress for long runs; may be empty.
   std::function<void(const std::string&)> progress;
 };

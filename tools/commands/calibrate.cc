@@ -150,10 +150,14 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   }
   options.interval_jitter = !streams;
   LaserReportOptions report_options = ReportOptions(flags, options);
-  // The screen needs the log only: its thread starts before the input checks (on a log they
-  // refuse, its result is waited for and dropped).
+  // The screen needs the log and the calibration's closed forms: its thread starts before the
+  // input checks and waits for them (on a log the checks refuse, it is released, waited for and
+  // dropped).
   const bool latent_timing = streams && flags.timing != "off";
+  ScreenClosedForms closed_forms;  // After report_options: released before the screen is awaited.
   if (logs.size() == 1 && !latent_timing) {
+    report_options.calibration_closed_forms = closed_forms.future();
+    options.closed_forms_done = closed_forms.Giver();
     report_options.started_screen = StartLaserModelScreen(logs.front().intervals, report_options);
   }
   // The checks' consensus screen is the closed form's, unless the latent-time route re-forms

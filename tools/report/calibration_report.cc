@@ -19,6 +19,7 @@ namespace {
 LaserCalibrationOptions ScreenOptions(const LaserReportOptions& options) {
   LaserCalibrationOptions screen = options.screen;
   screen.refinement.num_threads = 1;
+  screen.closed_forms_done = nullptr;  // The calibration's hand-off, not the screen's.
   return screen;
 }
 
@@ -88,9 +89,15 @@ std::shared_future<StatusOr<LaserModelScreen>> StartLaserModelScreen(
     return {};
   }
   try {
-    return std::async(std::launch::async, [&intervals, screen = ScreenOptions(options)] {
-      return ScreenLaserModel(intervals, screen, false);
-    });
+    return std::async(std::launch::async,
+                      [&intervals, screen = ScreenOptions(options),
+                       closed_forms = options.calibration_closed_forms]() mutable {
+                        // The closed forms are the calibration's first step: the screen waits for
+                        // them (the other core is the calibration's meanwhile) rather than
+                        // computing them again.
+                        if (closed_forms.valid()) screen.closed_forms = closed_forms.get();
+                        return ScreenLaserModel(intervals, screen, false);
+                      });
   } catch (const std::system_error&) {  // No thread to be had: the report screens in turn.
     return {};
   }

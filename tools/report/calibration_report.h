@@ -11,7 +11,9 @@
 #include <calib/solvers/scan_matching/robot_bag_log.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 
+#include <functional>
 #include <future>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -39,6 +41,40 @@ struct LaserReportOptions {
   // The screen started beside the calibration (StartLaserModelScreen); when not valid, the report
   // runs it.
   std::shared_future<StatusOr<LaserModelScreen>> started_screen;
+  // When valid, the screen started beside the calibration waits for the calibration's closed
+  // forms (ScreenClosedForms) instead of computing them again.
+  std::shared_future<std::shared_ptr<const LaserCalibrationResult>> calibration_closed_forms;
+};
+
+// Hands the calibration's closed forms (its consensus screen's and the seed) to the model screen
+// started beside it. Give() them once the calibration has them (its options' closed_forms_done:
+// Giver()); destroyed without, it releases the screen with none, which then computes its own.
+// Destroy it before the screen's future is waited for: declare it after the report options.
+class ScreenClosedForms {
+ public:
+  ScreenClosedForms() : future_(promise_.get_future().share()) {}
+  ~ScreenClosedForms() {
+    if (!given_) promise_.set_value(nullptr);
+  }
+  ScreenClosedForms(const ScreenClosedForms&) = delete;
+  ScreenClosedForms& operator=(const ScreenClosedForms&) = delete;
+
+  void Give(const LaserCalibrationResult& result) {
+    if (given_) return;
+    given_ = true;
+    promise_.set_value(std::make_shared<const LaserCalibrationResult>(result));
+  }
+  std::function<void(const LaserCalibrationResult&)> Giver() {
+    return [this](const LaserCalibrationResult& result) { Give(result); };
+  }
+  std::shared_future<std::shared_ptr<const LaserCalibrationResult>> future() const {
+    return future_;
+  }
+
+ private:
+  std::promise<std::shared_ptr<const LaserCalibrationResult>> promise_;
+  std::shared_future<std::shared_ptr<const LaserCalibrationResult>> future_;
+  bool given_ = false;  // On the calibration's thread only.
 };
 
 // Starts the model screen of a log of intervals on a second thread: it needs the log only, so it

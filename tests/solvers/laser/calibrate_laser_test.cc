@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <memory>
 
 namespace calib {
 namespace {
@@ -331,7 +332,8 @@ TEST(CalibrateLaserTest, NoInliersGiveAFiniteFlaggedNoise) {
 
 // When the trimming removes the only turns, the untrimmed closed form seeds the refinement and
 // the result says so.
-TEST(CalibrateLaserTest, FailedTrimmingFallsBackWithAWarning) {
+// A log whose only three turns have a sensor motion off by 5 cm: the trimming drops them.
+std::vector<LaserInterval> ThreeBadTurns() {
   LaserSimOptions sim;
   sim.num_intervals = 300;
   sim.seed = 43;
@@ -343,19 +345,60 @@ TEST(CalibrateLaserTest, FailedTrimmingFallsBackWithAWarning) {
     if (kind.turning() == 0) {
       intervals.push_back(interval);
     } else if (turns < 3) {
-      // The only three turns, each with a sensor motion off by 5 cm: the trimming drops them.
       intervals.push_back(interval);
       intervals.back().sensor_motion(0) += 0.05;
       ++turns;
     }
   }
-  ASSERT_EQ(turns, 3);
+  return intervals;
+}
+
+TEST(CalibrateLaserTest, FailedTrimmingFallsBackWithAWarning) {
+  const std::vector<LaserInterval> intervals = ThreeBadTurns();
+  ASSERT_EQ(CountLaserMotion(intervals).turning(), 3);
   ASSERT_TRUE(CensiClosedForm(intervals).ok());
   ASSERT_FALSE(CensiClosedFormTrimmed(intervals).ok());
   const StatusOr<LaserCalibrationResult> result = CalibrateLaser(intervals);
   ASSERT_TRUE(result.ok()) << result.message();
   EXPECT_FALSE(result->seed_trimmed);
   EXPECT_TRUE(HasWarning(*result, "the trimmed closed form failed"));
+}
+
+// The closed forms one calibration hands on (closed_forms_done) give another calibration of the
+// same log the same result, gross intervals and trimming warning included; given for another
+// log (a different size), they are not used.
+TEST(CalibrateLaserTest, HandedOnClosedFormsGiveTheSameResult) {
+  LaserSimOptions sim;
+  sim.num_intervals = 400;
+  sim.outlier_fraction = 0.05;
+  const LaserLog slips = SimulateLaserLog(sim);
+  for (const std::vector<LaserInterval>& intervals : {slips.intervals, ThreeBadTurns()}) {
+    LaserCalibrationOptions options;
+    std::shared_ptr<const LaserCalibrationResult> handed;
+    options.closed_forms_done = [&](const LaserCalibrationResult& r) {
+      handed = std::make_shared<const LaserCalibrationResult>(r);
+    };
+    const StatusOr<LaserCalibrationResult> own = CalibrateLaser(intervals, options);
+    ASSERT_TRUE(own.ok() && handed != nullptr) << own.message();
+    LaserCalibrationOptions taking;
+    taking.closed_forms = handed;
+    const StatusOr<LaserCalibrationResult> taken = CalibrateLaser(intervals, taking);
+    ASSERT_TRUE(taken.ok()) << taken.message();
+    EXPECT_EQ(taken->estimate.ToVector(), own->estimate.ToVector());
+    EXPECT_EQ(taken->covariance, own->covariance);
+    EXPECT_EQ(taken->closed_form_trimmed.calibration.ToVector(),
+              own->closed_form_trimmed.calibration.ToVector());
+    EXPECT_EQ(taken->gross_note, own->gross_note);
+    EXPECT_EQ(taken->seed_trimmed, own->seed_trimmed);
+    EXPECT_EQ(taken->warnings, own->warnings);
+
+    const std::vector<LaserInterval> shorter(intervals.begin(), intervals.end() - 1);
+    const StatusOr<LaserCalibrationResult> fresh = CalibrateLaser(shorter);
+    const StatusOr<LaserCalibrationResult> not_taken = CalibrateLaser(shorter, taking);
+    ASSERT_TRUE(fresh.ok() && not_taken.ok());
+    EXPECT_EQ(not_taken->estimate.ToVector(), fresh->estimate.ToVector());
+  }
+  EXPECT_FALSE(CalibrateLaser(ThreeBadTurns())->seed_trimmed);
 }
 
 // Intervals built in memory bypass the readers' bounds: an absurd value is an error naming the
