@@ -114,8 +114,7 @@ Status ClosedFormWithoutGross(const std::vector<LaserInterval>& intervals,
   const bool reuse = given != nullptr && given->kept.size() == intervals.size();
   if (reuse) screen = *given;
   const StatusOr<CensiClosedFormResult> screened =
-      reuse ? CensiClosedForm(intervals, &screen.kept)
-            : CensiClosedFormScreened(intervals, &screen);
+      reuse ? ClosedFormOnKept(intervals, screen) : CensiClosedFormScreened(intervals, &screen);
   if (screened.ok() && screen.outliers() == 0) {
     result->closed_form = *screened;  // Every interval kept: the closed form on all of them.
     return Status::Ok();

@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 
 namespace calib {
@@ -170,22 +171,31 @@ StatusOr<TrimmedClosedFormResult> CensiClosedFormTrimmed(
     const ConsensusScreen* given_screen) {
   TrimmedClosedFormResult result;
   result.kept.assign(intervals.size(), true);
+  std::optional<CensiClosedFormResult> first;  // The first round's, on the screen's kept set.
   if (options.screen_gross) {
     ConsensusScreenOptions screen_options;
     screen_options.closed_form = options.closed_form;
     ConsensusScreen screen =
         given_screen != nullptr ? *given_screen : ScreenGrossIntervals(intervals, screen_options);
+    const StatusOr<CensiClosedFormResult> on_kept =
+        ClosedFormOnKept(intervals, screen, options.closed_form);
     // A screen that leaves too little motion for the closed form is not used.
-    if (screen.outliers() > 0 &&
-        CensiClosedForm(intervals, &screen.kept, options.closed_form).ok()) {
-      result.kept = std::move(screen.kept);
-      result.gross = screen.outliers();
-      result.first_gross = screen.first_outlier;
+    if (on_kept.ok()) {
+      first = *on_kept;
+      if (screen.outliers() > 0) {
+        result.kept = std::move(screen.kept);
+        result.gross = screen.outliers();
+        result.first_gross = screen.first_outlier;
+      }
     }
   }
   for (int round = 0;; ++round) {
-    CALIB_ASSIGN_OR_RETURN(result.estimate,
-                           CensiClosedForm(intervals, &result.kept, options.closed_form));
+    if (round == 0 && first) {
+      result.estimate = *first;
+    } else {
+      CALIB_ASSIGN_OR_RETURN(result.estimate,
+                             CensiClosedForm(intervals, &result.kept, options.closed_form));
+    }
     if (round == options.rounds) break;
     // e = ℓ ⊕ ŝ − ô ⊕ ℓ (§III-B), in the robot frame.
     const LaserCalibration& cal = result.estimate.calibration;

@@ -259,8 +259,21 @@ StatusOr<CensiClosedFormResult> CensiClosedFormScreened(const std::vector<LaserI
                                                         ConsensusScreen* screen) {
   ConsensusScreen local = ScreenGrossIntervals(intervals);
   const StatusOr<CensiClosedFormResult> result = CensiClosedForm(intervals, &local.kept);
+  if (result.ok()) local.closed_form = *result;
   if (screen != nullptr) *screen = std::move(local);
   return result;
+}
+
+StatusOr<CensiClosedFormResult> ClosedFormOnKept(const std::vector<LaserInterval>& intervals,
+                                                 const ConsensusScreen& screen,
+                                                 const CensiClosedFormOptions& options) {
+  const CensiClosedFormOptions defaults;
+  if (screen.closed_form && screen.kept.size() == intervals.size() &&
+      options.max_condition_number == defaults.max_condition_number &&
+      options.num_threads == defaults.num_threads) {
+    return *screen.closed_form;
+  }
+  return CensiClosedForm(intervals, &screen.kept, options);
 }
 
 }  // namespace calib

@@ -5,6 +5,7 @@
 #include <calib/core/status.h>
 #include <calib/solvers/laser/censi_closed_form.h>
 
+#include <optional>
 #include <vector>
 
 // Gross records found before any least squares sees them. One wheel speed of 1000 rad/s, one T
@@ -31,6 +32,9 @@ struct ConsensusScreen {
   int rotation_outliers = 0;
   int translation_outliers = 0;
   int first_outlier = -1;  // Index of the first gross interval, −1 when none.
+  // The closed form on the kept intervals under the default options, when CensiClosedFormScreened
+  // computed it and it succeeded (ClosedFormOnKept reuses it).
+  std::optional<CensiClosedFormResult> closed_form;
   int outliers() const { return rotation_outliers + translation_outliers; }
 };
 
@@ -41,6 +45,12 @@ ConsensusScreen ScreenGrossIntervals(const std::vector<LaserInterval>& intervals
 // The closed form on the intervals the screen keeps (`screen` may be null).
 StatusOr<CensiClosedFormResult> CensiClosedFormScreened(const std::vector<LaserInterval>& intervals,
                                                         ConsensusScreen* screen = nullptr);
+
+// The closed form on the intervals `screen` keeps: the screen's own (screen.closed_form) under the
+// default options, else computed.
+StatusOr<CensiClosedFormResult> ClosedFormOnKept(const std::vector<LaserInterval>& intervals,
+                                                 const ConsensusScreen& screen,
+                                                 const CensiClosedFormOptions& options = {});
 
 }  // namespace calib
 

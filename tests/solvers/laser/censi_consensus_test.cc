@@ -121,6 +121,40 @@ TEST(CensiConsensusTest, SurvivesFortyPercentGross) {
   EXPECT_LT(MaxError(screened->calibration), 1e-6);
 }
 
+// The screen keeps its closed form for the closed forms that start from it: the same as computing
+// it on the kept intervals; with other options, or without one, it is computed; the trimmed closed
+// form from the screen is the one from a fresh screen.
+TEST(CensiConsensusTest, TheScreensClosedFormIsReused) {
+  std::vector<LaserInterval> intervals = MakeIntervals(600, 8);
+  intervals[17].sensor_motion(2) += 1.0;
+  ConsensusScreen screen;
+  const StatusOr<CensiClosedFormResult> screened = CensiClosedFormScreened(intervals, &screen);
+  ASSERT_TRUE(screened.ok() && screen.closed_form.has_value());
+  const StatusOr<CensiClosedFormResult> computed = CensiClosedForm(intervals, &screen.kept);
+  const StatusOr<CensiClosedFormResult> reused = ClosedFormOnKept(intervals, screen);
+  ASSERT_TRUE(computed.ok() && reused.ok());
+  EXPECT_EQ(reused->calibration.ToVector(), computed->calibration.ToVector());
+  EXPECT_EQ(reused->samples_used, computed->samples_used);
+
+  ConsensusScreen marked = screen;  // A closed form it would not compute: not reused.
+  marked.closed_form->calibration.odometry.wheelbase_m = 1.0;
+  CensiClosedFormOptions strict;
+  strict.max_condition_number = 1e6;
+  EXPECT_EQ(ClosedFormOnKept(intervals, marked, strict)->calibration.ToVector(),
+            CensiClosedForm(intervals, &screen.kept, strict)->calibration.ToVector());
+  marked.closed_form.reset();
+  EXPECT_EQ(ClosedFormOnKept(intervals, marked)->calibration.ToVector(),
+            computed->calibration.ToVector());
+
+  const StatusOr<TrimmedClosedFormResult> from_screen =
+      CensiClosedFormTrimmed(intervals, {}, &screen);
+  const StatusOr<TrimmedClosedFormResult> fresh = CensiClosedFormTrimmed(intervals);
+  ASSERT_TRUE(from_screen.ok() && fresh.ok());
+  EXPECT_EQ(from_screen->estimate.calibration.ToVector(), fresh->estimate.calibration.ToVector());
+  EXPECT_EQ(from_screen->kept, fresh->kept);
+  EXPECT_EQ(from_screen->gross, 1);
+}
+
 // Too few moving intervals for a consensus: nothing is screened, never a failure.
 TEST(CensiConsensusTest, TinyLogKeepsEverything) {
   const std::vector<LaserInterval> intervals = MakeIntervals(3, 6);
