@@ -221,11 +221,20 @@ double LogLikelihood(const JitterData& data, const Eigen::Vector3d& theta, doubl
 }
 
 // max over θ of the log-likelihood at σ_j² (Fisher scoring from *theta, which it updates, until
-// θ moves by less than `tolerance`, relative).
+// θ moves by less than `tolerance`, relative). Without jitter Σ_k = diag(θ): the maximum is at
+// the mean squared errors, in one pass.
 double ProfileLogLikelihood(const JitterData& data, double jitter_s, bool estimate_noise,
                             Eigen::Vector3d* theta, double tolerance) {
   const double jitter2 = jitter_s * jitter_s;
   if (!estimate_noise) return LogLikelihood(data, *theta, jitter2);
+  if (jitter2 == 0.0 && data.size() > 0) {
+    for (int i = 0; i < 3; ++i) {
+      double sum = 0.0;
+      for (const double e : data.error[i]) sum += e * e;
+      (*theta)(i) = std::max(sum / static_cast<double>(data.size()), kMinVariance);
+    }
+    return LogLikelihood(data, *theta, 0.0);
+  }
   int held[3] = {0, 0, 0};  // Steps in a row that the 10× limit held back, per variance.
   for (int iteration = 0; iteration < 100; ++iteration) {
     Eigen::Vector3d score;

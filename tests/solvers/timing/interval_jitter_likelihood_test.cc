@@ -55,6 +55,24 @@ TEST(IntervalJitterLikelihoodTest, TheProfileEndsAtItsMaximum) {
   }
 }
 
+// Without jitter the profile is in closed form (the mean squared errors); the scoring at a jitter
+// too small to matter ends there too.
+TEST(IntervalJitterLikelihoodTest, WithoutJitterTheProfileIsTheMeanSquare) {
+  const Eigen::Vector3d truth(1e-6, 4e-6, 1e-5);
+  const JitterData data = Draw(2000, truth, 0.01, false, 3);
+  Eigen::Vector3d closed = truth * 50.0, scored = truth * 50.0;
+  const double value = ProfileLogLikelihood(data, 0.0, true, &closed);
+  const double scored_value = ProfileLogLikelihood(data, 1e-12, true, &scored);
+  for (int i = 0; i < 3; ++i) {
+    double sum = 0.0;
+    for (const double e : data.error[i]) sum += e * e;
+    EXPECT_DOUBLE_EQ(closed(i), sum / static_cast<double>(data.size()));
+    EXPECT_NEAR(scored(i), closed(i), 1e-8 * closed(i));
+  }
+  EXPECT_NEAR(value, scored_value, 1e-9 * std::abs(value));
+  EXPECT_EQ(value, LogLikelihood(data, closed, 0.0));
+}
+
 // A jitter that explains the y errors entirely drives θ_y to the floor (in a few passes rather
 // than one tenth per pass); the other variances still reach their maximum.
 TEST(IntervalJitterLikelihoodTest, AVarianceTheJitterExplainsFallsToTheFloor) {
