@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <memory>
 #include <string>
 
 namespace calib {
@@ -34,7 +35,8 @@ TEST(CalibrationReportTest, TheModelScreenRunsUpToItsLimitAndSaysSoBeyond) {
 }
 
 // l90's screen finds physics the base model leaves out: the report must say the same whether the
-// screen ran beside the calibration or after it.
+// screen ran beside the calibration (on its own or waiting for the calibration's closed forms) or
+// after it.
 TEST(CalibrationReportTest, AScreenStartedBesideTheCalibrationReportsTheSame) {
   const std::filesystem::path l90 = std::filesystem::path(CALIB_CENSI_DATA_DIR) / "l90.tuple";
   if (!std::filesystem::exists(l90)) {
@@ -55,6 +57,29 @@ TEST(CalibrationReportTest, AScreenStartedBesideTheCalibrationReportsTheSame) {
   EXPECT_TRUE(after.json["model_screen"]["flagged"].get<bool>());
   EXPECT_EQ(beside.json.dump(), after.json.dump());
   EXPECT_EQ(beside.summary, after.summary);
+
+  // Waiting for the calibration's closed forms (as `calib calibrate` starts it): the same again.
+  {
+    LaserReportOptions waiting = options;
+    LaserCalibrationOptions calibration;
+    ScreenClosedForms closed_forms;
+    waiting.calibration_closed_forms = closed_forms.future();
+    calibration.closed_forms_done = closed_forms.Giver();
+    waiting.started_screen = StartLaserModelScreen(log->intervals, waiting);
+    const StatusOr<LaserCalibrationResult> handing = CalibrateLaser(log->intervals, calibration);
+    ASSERT_TRUE(handing.ok()) << handing.message();
+    const CalibrationReport handed = LaserIntervalReport(*handing, {&*log}, waiting);
+    EXPECT_EQ(handed.json.dump(), LaserIntervalReport(*handing, {&*log}, options).json.dump());
+  }
+  // Released without them (the calibration stopped first): the screen computes its own.
+  {
+    LaserReportOptions released = options;
+    auto closed_forms = std::make_unique<ScreenClosedForms>();
+    released.calibration_closed_forms = closed_forms->future();
+    released.started_screen = StartLaserModelScreen(log->intervals, released);
+    closed_forms.reset();
+    EXPECT_EQ(LaserIntervalReport(*result, {&*log}, released).json.dump(), after.json.dump());
+  }
 
   // Beyond the limit nothing is started: the report says it did not run.
   options.screen_max_intervals = 100;
