@@ -83,12 +83,14 @@ Status Solve(const SolverSettings& settings, const std::string& what, ceres::Pro
 }
 
 Status SolveInStages(const std::function<Status(ceres::Solver::Summary*)>& solve,
-                     const std::function<void()>& redescend, ceres::Solver::Summary* summary) {
+                     const std::function<void()>& redescend, ceres::Solver::Summary* summary,
+                     const std::function<void(const ceres::Solver::Summary&)>& after_first) {
   ceres::Solver::Summary own;
   if (summary == nullptr) summary = &own;
   if (!redescend) return solve(summary);
   ceres::Solver::Summary first;
   CALIB_RETURN_IF_ERROR(solve(&first));
+  if (after_first) after_first(first);
   redescend();
   CALIB_RETURN_IF_ERROR(solve(summary));
   summary->iterations.insert(summary->iterations.begin(), first.iterations.begin(),

@@ -58,8 +58,11 @@ Status Solve(const SolverSettings& settings, const std::string& what, ceres::Pro
 // A robust problem's solves in two stages: `solve` under its first loss, then, when `redescend`
 // is set, the switch to Tukey's biweight (not convex: it starts from that optimum) and `solve`
 // again; `summary` (when not null) holds both stages' iterations. Without `redescend`, one solve.
-Status SolveInStages(const std::function<Status(ceres::Solver::Summary*)>& solve,
-                     const std::function<void()>& redescend, ceres::Solver::Summary* summary);
+// `after_first` (may be empty) is told the first stage's summary before the switch.
+Status SolveInStages(
+    const std::function<Status(ceres::Solver::Summary*)>& solve,
+    const std::function<void()>& redescend, ceres::Solver::Summary* summary,
+    const std::function<void(const ceres::Solver::Summary&)>& after_first = nullptr);
 
 // Whether a solve ended by one of its convergence tests (not by its iteration or time limit).
 bool Converged(const ceres::Solver::Summary& summary);

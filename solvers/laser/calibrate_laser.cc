@@ -47,10 +47,60 @@ struct SolveOutcome {
   std::string not_converged;  // Why the last solve stopped, when it did not converge.
 };
 
+// The convex stage between two calibrations of one log: `given` (may be null) replaces the
+// first solve where it applies; `done` (may be empty) is told the first solve's convex stage.
+struct ConvexStageHandOff {
+  const LaserConvexStage* given = nullptr;
+  std::function<void(const LaserConvexStage&)> done;
+};
+
+// A solve's iterations added to *outcome, and how it ended.
+void AddSolve(const ceres::Solver::Summary& summary, SolveOutcome* outcome) {
+  outcome->iterations += static_cast<int>(summary.iterations.size());
+  outcome->converged = Converged(summary);
+  outcome->not_converged = outcome->converged ? "" : NotConvergedText("the refinement", summary);
+}
+
+// The first solve of RefineWithNoise, or the given convex stage in its place.
+Status FirstSolve(const LaserCalibrationOptions& options, const ConvexStageHandOff& hand_off,
+                  LaserProblem* problem, SolveOutcome* outcome) {
+  LaserConvexStage stage;
+  stage.start = problem->calibration();
+  stage.refinement = options.refinement;
+  for (size_t d = 0; d < problem->num_datasets(); ++d) {
+    stage.noise_sigma.push_back(problem->sqrt_information(d).diagonal().cwiseInverse());
+  }
+  const LaserConvexStage* given = hand_off.given;
+  if (given != nullptr && !problem->solves_in_stages() &&
+      given->Replaces(stage.start, stage.noise_sigma, options.refinement)) {
+    problem->set_calibration(given->estimate);
+    outcome->iterations += given->iterations;
+    outcome->converged = given->converged;
+    outcome->not_converged = given->not_converged;
+    return Status::Ok();
+  }
+  std::function<void(const ceres::Solver::Summary&)> after_convex_stage;
+  if (hand_off.done) {
+    after_convex_stage = [&](const ceres::Solver::Summary& first) {
+      SolveOutcome first_outcome;
+      AddSolve(first, &first_outcome);
+      stage.estimate = problem->calibration();
+      stage.iterations = first_outcome.iterations;
+      stage.converged = first_outcome.converged;
+      stage.not_converged = first_outcome.not_converged;
+      hand_off.done(stage);
+    };
+  }
+  ceres::Solver::Summary summary;
+  CALIB_RETURN_IF_ERROR(problem->Solve(&summary, after_convex_stage));
+  AddSolve(summary, outcome);
+  return Status::Ok();
+}
+
 // Fits, re-estimates each log's noise from the residuals (unless fixed), and fits again while
 // the noise level still moves enough to shift the weights.
 StatusOr<SolveOutcome> RefineWithNoise(const LaserCalibrationOptions& options,
-                                       LaserProblem* problem,
+                                       const ConvexStageHandOff& hand_off, LaserProblem* problem,
                                        const std::function<void(const std::string&)>& report) {
   // Whitens each log by its robust noise level; returns the largest relative change.
   const auto estimate_noise = [&]() {
@@ -67,13 +117,16 @@ StatusOr<SolveOutcome> RefineWithNoise(const LaserCalibrationOptions& options,
   estimate_noise();
   SolveOutcome outcome;
   for (int round = 0; round < std::max(1, options.noise_rounds); ++round) {
-    ceres::Solver::Summary summary;
-    CALIB_RETURN_IF_ERROR(problem->Solve(&summary));
-    outcome.iterations += static_cast<int>(summary.iterations.size());
-    outcome.converged = Converged(summary);
-    outcome.not_converged = outcome.converged ? "" : NotConvergedText("the refinement", summary);
+    const int before = outcome.iterations;
+    if (round == 0) {
+      CALIB_RETURN_IF_ERROR(FirstSolve(options, hand_off, problem, &outcome));
+    } else {
+      ceres::Solver::Summary summary;
+      CALIB_RETURN_IF_ERROR(problem->Solve(&summary));
+      AddSolve(summary, &outcome);
+    }
     report("refinement round " + std::to_string(round + 1) + ": " +
-           std::to_string(summary.iterations.size()) + " iterations");
+           std::to_string(outcome.iterations - before) + " iterations");
     if (options.noise_sigma || estimate_noise() < kNoiseRefitChange) break;
   }
   return outcome;
@@ -137,6 +190,24 @@ Status ClosedFormWithoutGross(const std::vector<LaserInterval>& intervals,
 
 // The closed forms' share of a result (ClosedFormWithoutGross, SeedFromTrimmedClosedForm), from
 // a calibration of the same log; its warnings so far are the trimming's.
+bool SameRefinement(const LaserRefinementOptions& a, const LaserRefinementOptions& b) {
+  // num_threads: the fused passes split their sums the same way on any number of threads.
+  return a.loss == b.loss && a.loss_scale == b.loss_scale && a.max_iterations == b.max_iterations &&
+         a.per_interval_blocks == b.per_interval_blocks &&
+         (!a.per_interval_blocks || a.num_threads == b.num_threads);
+}
+
+}  // namespace
+
+bool LaserConvexStage::Replaces(const LaserCalibration& from,
+                                const std::vector<Eigen::Vector3d>& sigma,
+                                const LaserRefinementOptions& options) const {
+  return from.ToVector() == start.ToVector() && sigma == noise_sigma &&
+         SameRefinement(options, refinement);
+}
+
+namespace {
+
 void CopyClosedForms(const LaserCalibrationResult& from, LaserCalibrationResult* result) {
   result->closed_form = from.closed_form;
   result->gross_intervals = from.gross_intervals;
@@ -238,7 +309,8 @@ Status WarmStart(const std::vector<const std::vector<LaserInterval>*>& logs, siz
   }
   for (const auto* log : logs) total += log->size();
   LaserProblem warm(subset_datasets, *initial, options.refinement);
-  CALIB_ASSIGN_OR_RETURN(const SolveOutcome warm_outcome, RefineWithNoise(options, &warm, report));
+  CALIB_ASSIGN_OR_RETURN(const SolveOutcome warm_outcome,
+                         RefineWithNoise(options, {}, &warm, report));
   *iterations += warm_outcome.iterations;
   *initial = warm.calibration();
   for (size_t d = 0; d < logs.size(); ++d) {
@@ -323,7 +395,6 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
     }
   }
   result.closed_form_seconds = SecondsSince(start);
-  if (options.closed_forms_done) options.closed_forms_done(result);
   report("closed form done in " + std::to_string(result.closed_form_seconds) + " s");
 
   start = std::chrono::steady_clock::now();
@@ -349,7 +420,21 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   // The warm start ended under the redescending loss: the full problem starts there directly.
   if (!initial_sigma.empty()) problem.Redescend();
   result.loss = problem.LossDescription();
-  CALIB_ASSIGN_OR_RETURN(const SolveOutcome outcome, RefineWithNoise(options, &problem, report));
+  ConvexStageHandOff hand_off;
+  if (given_closed_forms != nullptr && given_closed_forms->convex_stage && logs.size() == 1 &&
+      given_closed_forms->samples == result.samples) {
+    hand_off.given = &*given_closed_forms->convex_stage;
+  }
+  if (options.closed_forms_done && logs.size() == 1 && problem.solves_in_stages()) {
+    hand_off.done = [&](const LaserConvexStage& stage) {
+      result.convex_stage = stage;
+      options.closed_forms_done(result);
+    };
+  } else if (options.closed_forms_done) {
+    options.closed_forms_done(result);
+  }
+  CALIB_ASSIGN_OR_RETURN(const SolveOutcome outcome,
+                         RefineWithNoise(options, hand_off, &problem, report));
   result.iterations += outcome.iterations;
   result.converged = outcome.converged;
   if (!outcome.converged) result.warnings.push_back(outcome.not_converged);

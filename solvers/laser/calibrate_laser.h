@@ -28,6 +28,24 @@ namespace calib {
 
 struct LaserCalibrationResult;
 
+// The refinement's first, convex stage (under the loss before it redescends to Tukey's): where
+// it started, the noise level that whitened it, its options and its end. Another calibration of
+// the same log that stops there (the model screen's base fit) takes it instead of solving again.
+struct LaserConvexStage {
+  LaserCalibration start;
+  std::vector<Eigen::Vector3d> noise_sigma;  // Per log.
+  LaserRefinementOptions refinement;
+  LaserCalibration estimate;
+  int iterations = 0;
+  bool converged = true;
+  std::string not_converged;  // Why it stopped, when it did not converge.
+
+  // Whether a solve from `start` whitened by `noise_sigma` under `refinement`, without the
+  // redescending stage, would be this stage (the same figures, bit for bit).
+  bool Replaces(const LaserCalibration& start, const std::vector<Eigen::Vector3d>& noise_sigma,
+                const LaserRefinementOptions& refinement) const;
+};
+
 struct LaserCalibrationOptions {
   LaserRefinementOptions refinement;
   // Fit, re-estimate the scan noise from the residuals, fit again while it changes by more than
@@ -52,10 +70,11 @@ struct LaserCalibrationOptions {
   std::shared_ptr<const ConsensusScreen> consensus_screen;
   // The closed forms of the same single log from another calibration (the model screen takes its
   // calibration's): the result's closed_form … seed_trimmed, and a failed trimming's warning, are
-  // copied from it instead of computed. Null: computed here.
+  // copied from it instead of computed, and its convex_stage replaces the first solve when it
+  // applies (LaserConvexStage::Replaces). Null: computed here.
   std::shared_ptr<const LaserCalibrationResult> closed_forms;
-  // Called with the result once its closed forms are in (for another calibration that waits for
-  // them); may be empty.
+  // Called with the result once its closed forms are in, and its convex stage when the
+  // refinement has one (for another calibration that waits for them); may be empty.
   std::function<void(const LaserCalibrationResult&)> closed_forms_done;
   // Called with a line of progress for long runs; may be empty.
   std::function<void(const std::string&)> progress;
@@ -71,6 +90,9 @@ struct LaserCalibrationResult {
   std::string gross_note;   // How many and the first, in words ("" when none).
   CensiClosedFormResult closed_form_trimmed;  // With its trimming: the refinement's seed.
   bool seed_trimmed = true;  // False: the trimming failed and the seed is `closed_form`.
+  // The refinement's convex stage, kept when closed_forms_done hands it on (one log, a loss that
+  // redescends, no warm start).
+  std::optional<LaserConvexStage> convex_stage;
   int samples = 0;
   int inliers = 0;
   std::vector<std::vector<bool>> is_inlier;  // Per log, per interval.

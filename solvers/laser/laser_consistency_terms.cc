@@ -10,8 +10,8 @@
 namespace calib::consistency_internal {
 namespace {
 
-// Below this many intervals per chunk a thread costs more than it saves.
-constexpr size_t kMinChunk = 5000;
+// The passes run in chunks of at least this many intervals (ParallelSplit).
+constexpr size_t kMinChunk = 500;
 
 // Rescues the fit's outliers that are timing artefacts (see ComputeTerms).
 void RescueTimingOutliers(const std::vector<LaserInterval>& intervals,
@@ -73,9 +73,9 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
   LogTerms log{&intervals, {}};
   ReserveOnHugePages(&log.terms, intervals.size());
   log.terms.resize(intervals.size());
-  std::vector<LaserParamMatrix> hessians(ChunkCount(intervals.size(), num_threads, kMinChunk),
+  std::vector<LaserParamMatrix> hessians(SplitCount(intervals.size(), kMinChunk),
                                          LaserParamMatrix::Zero());
-  ParallelChunks(
+  ParallelSplit(
       intervals.size(), num_threads, kMinChunk, [&](size_t chunk, size_t begin, size_t end) {
         // On the thread's stack: side by side in `hessians` the sums would share cache lines.
         LaserParamMatrix h = LaserParamMatrix::Zero();
@@ -113,9 +113,8 @@ LaserParamMatrix InfluenceLongRun(const std::vector<LogTerms>& logs, int lag, in
   LaserParamMatrix s = LaserParamMatrix::Zero();
   for (const LogTerms& log : logs) {
     const std::vector<IntervalTerms>& t = log.terms;
-    std::vector<LaserParamMatrix> sums(ChunkCount(t.size(), num_threads, kMinChunk),
-                                       LaserParamMatrix::Zero());
-    ParallelChunks(t.size(), num_threads, kMinChunk, [&](size_t chunk, size_t begin, size_t end) {
+    std::vector<LaserParamMatrix> sums(SplitCount(t.size(), kMinChunk), LaserParamMatrix::Zero());
+    ParallelSplit(t.size(), num_threads, kMinChunk, [&](size_t chunk, size_t begin, size_t end) {
       // Σ_k ψ_kψ_kᵀ + C + Cᵀ with C = Σ_k ψ_k·(Σ_j w_j ψ_{k+j})ᵀ: one outer product per
       // interval, the lags summed as a running vector.
       LaserParamMatrix cross = LaserParamMatrix::Zero();

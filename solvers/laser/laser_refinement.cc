@@ -21,9 +21,9 @@ constexpr char kSingular[] =
     "the information matrix is singular: the log does not determine all six parameters";
 constexpr char kTooFew[] = "too few intervals for a covariance";
 
-// The per-interval passes (errors, covariance) are a noticeable share of a million-interval run:
-// they run in parallel chunks of at least this many intervals.
-constexpr size_t kMinChunk = 5000;
+// The per-interval passes (errors, covariance, the increment-noise correction) run in chunks of at
+// least this many intervals (ParallelSplit: the same figures on any number of threads).
+constexpr size_t kMinChunk = 500;
 
 }  // namespace
 
@@ -95,7 +95,7 @@ void LaserProblem::AddFusedBlock(ceres::LossFunction* block_loss) {
   };
   problem_->AddResidualBlock(
       NewFusedNormalCost<3, kNumLaserParams>({3, 3}, num_intervals(), linearize, block_loss,
-                                             options_.num_threads),
+                                             options_.num_threads, kMinChunk),
       nullptr, odometry_, base_T_sensor_);
 }
 
@@ -107,7 +107,9 @@ void LaserProblem::Linearize(size_t d, size_t k, const SensorMounting& mounting,
 
 LaserProblem::~LaserProblem() = default;
 
-Status LaserProblem::Solve(ceres::Solver::Summary* summary) {
+Status LaserProblem::Solve(
+    ceres::Solver::Summary* summary,
+    const std::function<void(const ceres::Solver::Summary&)>& after_convex_stage) {
   const auto solve = [&](ceres::Solver::Summary* stage) {
     // The fused block evaluates its intervals on its own threads.
     return calib::Solve(
@@ -116,8 +118,8 @@ Status LaserProblem::Solve(ceres::Solver::Summary* summary) {
         "the refinement", problem_.get(), stage);
   };
   std::function<void()> redescend;
-  if (redescends() && !redescended_) redescend = [this] { Redescend(); };
-  CALIB_RETURN_IF_ERROR(SolveInStages(solve, redescend, summary));
+  if (solves_in_stages()) redescend = [this] { Redescend(); };
+  CALIB_RETURN_IF_ERROR(SolveInStages(solve, redescend, summary, after_convex_stage));
   if (!(odometry_[0] > 0.0 && odometry_[1] > 0.0 && odometry_[2] > 0.0)) {
     return Status::NotObservable(
         "the refinement drove a wheel radius or the wheelbase to a non-positive "
@@ -171,12 +173,12 @@ std::vector<Eigen::Vector3d> LaserProblem::Errors(size_t dataset) const {
   const std::vector<LaserInterval>& intervals = *datasets_[dataset].intervals;
   std::vector<Eigen::Vector3d> errors(intervals.size());
   const SensorMounting mounting(base_T_sensor_);
-  ParallelChunks(intervals.size(), options_.num_threads, kMinChunk,
-                 [&](size_t, size_t begin, size_t end) {
-                   for (size_t k = begin; k < end; ++k) {
-                     errors[k] = LaserResidual::Error(intervals[k], odometry_, mounting);
-                   }
-                 });
+  ParallelSplit(intervals.size(), options_.num_threads, kMinChunk,
+                [&](size_t, size_t begin, size_t end) {
+                  for (size_t k = begin; k < end; ++k) {
+                    errors[k] = LaserResidual::Error(intervals[k], odometry_, mounting);
+                  }
+                });
   return errors;
 }
 
@@ -215,28 +217,30 @@ StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::Covariance() const
 }
 
 StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::SandwichCovariance() const {
-  const int threads = std::max(1, options_.num_threads);
-  std::vector<SandwichSums<kNumLaserParams>> sums(threads);
+  const int chunks = SplitCount(num_intervals(), kMinChunk);
+  std::vector<SandwichSums<kNumLaserParams>> sums(chunks);
   std::atomic<bool> failed{false};
   const SensorMounting mounting(base_T_sensor_);
-  ParallelChunks(num_intervals(), threads, kMinChunk, [&](size_t chunk, size_t begin, size_t end) {
-    Eigen::Matrix<double, 3, kNumLaserParams> j;
-    Eigen::Vector3d r;
-    // Summed on the thread's stack: side by side in `sums` the chunks' sums share cache lines.
-    SandwichSums<kNumLaserParams> own;
-    for (size_t i = begin; i < end; ++i) {
-      const size_t d = DatasetOf(i);
-      Linearize(d, i - dataset_begin_[d], mounting, &r, &j);
-      if (!r.allFinite() || !j.allFinite()) {
-        failed = true;
-        return;
-      }
-      own.Add(j, r, EvaluateLoss(loss_.get(), r.squaredNorm()));
-    }
-    sums[chunk] = own;
-  });
+  ParallelSplit(num_intervals(), options_.num_threads, kMinChunk,
+                [&](size_t chunk, size_t begin, size_t end) {
+                  Eigen::Matrix<double, 3, kNumLaserParams> j;
+                  Eigen::Vector3d r;
+                  // Summed on the thread's stack: side by side in `sums` the chunks' sums share
+                  // cache lines.
+                  SandwichSums<kNumLaserParams> own;
+                  for (size_t i = begin; i < end; ++i) {
+                    const size_t d = DatasetOf(i);
+                    Linearize(d, i - dataset_begin_[d], mounting, &r, &j);
+                    if (!r.allFinite() || !j.allFinite()) {
+                      failed = true;
+                      return;
+                    }
+                    own.Add(j, r, EvaluateLoss(loss_.get(), r.squaredNorm()));
+                  }
+                  sums[chunk] = own;
+                });
   if (failed) return Status::Internal("a residual could not be evaluated at the estimate");
-  for (int c = 1; c < threads; ++c) sums[0] += sums[c];
+  for (int c = 1; c < chunks; ++c) sums[0] += sums[c];
   const double n = 3.0 * num_intervals();
   if (n <= kNumLaserParams) return Status::NotObservable(kTooFew);
   StatusOr<CorrectedCovariance<LaserParamMatrix>> sandwich =
@@ -249,31 +253,53 @@ StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::SandwichCovariance
 
 StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::CorrelatedSandwichCovariance(
     const std::vector<std::vector<Eigen::Matrix3d>>& lag_one) const {
-  SandwichSums<kNumLaserParams> sums;
-  Eigen::Matrix<double, 3, kNumLaserParams> j, j_previous;
-  Eigen::Vector3d r;
-  double weight_previous = 0.0;
   const SensorMounting mounting(base_T_sensor_);
-  for (size_t i = 0; i < num_intervals(); ++i) {
+  // Interval i's Jacobian and loss weight; false: not evaluable.
+  const auto linearize = [&](size_t i, Eigen::Matrix<double, 3, kNumLaserParams>* j,
+                             Eigen::Vector3d* r, LossDerivatives* rho) {
     const size_t d = DatasetOf(i);
-    const size_t k = i - dataset_begin_[d];
-    Linearize(d, k, mounting, &r, &j);
-    if (!r.allFinite() || !j.allFinite()) {
-      return Status::Internal("a residual could not be evaluated at the estimate");
-    }
-    const LossDerivatives rho = EvaluateLoss(loss_.get(), r.squaredNorm());
-    sums.Add(j, r, rho);
-    if (k > 0 && d < lag_one.size() && k - 1 < lag_one[d].size()) {
-      // Cov(r_{k−1}, r_k) = L_{k−1}·C·L_kᵀ of the whitened residuals.
-      const Eigen::Matrix3d whitened = IntervalSqrtInformation(d, k - 1) * lag_one[d][k - 1] *
-                                       IntervalSqrtInformation(d, k).transpose();
-      const LaserParamMatrix cross =
-          weight_previous * rho.rho1 * j_previous.transpose() * whitened * j;
-      sums.meat += cross + cross.transpose();
-    }
-    j_previous = j;
-    weight_previous = rho.rho1;
-  }
+    Linearize(d, i - dataset_begin_[d], mounting, r, j);
+    *rho = EvaluateLoss(loss_.get(), r->squaredNorm());
+    return r->allFinite() && j->allFinite();
+  };
+  std::vector<SandwichSums<kNumLaserParams>> parts(SplitCount(num_intervals(), kMinChunk));
+  std::atomic<bool> failed{false};
+  ParallelSplit(num_intervals(), options_.num_threads, kMinChunk,
+                [&](size_t chunk, size_t begin, size_t end) {
+                  SandwichSums<kNumLaserParams> own;  // On the thread's stack.
+                  Eigen::Matrix<double, 3, kNumLaserParams> j, j_previous;
+                  Eigen::Vector3d r;
+                  LossDerivatives rho, rho_previous;
+                  // A chunk's first interval pairs with the one before it (evaluated again).
+                  if (begin > 0 && !linearize(begin - 1, &j_previous, &r, &rho_previous)) {
+                    failed = true;
+                    return;
+                  }
+                  for (size_t i = begin; i < end; ++i) {
+                    if (!linearize(i, &j, &r, &rho)) {
+                      failed = true;
+                      return;
+                    }
+                    own.Add(j, r, rho);
+                    const size_t d = DatasetOf(i);
+                    const size_t k = i - dataset_begin_[d];
+                    if (k > 0 && d < lag_one.size() && k - 1 < lag_one[d].size()) {
+                      // Cov(r_{k−1}, r_k) = L_{k−1}·C·L_kᵀ of the whitened residuals.
+                      const Eigen::Matrix3d whitened = IntervalSqrtInformation(d, k - 1) *
+                                                       lag_one[d][k - 1] *
+                                                       IntervalSqrtInformation(d, k).transpose();
+                      const LaserParamMatrix cross =
+                          rho_previous.rho1 * rho.rho1 * j_previous.transpose() * whitened * j;
+                      own.meat += cross + cross.transpose();
+                    }
+                    j_previous = j;
+                    rho_previous = rho;
+                  }
+                  parts[chunk] = own;
+                });
+  if (failed) return Status::Internal("a residual could not be evaluated at the estimate");
+  SandwichSums<kNumLaserParams> sums = parts[0];
+  for (size_t c = 1; c < parts.size(); ++c) sums += parts[c];
   const double n = 3.0 * num_intervals();
   if (n <= kNumLaserParams) return Status::NotObservable(kTooFew);
   StatusOr<CorrectedCovariance<LaserParamMatrix>> sandwich =
@@ -309,17 +335,22 @@ LaserParamVector Score(const LaserInterval& interval, const Eigen::Matrix3d& roo
 }  // namespace
 
 void LaserProblem::AddIncrementCorrection(size_t d, size_t k, const Eigen::Matrix2d* covariance,
-                                          const SensorMounting& mounting, LaserParamMatrix* hessian,
-                                          LaserParamVector* correction) const {
+                                          const SensorMounting& mounting,
+                                          IncrementSums* sums) const {
   const LaserInterval& interval = (*datasets_[d].intervals)[k];
   const Eigen::Matrix3d& root = IntervalSqrtInformation(d, k);
   Eigen::Matrix<double, 3, kNumLaserParams> j;
   Eigen::Vector3d r;
   LaserResidual::Linearize(interval, root, odometry_, mounting, &r, &j);
-  const double weight = LossWeight(r.squaredNorm());
-  *hessian += weight * j.transpose() * j;
+  const LossDerivatives rho = EvaluateLoss(loss_.get(), r.squaredNorm());
+  const double weight = rho.rho1;
+  const LaserParamMatrix gauss_newton = weight * j.transpose() * j;
+  sums->hessian += gauss_newton;
+  const LaserParamVector g = j.transpose() * r;
+  const LaserParamVector center = weight * g;
+  sums->gradient += center;
+  sums->newton_hessian += gauss_newton + 2.0 * rho.rho2 * g * g.transpose();
   if (covariance == nullptr) return;
-  const LaserParamVector center = weight * j.transpose() * r;
   // 2×2: the closed-form eigen decomposition (the iterative one cost as much as a residual).
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen;
   eigen.computeDirect(*covariance);
@@ -327,34 +358,33 @@ void LaserProblem::AddIncrementCorrection(size_t d, size_t k, const Eigen::Matri
     const double variance = eigen.eigenvalues()(i);
     if (!(variance > 0.0)) continue;
     const Eigen::Vector2d u = std::sqrt(variance) * eigen.eigenvectors().col(i);
-    *correction += 0.5 * (Score(ShiftIncrements(interval, u), root, odometry_, mounting, weight) +
-                          Score(ShiftIncrements(interval, -u), root, odometry_, mounting, weight) -
-                          2.0 * center);
+    sums->correction +=
+        0.5 *
+        (Score(ShiftIncrements(interval, u), root, odometry_, mounting, weight) +
+         Score(ShiftIncrements(interval, -u), root, odometry_, mounting, weight) - 2.0 * center);
   }
 }
 
 StatusOr<LaserProblem::IncrementCorrection> LaserProblem::IncrementNoiseCorrection(
     const std::vector<std::vector<Eigen::Matrix2d>>& increment_covariance) const {
   const SensorMounting mounting(base_T_sensor_);
-  struct Sums {
-    LaserParamMatrix hessian = LaserParamMatrix::Zero();
-    LaserParamVector correction = LaserParamVector::Zero();
-  };
-  std::vector<Sums> sums(ChunkCount(num_intervals(), options_.num_threads, kMinChunk));
-  ParallelChunks(num_intervals(), options_.num_threads, kMinChunk,
-                 [&](size_t chunk, size_t begin, size_t end) {
-                   Sums own;  // On the thread's stack (see SandwichCovariance).
-                   for (size_t i = begin; i < end; ++i) {
-                     const size_t d = DatasetOf(i), k = i - dataset_begin_[d];
-                     const bool given =
-                         d < increment_covariance.size() && k < increment_covariance[d].size();
-                     AddIncrementCorrection(d, k, given ? &increment_covariance[d][k] : nullptr,
-                                            mounting, &own.hessian, &own.correction);
-                   }
-                   sums[chunk] = own;
-                 });
+  std::vector<IncrementSums> sums(SplitCount(num_intervals(), kMinChunk));
+  ParallelSplit(num_intervals(), options_.num_threads, kMinChunk,
+                [&](size_t chunk, size_t begin, size_t end) {
+                  IncrementSums own;  // On the thread's stack (see SandwichCovariance).
+                  for (size_t i = begin; i < end; ++i) {
+                    const size_t d = DatasetOf(i), k = i - dataset_begin_[d];
+                    const bool given =
+                        d < increment_covariance.size() && k < increment_covariance[d].size();
+                    AddIncrementCorrection(d, k, given ? &increment_covariance[d][k] : nullptr,
+                                           mounting, &own);
+                  }
+                  sums[chunk] = own;
+                });
   for (size_t c = 1; c < sums.size(); ++c) {
     sums[0].hessian += sums[c].hessian;
+    sums[0].newton_hessian += sums[c].newton_hessian;
+    sums[0].gradient += sums[c].gradient;
     sums[0].correction += sums[c].correction;
   }
   const Eigen::LDLT<LaserParamMatrix> ldlt(sums[0].hessian);
@@ -362,8 +392,16 @@ StatusOr<LaserProblem::IncrementCorrection> LaserProblem::IncrementNoiseCorrecti
     return Status::NotObservable(kSingular);
   }
   const LaserParamMatrix inverse = ldlt.solve(LaserParamMatrix::Identity());
-  return IncrementCorrection{ldlt.solve(sums[0].correction),
-                             inverse.diagonal().cwiseMax(0.0).cwiseSqrt()};
+  IncrementCorrection out{ldlt.solve(sums[0].correction),
+                          inverse.diagonal().cwiseMax(0.0).cwiseSqrt(),
+                          -ldlt.solve(sums[0].gradient)};
+  // Newton's step where the score's derivative is positive definite (near the optimum), else the
+  // Gauss–Newton one.
+  const Eigen::LDLT<LaserParamMatrix> newton(sums[0].newton_hessian);
+  if (newton.info() == Eigen::Success && (newton.vectorD().array() > 0.0).all()) {
+    out.newton_step = -newton.solve(sums[0].gradient);
+  }
+  return out;
 }
 
 Eigen::Vector3d RobustNoiseSigma(const std::vector<Eigen::Vector3d>& errors) {

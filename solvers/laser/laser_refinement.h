@@ -66,8 +66,13 @@ class LaserProblem {
   LaserProblem& operator=(const LaserProblem&) = delete;
 
   // Solves; the first solve of a redescending problem runs under `loss`, then under Tukey's
-  // biweight from that optimum (the summary then holds both stages' iterations).
-  Status Solve(ceres::Solver::Summary* summary = nullptr);
+  // biweight from that optimum (the summary then holds both stages' iterations), telling
+  // `after_convex_stage` (may be empty) the first stage's summary in between.
+  Status Solve(
+      ceres::Solver::Summary* summary = nullptr,
+      const std::function<void(const ceres::Solver::Summary&)>& after_convex_stage = nullptr);
+  // Whether the next solve runs in two stages (see Solve).
+  bool solves_in_stages() const { return redescends() && !redescended_; }
   // Switches to the redescending loss now (for a start already near the robust optimum, e.g. a
   // warm start); no effect when the options ask for none or it is in use.
   void Redescend();
@@ -114,10 +119,16 @@ class LaserProblem {
   // attenuation bias of a noisy regressor. Returns Δp = H⁻¹·Σ_k c_k (H = Σρ'JᵀJ), with c_k that
   // term from second differences along the columns u of C_k's square root:
   // c_k = ½Σ_u [ψ_k(Δφ + u) + ψ_k(Δφ − u) − 2ψ_k(Δφ)]; p + Δp solves the corrected score to
-  // first order. Also returns √diag(H⁻¹), the parameters' σ under the model's weights.
+  // first order. Also returns √diag(H⁻¹), the parameters' σ under the model's weights, and from
+  // the same pass Newton's step −H_ψ⁻¹·Σψ_k to the robust cost's optimum, H_ψ = Σ[ρ'JᵀJ +
+  // 2ρ''(Jᵀr)(Jᵀr)ᵀ] the score's derivative (the sandwich's bread; where it is not positive
+  // definite, H instead). LM's Gauss–Newton matrix is H (for ρ'' ≤ 0 Ceres' corrector only scales
+  // by √ρ'), which near the optimum converges only linearly (Tukey's ρ'' < 0: H_ψ < H); Newton's
+  // step from a fraction of σ away lands on it.
   struct IncrementCorrection {
     LaserParamVector step;
     LaserParamVector stddev;
+    LaserParamVector newton_step;
   };
   StatusOr<IncrementCorrection> IncrementNoiseCorrection(
       const std::vector<std::vector<Eigen::Matrix2d>>& increment_covariance) const;
@@ -138,11 +149,16 @@ class LaserProblem {
   // r and J of interval k of dataset d at the current parameters.
   void Linearize(size_t d, size_t k, const SensorMounting& mounting, Eigen::Vector3d* r,
                  Eigen::Matrix<double, 3, 6>* j) const;
-  // Interval k of dataset d's share of IncrementNoiseCorrection: ρ'JᵀJ into *hessian, and c_k
-  // into *correction when its increments' `covariance` is given.
+  // IncrementNoiseCorrection's sums: H = Σρ'JᵀJ, H_ψ, Σψ_k and Σc_k.
+  struct IncrementSums {
+    LaserParamMatrix hessian = LaserParamMatrix::Zero();
+    LaserParamMatrix newton_hessian = LaserParamMatrix::Zero();
+    LaserParamVector gradient = LaserParamVector::Zero();
+    LaserParamVector correction = LaserParamVector::Zero();
+  };
+  // Interval k of dataset d's share of them (c_k when its increments' `covariance` is given).
   void AddIncrementCorrection(size_t d, size_t k, const Eigen::Matrix2d* covariance,
-                              const SensorMounting& mounting, LaserParamMatrix* hessian,
-                              LaserParamVector* correction) const;
+                              const SensorMounting& mounting, IncrementSums* sums) const;
   void AddResidualBlocks(ceres::LossFunction* block_loss);
   void AddFusedBlock(ceres::LossFunction* block_loss);
   const Eigen::Matrix3d& IntervalSqrtInformation(size_t dataset, size_t k) const {

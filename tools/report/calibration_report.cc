@@ -1,3 +1,4 @@
+#include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/laser/laser_model_screen.h>
 #include <calib/tools/report/bearing_report.h>
 #include <calib/tools/report/calibration_report.h>
@@ -96,6 +97,7 @@ std::shared_future<StatusOr<LaserModelScreen>> StartLaserModelScreen(
                         // them (the other core is the calibration's meanwhile) rather than
                         // computing them again.
                         if (closed_forms.valid()) screen.closed_forms = closed_forms.get();
+                        const OccupiedCore busy;  // The calibration's passes keep to theirs.
                         return ScreenLaserModel(intervals, screen, false);
                       });
   } catch (const std::system_error&) {  // No thread to be had: the report screens in turn.

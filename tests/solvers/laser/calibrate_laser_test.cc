@@ -401,6 +401,57 @@ TEST(CalibrateLaserTest, HandedOnClosedFormsGiveTheSameResult) {
   EXPECT_FALSE(CalibrateLaser(ThreeBadTurns())->seed_trimmed);
 }
 
+// A calibration that stops at the convex stage (no redescending stage, the estimate only: the
+// model screen's base fit) takes the handing calibration's first stage bit for bit; a stage that
+// started elsewhere (another noise level) is not taken.
+TEST(CalibrateLaserTest, HandedOnConvexStageIsTheSameFit) {
+  LaserSimOptions sim;
+  sim.num_intervals = 1500;
+  sim.outlier_fraction = 0.05;
+  const LaserLog log = SimulateLaserLog(sim);
+  LaserCalibrationOptions options;
+  std::shared_ptr<const LaserCalibrationResult> handed;
+  int calls = 0;
+  options.closed_forms_done = [&](const LaserCalibrationResult& r) {
+    ++calls;
+    handed = std::make_shared<const LaserCalibrationResult>(r);
+  };
+  const StatusOr<LaserCalibrationResult> own = CalibrateLaser(log.intervals, options);
+  ASSERT_TRUE(own.ok() && handed != nullptr) << own.message();
+  EXPECT_EQ(calls, 1);
+  ASSERT_TRUE(handed->convex_stage.has_value());
+  EXPECT_NE(handed->convex_stage->estimate.ToVector(), own->estimate.ToVector());  // Redescended.
+
+  LaserCalibrationOptions stops;
+  stops.refinement.redescending_scale = 0.0;
+  stops.estimate_only = true;
+  stops.refinement.num_threads = 1;  // The split sums do not depend on it.
+  const StatusOr<LaserCalibrationResult> alone = CalibrateLaser(log.intervals, stops);
+  stops.closed_forms = handed;
+  const StatusOr<LaserCalibrationResult> taken = CalibrateLaser(log.intervals, stops);
+  ASSERT_TRUE(alone.ok() && taken.ok());
+  EXPECT_EQ(taken->estimate.ToVector(), alone->estimate.ToVector());
+  EXPECT_EQ(taken->iterations, alone->iterations);
+  EXPECT_EQ(taken->noise_sigma, alone->noise_sigma);
+  // Taken, not solved again: a stage altered after the fact shows in the result.
+  auto altered = std::make_shared<LaserCalibrationResult>(*handed);
+  altered->convex_stage->estimate.odometry.wheelbase_m *= 1.01;
+  stops.closed_forms = altered;
+  const StatusOr<LaserCalibrationResult> from_altered = CalibrateLaser(log.intervals, stops);
+  ASSERT_TRUE(from_altered.ok());
+  EXPECT_NE(from_altered->estimate.ToVector(), alone->estimate.ToVector());
+  stops.closed_forms = handed;
+
+  // Whitened otherwise, the stage does not apply: the fit is the calibration's own.
+  stops.noise_sigma = Eigen::Vector3d(0.01, 0.01, 0.002);
+  const StatusOr<LaserCalibrationResult> other = CalibrateLaser(log.intervals, stops);
+  stops.closed_forms = nullptr;
+  const StatusOr<LaserCalibrationResult> other_alone = CalibrateLaser(log.intervals, stops);
+  ASSERT_TRUE(other.ok() && other_alone.ok());
+  EXPECT_EQ(other->estimate.ToVector(), other_alone->estimate.ToVector());
+  EXPECT_NE(other->estimate.ToVector(), alone->estimate.ToVector());
+}
+
 // Intervals built in memory bypass the readers' bounds: an absurd value is an error naming the
 // interval, never a CHECK inside Ceres; a single big glitch costs its interval.
 TEST(CalibrateLaserTest, AbsurdValueInMemoryIsRefusedAndGlitchCostsOneInterval) {

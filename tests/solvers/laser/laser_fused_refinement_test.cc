@@ -1,12 +1,16 @@
 #include <calib/core/laser/laser_simulator.h>
 #include <calib/problems/laser/laser_residual.h>
 #include <calib/solvers/common/fused_normal_cost.h>
+#include <calib/solvers/common/robust_covariance.h>
+#include <calib/solvers/common/robust_loss.h>
 #include <calib/solvers/laser/calibrate_laser.h>
 #include <calib/solvers/laser/laser_refinement.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <memory>
+#include <vector>
 
 namespace calib {
 namespace {
@@ -146,6 +150,91 @@ TEST(FusedRefinementTest, EqualsThePerIntervalBlocksPath) {
   ASSERT_TRUE(sandwich.ok() && separate_sandwich.ok());
   EXPECT_LT((sandwich->covariance - separate_sandwich->covariance).norm(),
             1e-6 * separate_sandwich->covariance.norm());
+}
+
+// Near the optimum (a fraction of σ off, as a later refit round starts), Newton's step of the
+// increment-noise pass lands on it; LM, whose Gauss–Newton matrix leaves out Tukey's ρ'' < 0,
+// stops a few hundredths of σ short. Without increment covariances the correction is zero.
+TEST(FusedRefinementTest, NewtonStepFromNearTheOptimumLandsOnIt) {
+  const LaserLog log = NoisyLogWithSlips(3000, 22);
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(log.intervals);
+  ASSERT_TRUE(result.ok()) << result.message();
+  const LaserParamVector sigma = result->stddev;
+  LaserProblem problem({Whitened(log, *result)}, result->estimate, LaserRefinementOptions{});
+  problem.Redescend();
+  ASSERT_TRUE(problem.Solve().ok());
+  const auto newton_step = [&] {
+    const StatusOr<LaserProblem::IncrementCorrection> near = problem.IncrementNoiseCorrection({});
+    EXPECT_TRUE(near.ok()) << near.message();
+    EXPECT_EQ(near->step, LaserParamVector::Zero());
+    return near->newton_step;
+  };
+  const auto step = [&] {
+    problem.set_calibration(
+        LaserCalibration::FromVector(problem.calibration().ToVector() + newton_step()));
+  };
+  const LaserParamVector lm_short = newton_step().cwiseQuotient(sigma);
+  step();
+  step();
+  EXPECT_LT(newton_step().cwiseQuotient(sigma).cwiseAbs().maxCoeff(), 1e-4);
+  EXPECT_GT(lm_short.cwiseAbs().maxCoeff(), 1e-3) << lm_short.transpose();
+  const LaserParamVector optimum = problem.calibration().ToVector();
+  LaserParamVector offset;
+  offset << 0.3, -0.2, 0.25, -0.3, 0.1, 0.2;
+  problem.set_calibration(LaserCalibration::FromVector(optimum + offset.cwiseProduct(sigma)));
+  step();
+  const LaserParamVector landed = problem.calibration().ToVector() - optimum;
+  EXPECT_LT(landed.cwiseQuotient(sigma).cwiseAbs().maxCoeff(), 0.01) << landed.transpose();
+}
+
+// The sandwich with neighbouring intervals correlated, summed in chunks (each chunk's first
+// interval paired with the one before it), equals the same sums taken interval by interval.
+TEST(FusedRefinementTest, CorrelatedSandwichEqualsTheSumsInOrder) {
+  const LaserLog log = NoisyLogWithSlips(3000, 23);
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(log.intervals);
+  ASSERT_TRUE(result.ok()) << result.message();
+  const LaserDataset dataset = Whitened(log, *result);
+  LaserProblem problem({dataset}, result->estimate, LaserRefinementOptions{});
+  problem.Redescend();
+  const size_t n = log.intervals.size();
+  std::vector<std::vector<Eigen::Matrix3d>> lag_one(1);
+  for (size_t k = 0; k + 1 < n; ++k) {
+    lag_one[0].push_back(-0.3 * result->noise_sigma[0].cwiseAbs2().asDiagonal().toDenseMatrix());
+  }
+  const StatusOr<CorrectedCovariance<LaserParamMatrix>> chunked =
+      problem.CorrelatedSandwichCovariance(lag_one);
+  ASSERT_TRUE(chunked.ok()) << chunked.message();
+
+  const std::unique_ptr<ceres::LossFunction> tukey =
+      MakeLossFunction(RobustLoss::kTukey, LaserRefinementOptions{}.redescending_scale);
+  const LaserParamVector v = result->estimate.ToVector();
+  const SensorMounting mounting(v.data() + 3);
+  const Eigen::Matrix3d& root = dataset.sqrt_information;
+  SandwichSums<kNumLaserParams> sums;
+  Eigen::Matrix<double, 3, kNumLaserParams> j, j_previous;
+  Eigen::Vector3d r;
+  double weight_previous = 0.0;
+  for (size_t k = 0; k < n; ++k) {
+    LaserResidual::Linearize(log.intervals[k], root, v.data(), mounting, &r, &j);
+    const LossDerivatives rho = EvaluateLoss(tukey.get(), r.squaredNorm());
+    sums.Add(j, r, rho);
+    if (k > 0) {
+      const LaserParamMatrix cross = weight_previous * rho.rho1 * j_previous.transpose() * root *
+                                     lag_one[0][k - 1] * root.transpose() * j;
+      sums.meat += cross + cross.transpose();
+    }
+    j_previous = j;
+    weight_previous = rho.rho1;
+  }
+  const StatusOr<CorrectedCovariance<LaserParamMatrix>> in_order =
+      SandwichCovariance(sums, 3.0 * n, 3.0 * n - kNumLaserParams);
+  ASSERT_TRUE(in_order.ok());
+  EXPECT_LT((chunked->covariance - in_order->covariance).norm(),
+            1e-10 * in_order->covariance.norm());
+  const StatusOr<CorrectedCovariance<LaserParamMatrix>> uncorrelated = problem.SandwichCovariance();
+  ASSERT_TRUE(uncorrelated.ok());
+  EXPECT_GT((chunked->covariance - uncorrelated->covariance).norm(),
+            1e-3 * uncorrelated->covariance.norm());
 }
 
 // Without a robust loss and on noise-free data both paths recover the truth exactly.
