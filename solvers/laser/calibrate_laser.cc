@@ -379,7 +379,10 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   auto start = std::chrono::steady_clock::now();
   const size_t total = joined.size();
   const size_t stride = (total + kWarmStartSubset - 1) / kWarmStartSubset;
-  const LaserCalibrationResult* given_closed_forms = options.closed_forms.get();
+  std::shared_ptr<const LaserCalibrationResult> awaited;
+  if (!options.closed_forms && options.await_closed_forms) awaited = options.await_closed_forms();
+  const LaserCalibrationResult* given_closed_forms =
+      options.closed_forms ? options.closed_forms.get() : awaited.get();
   if (given_closed_forms != nullptr && logs.size() == 1 &&
       given_closed_forms->samples == result.samples) {
     CopyClosedForms(*given_closed_forms, &result);

@@ -73,6 +73,9 @@ struct LaserCalibrationOptions {
   // copied from it instead of computed, and its convex_stage replaces the first solve when it
   // applies (LaserConvexStage::Replaces). Null: computed here.
   std::shared_ptr<const LaserCalibrationResult> closed_forms;
+  // When closed_forms is null: called once the checks of the log are done, for the closed forms
+  // as above (it may wait for another calibration to hand them on); may return null, or be empty.
+  std::function<std::shared_ptr<const LaserCalibrationResult>()> await_closed_forms;
   // Called with the result once its closed forms are in, and its convex stage when the
   // refinement has one (for another calibration that waits for them); may be empty.
   std::function<void(const LaserCalibrationResult&)> closed_forms_done;

@@ -15,7 +15,9 @@ namespace {
 // round's times the ratio of the two changes.
 constexpr double kSettled = 0.01;
 constexpr double kSettledStddevs = 0.02;
-constexpr double kNewtonReach = 0.5;
+// Newton steps up to this many σ (see SolveAndCorrect): over a σ or so the robust cost is
+// quadratic to a few percent, the next round takes the rest.
+constexpr double kNewtonReach = 1.0;
 
 // The jitter each log's whitening uses: its estimate when significant, none otherwise.
 double UsedJitter(const IntervalJitterEstimate& estimate) {
@@ -70,24 +72,23 @@ std::vector<bool> Inliers(const std::vector<Eigen::Vector3d>& errors,
   return inlier;
 }
 
-// The refit's optimum under the current whitening with the increment-noise correction as
-// `step`: LM from the base fit in the first round. A later round starts at the previous round's
-// corrected optimum, which the whitening's small change moves by a fraction of σ: Newton's step
-// from the correction's own pass gets there (closer than LM, which stops a few hundredths of σ
-// short under Tukey's loss), unless it reaches further than kNewtonReach σ: then LM again.
+// The refit's optimum under the current whitening, with the increment-noise correction as
+// `step`. Each round starts at an optimum under a whitening that the jitter's estimate has just
+// moved (the base fit's first, then the previous round's corrected one), a fraction of σ away on
+// real logs (0.1–0.8σ, then 0.02–0.15σ): Newton's step from the correction's own pass gets there
+// (closer than LM, which stops a few hundredths of σ short under Tukey's loss), unless it reaches
+// further than kNewtonReach σ: then LM solves, and the correction is taken again at its optimum.
 StatusOr<LaserProblem::IncrementCorrection> SolveAndCorrect(
-    bool first_round, const std::vector<std::vector<Eigen::Matrix2d>>& increment_covariance,
-    LaserProblem* problem, LaserCalibrationResult* result) {
-  if (!first_round) {
-    CALIB_ASSIGN_OR_RETURN(LaserProblem::IncrementCorrection near,
-                           problem->IncrementNoiseCorrection(increment_covariance));
-    const double reach =
-        (near.newton_step.array() / near.stddev.array().max(1e-300)).abs().maxCoeff();
-    if (reach <= kNewtonReach) {
-      ++result->iterations;
-      near.step += near.newton_step;
-      return near;
-    }
+    const std::vector<std::vector<Eigen::Matrix2d>>& increment_covariance, LaserProblem* problem,
+    LaserCalibrationResult* result) {
+  CALIB_ASSIGN_OR_RETURN(LaserProblem::IncrementCorrection near,
+                         problem->IncrementNoiseCorrection(increment_covariance));
+  const double reach =
+      (near.newton_step.array() / near.stddev.array().max(1e-300)).abs().maxCoeff();
+  if (reach <= kNewtonReach) {
+    ++result->iterations;
+    near.step += near.newton_step;
+    return near;
   }
   ceres::Solver::Summary summary;
   CALIB_RETURN_IF_ERROR(problem->Solve(&summary));
@@ -141,7 +142,7 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
   }
   for (int round = 0; round < rounds; ++round) {
     CALIB_ASSIGN_OR_RETURN(const LaserProblem::IncrementCorrection correction,
-                           SolveAndCorrect(round == 0, increment_covariance, &problem, result));
+                           SolveAndCorrect(increment_covariance, &problem, result));
     problem.set_calibration(
         LaserCalibration::FromVector(problem.calibration().ToVector() + correction.step));
     const LaserCalibration estimate = problem.calibration();

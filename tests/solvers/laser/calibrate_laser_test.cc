@@ -433,6 +433,18 @@ TEST(CalibrateLaserTest, HandedOnConvexStageIsTheSameFit) {
   EXPECT_EQ(taken->estimate.ToVector(), alone->estimate.ToVector());
   EXPECT_EQ(taken->iterations, alone->iterations);
   EXPECT_EQ(taken->noise_sigma, alone->noise_sigma);
+  // Awaited once the log is checked, the same.
+  int awaited = 0;
+  LaserCalibrationOptions awaiting = stops;
+  awaiting.closed_forms = nullptr;
+  awaiting.await_closed_forms = [&] {
+    ++awaited;
+    return handed;
+  };
+  const StatusOr<LaserCalibrationResult> after_wait = CalibrateLaser(log.intervals, awaiting);
+  ASSERT_TRUE(after_wait.ok());
+  EXPECT_EQ(after_wait->estimate.ToVector(), alone->estimate.ToVector());
+  EXPECT_EQ(awaited, 1);
   // Taken, not solved again: a stage altered after the fact shows in the result.
   auto altered = std::make_shared<LaserCalibrationResult>(*handed);
   altered->convex_stage->estimate.odometry.wheelbase_m *= 1.01;
