@@ -3,16 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 namespace calib {
 namespace {
 
 // Below this many values nth_element is as fast as the bracket.
-constexpr size_t kBracketAbove = size_t{1} << 16;
-constexpr size_t kSample = 4096;
-// Half-width of the bracket in sample ranks: the k-th value's rank in the sample has a standard
-// deviation of at most √(4096/4) = 32, so 160 ranks miss once in millions.
-constexpr size_t kHalfWidth = 160;
+constexpr size_t kBracketAbove = 1024;
+constexpr size_t kMinSample = 256;
+constexpr size_t kMaxSample = 4096;
 
 double Fallback(std::vector<double>* values, size_t k) {
   std::nth_element(values->begin(), values->begin() + static_cast<long>(k), values->end());
@@ -25,34 +24,42 @@ double KthSmallest(std::vector<double>* values, size_t k) {
   std::vector<double>& v = *values;
   const size_t n = v.size();
   if (n < kBracketAbove) return Fallback(values, k);
-  std::vector<double> sample(kSample);
-  for (size_t i = 0; i < kSample; ++i) sample[i] = v[i * (n / kSample)];
+  // An evenly spread sample of s values: the k-th value's rank in it has a standard deviation of
+  // at most √(s/4), and a bracket of 5 of those either side misses about once in a million.
+  const size_t s = std::clamp(n / 8, kMinSample, kMaxSample);
+  const long half_width = static_cast<long>(std::ceil(5.0 * std::sqrt(0.25 * s)));
+  std::vector<double> sample(s);
+  for (size_t i = 0; i < s; ++i) sample[i] = v[i * (n / s)];
   if (!std::all_of(sample.begin(), sample.end(), [](double x) { return !std::isnan(x); })) {
     return Fallback(values, k);
   }
-  std::sort(sample.begin(), sample.end());
-  const size_t at = static_cast<size_t>(static_cast<double>(k) / static_cast<double>(n) * kSample);
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  const double lo = at >= kHalfWidth ? sample[at - kHalfWidth] : -kInf;
-  const double hi = at + kHalfWidth < kSample ? sample[at + kHalfWidth] : kInf;
-  size_t below = 0, above = 0;
-  std::vector<double> inside;
-  inside.reserve(n / kSample * (2 * kHalfWidth + 1) * 2);
+  const long at = static_cast<long>(static_cast<double>(k) / static_cast<double>(n) * s);
+  const long low_rank = at - half_width, high_rank = at + half_width;
+  const bool bounded_below = low_rank >= 0, bounded_above = high_rank < static_cast<long>(s);
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  if (bounded_below) {
+    std::nth_element(sample.begin(), sample.begin() + low_rank, sample.end());
+    lo = sample[low_rank];
+  }
+  if (bounded_above) {
+    const auto from = bounded_below ? sample.begin() + low_rank : sample.begin();
+    std::nth_element(from, sample.begin() + high_rank, sample.end());
+    hi = sample[high_rank];
+  }
+  // One pass without branches on the values: count those below, gather those inside.
+  const std::unique_ptr<double[]> inside(new double[n]);
+  size_t below = 0, above = 0, m = 0;
   for (const double x : v) {
-    if (x < lo) {
-      ++below;
-    } else if (x <= hi) {
-      inside.push_back(x);
-    } else if (x > hi) {
-      ++above;
-    }
+    below += x < lo;
+    above += x > hi;
+    inside[m] = x;
+    m += (x >= lo) & (x <= hi);
   }
   // A NaN falls in none of the three: the counts then do not add up.
-  if (below + inside.size() + above != n || k < below || k >= below + inside.size()) {
-    return Fallback(values, k);
-  }
+  if (below + m + above != n || k < below || k >= below + m) return Fallback(values, k);
   const size_t j = k - below;
-  std::nth_element(inside.begin(), inside.begin() + static_cast<long>(j), inside.end());
+  std::nth_element(inside.get(), inside.get() + j, inside.get() + m);
   return inside[j];
 }
 

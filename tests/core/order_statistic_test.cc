@@ -19,7 +19,8 @@ double NthElement(std::vector<double> v, size_t k) {
 // sorted either way, and k at the ends and in between.
 TEST(OrderStatisticTest, KthSmallestEqualsNthElement) {
   Random random(11);
-  for (const size_t n : {size_t{1}, size_t{7}, size_t{1000}, size_t{70000}, size_t{300001}}) {
+  for (const size_t n : {size_t{1}, size_t{7}, size_t{1000}, size_t{1024}, size_t{4345},
+                         size_t{20000}, size_t{70000}, size_t{300001}}) {
     std::vector<std::vector<double>> arrays(5, std::vector<double>(n));
     for (size_t i = 0; i < n; ++i) {
       arrays[0][i] = random.Normal();
@@ -47,6 +48,12 @@ TEST(OrderStatisticTest, NaNFallsBackAndMedianIsUpper) {
   v[123] = std::numeric_limits<double>::quiet_NaN();
   copy = v;
   EXPECT_NO_FATAL_FAILURE(KthSmallest(&copy, 500));
+  // Between the sampled values of a log's size, too.
+  std::vector<double> log_sized(4345);
+  for (size_t i = 0; i < log_sized.size(); ++i) log_sized[i] = static_cast<double>(i);
+  log_sized[3] = std::numeric_limits<double>::quiet_NaN();
+  copy = log_sized;
+  EXPECT_EQ(KthSmallest(&copy, 2000), NthElement(log_sized, 2000));
   std::vector<double> empty;
   EXPECT_EQ(UpperMedian(&empty), 0.0);
 }

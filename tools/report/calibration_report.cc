@@ -91,25 +91,25 @@ std::shared_future<StatusOr<LaserModelScreen>> StartLaserModelScreen(
     return {};
   }
   try {
-    return std::async(std::launch::async,
-                      [&intervals, screen = ScreenOptions(options),
-                       closed_forms = options.calibration_closed_forms]() mutable {
-                        // The closed forms and the convex stage are the calibration's first
-                        // steps: the screen checks the log, then waits for them (the other core is
-                        // the calibration's meanwhile) rather than computing them again. From
-                        // then on it keeps its core: the calibration's passes keep to theirs.
-                        std::optional<OccupiedCore> busy;
-                        if (closed_forms.valid()) {
-                          screen.await_closed_forms = [&closed_forms, &busy] {
-                            std::shared_ptr<const LaserCalibrationResult> given = closed_forms.get();
-                            busy.emplace();
-                            return given;
-                          };
-                        } else {
-                          busy.emplace();
-                        }
-                        return ScreenLaserModel(intervals, screen, false);
-                      });
+    return std::async(
+        std::launch::async, [&intervals, screen = ScreenOptions(options),
+                             closed_forms = options.calibration_closed_forms]() mutable {
+          // The closed forms and the convex stage are the calibration's first
+          // steps: the screen checks the log, then waits for them (the other core is
+          // the calibration's meanwhile) rather than computing them again. From
+          // then on it keeps its core: the calibration's passes keep to theirs.
+          std::optional<OccupiedCore> busy;
+          if (closed_forms.valid()) {
+            screen.await_closed_forms = [&closed_forms, &busy] {
+              std::shared_ptr<const LaserCalibrationResult> given = closed_forms.get();
+              busy.emplace();
+              return given;
+            };
+          } else {
+            busy.emplace();
+          }
+          return ScreenLaserModel(intervals, screen, false);
+        });
   } catch (const std::system_error&) {  // No thread to be had: the report screens in turn.
     return {};
   }
