@@ -72,12 +72,13 @@ std::vector<bool> Inliers(const std::vector<Eigen::Vector3d>& errors,
   return inlier;
 }
 
-// The refit's optimum under the current whitening, with the increment-noise correction as
-// `step`. Each round starts at an optimum under a whitening that the jitter's estimate has just
-// moved (the base fit's first, then the previous round's corrected one), a fraction of σ away on
-// real logs (0.1–0.8σ, then 0.02–0.15σ): Newton's step from the correction's own pass gets there
-// (closer than LM, which stops a few hundredths of σ short under Tukey's loss), unless it reaches
-// further than kNewtonReach σ: then LM solves, and the correction is taken again at its optimum.
+// Moves the problem to the refit's optimum under the current whitening; returns the
+// increment-noise correction there as `step` (none without increment covariances). Each round
+// starts at an optimum under a whitening that the jitter's estimate has just moved (the base fit's
+// first, then the previous round's corrected one), a fraction of σ away on real logs (0.1–0.8σ,
+// then 0.02–0.15σ): Newton's step from the correction's own pass gets there (closer than LM, which
+// stops a few hundredths of σ short under Tukey's loss), unless it reaches further than
+// kNewtonReach σ: then LM solves, and the correction is taken again at its optimum.
 StatusOr<LaserProblem::IncrementCorrection> SolveAndCorrect(
     const std::vector<std::vector<Eigen::Matrix2d>>& increment_covariance, LaserProblem* problem,
     LaserCalibrationResult* result) {
@@ -87,7 +88,8 @@ StatusOr<LaserProblem::IncrementCorrection> SolveAndCorrect(
       (near.newton_step.array() / near.stddev.array().max(1e-300)).abs().maxCoeff();
   if (reach <= kNewtonReach) {
     ++result->iterations;
-    near.step += near.newton_step;
+    problem->set_calibration(
+        LaserCalibration::FromVector(problem->calibration().ToVector() + near.newton_step));
     return near;
   }
   ceres::Solver::Summary summary;
@@ -135,18 +137,24 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
   const int rounds = std::max(1, options.noise_rounds);
   RoundsSettling settling(result->estimate);
   // The increments' noise also attenuates the radii and wheelbase (errors in the regressors): one
-  // corrected-score step removes that bias; σ_j is then re-estimated at the corrected point.
+  // corrected-score step removes that bias; σ_j is then re-estimated at the corrected point. The
+  // first of several rounds goes without it (its σ_j, 0.04–0.16σ from the corrected point on the
+  // real sets, only sets the next round's whitening), which always follows and corrects.
   std::vector<std::vector<Eigen::Matrix2d>> increment_covariance(logs.size());
   for (size_t d = 0; d < logs.size(); ++d) {
     increment_covariance[d] = JitterIncrementCovariances(*logs[d], UsedJitter(jitter[d]));
   }
   for (int round = 0; round < rounds; ++round) {
+    const bool corrected = round > 0 || rounds == 1;
     CALIB_ASSIGN_OR_RETURN(const LaserProblem::IncrementCorrection correction,
-                           SolveAndCorrect(increment_covariance, &problem, result));
+                           SolveAndCorrect(corrected ? increment_covariance
+                                                     : std::vector<std::vector<Eigen::Matrix2d>>{},
+                                           &problem, result));
+    // The settling compares the optima the whitening moves, without their corrections.
+    settling.Moved(problem.calibration(), correction.stddev);
     problem.set_calibration(
         LaserCalibration::FromVector(problem.calibration().ToVector() + correction.step));
     const LaserCalibration estimate = problem.calibration();
-    settling.Moved(estimate, correction.stddev);
     double change = 0.0;
     for (size_t d = 0; d < logs.size(); ++d) {
       sensitivities[d] = IntervalTimeSensitivities(*logs[d], estimate);
@@ -160,7 +168,8 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
       // σ of σ_j only where this round may be the last (see the loop's end).
       const bool last_round = round + 1 == rounds;
       near.stddev_wanted = [&, last_round](const IntervalJitterEstimate& e) {
-        return last_round || settling.Settled(std::max(change, Change(e, jitter[d])));
+        return last_round ||
+               (corrected && settling.Settled(std::max(change, Change(e, jitter[d]))));
       };
       IntervalJitterEstimate next =
           EstimateIntervalJitter(errors, sensitivities[d], jitter[d].noise_sigma, inliers[d], near);
@@ -169,7 +178,7 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
       change = std::max(change, Change(next, jitter[d]));
       jitter[d] = next;
     }
-    if (settling.Settled(change) || round + 1 == rounds) break;
+    if ((corrected && settling.Settled(change)) || round + 1 == rounds) break;
     settling.NextRound(change);
     for (size_t d = 0; d < logs.size(); ++d) {
       increment_covariance[d] = JitterIncrementCovariances(*logs[d], UsedJitter(jitter[d]));
