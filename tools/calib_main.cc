@@ -7,6 +7,7 @@
 
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -49,5 +50,7 @@ int main(int argc, char** argv) {
                  errno != 0 ? ": " : "", errno != 0 ? std::strerror(errno) : "");
     return exit_code != 0 ? exit_code : 1;
   }
-  return exit_code;
+  // Everything is written: the process ends here, without the destructors of what the command
+  // left and of the static objects (a few hundred µs of freeing that the exit does at once).
+  std::_Exit(exit_code);
 }
