@@ -89,17 +89,17 @@ StatusOr<Vector5d> SolveTranslation(const Matrix5d& m, const CensiClosedFormOpti
 
 namespace {
 
-// Below this many intervals per chunk a thread costs more than it saves (and short logs, the
-// published recordings among them, keep the one sum in order).
-constexpr size_t kMinChunk = 50000;
+// The passes run in chunks of at least this many intervals (ParallelSplit: the same sums on any
+// number of threads).
+constexpr size_t kMinChunk = 500;
 
 // Σ term(interval) over the intervals with use[k] (all when `use` is null), in parallel chunks
 // summed on each thread's stack.
 template <typename M, typename F>
 M SumOverUsed(const std::vector<LaserInterval>& intervals, const std::vector<bool>* use,
               int threads, const F& term) {
-  std::vector<M> partial(ChunkCount(intervals.size(), threads, kMinChunk), M::Zero());
-  ParallelChunks(intervals.size(), threads, kMinChunk, [&](size_t c, size_t begin, size_t end) {
+  std::vector<M> partial(SplitCount(intervals.size(), kMinChunk), M::Zero());
+  ParallelSplit(intervals.size(), threads, kMinChunk, [&](size_t c, size_t begin, size_t end) {
     M sum = M::Zero();
     for (size_t k = begin; k < end; ++k) {
       if (use == nullptr || (*use)[k]) sum += term(intervals[k]);
@@ -200,14 +200,20 @@ StatusOr<TrimmedClosedFormResult> CensiClosedFormTrimmed(
     // e = ℓ ⊕ ŝ − ô ⊕ ℓ (§III-B), in the robot frame.
     const LaserCalibration& cal = result.estimate.calibration;
     std::vector<double> xy_error(intervals.size()), theta_error(intervals.size());
+    ParallelSplit(intervals.size(), options.closed_form.num_threads, kMinChunk,
+                  [&](size_t, size_t begin, size_t end) {
+                    for (size_t k = begin; k < end; ++k) {
+                      const Pose2d o = IntervalRobotMotion(cal.odometry.left_radius_m,
+                                                           cal.odometry.right_radius_m,
+                                                           cal.odometry.wheelbase_m, intervals[k]);
+                      const Pose2d e = Compose(cal.base_T_sensor, intervals[k].sensor_motion) -
+                                       Compose(o, cal.base_T_sensor);
+                      xy_error[k] = e.head<2>().norm();
+                      theta_error[k] = std::abs(WrapAngle(e(2)));
+                    }
+                  });
     std::vector<double> kept_xy, kept_theta;
     for (size_t k = 0; k < intervals.size(); ++k) {
-      const Pose2d o = IntervalRobotMotion(cal.odometry.left_radius_m, cal.odometry.right_radius_m,
-                                           cal.odometry.wheelbase_m, intervals[k]);
-      const Pose2d e =
-          Compose(cal.base_T_sensor, intervals[k].sensor_motion) - Compose(o, cal.base_T_sensor);
-      xy_error[k] = e.head<2>().norm();
-      theta_error[k] = std::abs(WrapAngle(e(2)));
       if (result.kept[k]) {
         kept_xy.push_back(xy_error[k]);
         kept_theta.push_back(theta_error[k]);

@@ -1,3 +1,4 @@
+#include <calib/core/order_statistic.h>
 #include <calib/core/random.h>
 #include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/laser/censi_closed_form_internal.h>
@@ -20,11 +21,7 @@ constexpr double kStillRad = 1e-6;  // Wheels at rest: no say in the rotation co
 constexpr double kMadToSigma = 1.4826;
 constexpr uint64_t kSeed = 20080519;  // Fixed: the same log gives the same screen.
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
+double Median(std::vector<double> v) { return UpperMedian(&v); }
 
 // Whether Median of value(0 … n−1) is below `bound`, i.e. at least n/2 + 1 values are: a count
 // that stops as soon as it is decided, where most candidates of a consensus search lose (the
@@ -55,12 +52,12 @@ bool MedianBelow(size_t n, double bound, const F& value) {
   return false;
 }
 
-// pred(k) for k in [0, n), in parallel chunks on long logs (pred only reads).
-constexpr size_t kMinChunk = 50000;
+// pred(k) for k in [0, n), in parallel chunks (pred only reads).
+constexpr size_t kMinChunk = 500;
 template <typename F>
 std::vector<char> Flags(size_t n, int threads, const F& pred) {
   std::vector<char> flags(n);
-  ParallelChunks(n, threads, kMinChunk, [&](size_t, size_t begin, size_t end) {
+  ParallelSplit(n, threads, kMinChunk, [&](size_t, size_t begin, size_t end) {
     for (size_t k = begin; k < end; ++k) flags[k] = pred(k);
   });
   return flags;

@@ -2,6 +2,7 @@
 #include <calib/core/order_statistic.h>
 #include <calib/core/se2.h>
 #include <calib/core/text_format.h>
+#include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/laser/censi_closed_form.h>
 #include <calib/solvers/laser/censi_consensus.h>
 #include <calib/solvers/laser/laser_input_checks.h>
@@ -16,6 +17,8 @@ namespace calib {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+// The misfit's pass runs in chunks of at least this many intervals (ParallelSplit).
+constexpr size_t kMinChunk = 500;
 
 // The readings of a log tried against the one given.
 enum Reading { kAsGiven, kSwapped, kLeftNegated, kRightNegated, kBothNegated, kThetaDegrees };
@@ -35,16 +38,21 @@ Fit FitClosedForm(const std::vector<LaserInterval>& intervals, ConsensusScreen* 
   Fit fit;
   if (!closed.ok()) return fit;
   const LaserCalibration& cal = closed->calibration;
-  std::vector<double> error_xy, motion_xy;
-  for (const LaserInterval& interval : intervals) {
-    const Pose2d o = IntervalRobotMotion(cal.odometry.left_radius_m, cal.odometry.right_radius_m,
-                                         cal.odometry.wheelbase_m, interval);
-    // e = ℓ ⊕ s − o ⊕ ℓ (§III-B), in the robot frame.
-    const Pose2d e =
-        Compose(cal.base_T_sensor, interval.sensor_motion) - Compose(o, cal.base_T_sensor);
-    error_xy.push_back(e.head<2>().norm());
-    motion_xy.push_back(interval.sensor_motion.head<2>().norm());
-  }
+  std::vector<double> error_xy(intervals.size()), motion_xy(intervals.size());
+  ParallelSplit(intervals.size(), CensiClosedFormOptions{}.num_threads, kMinChunk,
+                [&](size_t, size_t begin, size_t end) {
+                  for (size_t k = begin; k < end; ++k) {
+                    const LaserInterval& interval = intervals[k];
+                    const Pose2d o =
+                        IntervalRobotMotion(cal.odometry.left_radius_m, cal.odometry.right_radius_m,
+                                            cal.odometry.wheelbase_m, interval);
+                    // e = ℓ ⊕ s − o ⊕ ℓ (§III-B), in the robot frame.
+                    const Pose2d e = Compose(cal.base_T_sensor, interval.sensor_motion) -
+                                     Compose(o, cal.base_T_sensor);
+                    error_xy[k] = e.head<2>().norm();
+                    motion_xy[k] = interval.sensor_motion.head<2>().norm();
+                  }
+                });
   const double scale = Median(motion_xy);
   if (!(scale > 0.0)) return fit;
   fit.ok = true;
