@@ -190,24 +190,6 @@ Status ClosedFormWithoutGross(const std::vector<LaserInterval>& intervals,
 
 // The closed forms' share of a result (ClosedFormWithoutGross, SeedFromTrimmedClosedForm), from
 // a calibration of the same log; its warnings so far are the trimming's.
-bool SameRefinement(const LaserRefinementOptions& a, const LaserRefinementOptions& b) {
-  // num_threads: the fused passes split their sums the same way on any number of threads.
-  return a.loss == b.loss && a.loss_scale == b.loss_scale && a.max_iterations == b.max_iterations &&
-         a.per_interval_blocks == b.per_interval_blocks &&
-         (!a.per_interval_blocks || a.num_threads == b.num_threads);
-}
-
-}  // namespace
-
-bool LaserConvexStage::Replaces(const LaserCalibration& from,
-                                const std::vector<Eigen::Vector3d>& sigma,
-                                const LaserRefinementOptions& options) const {
-  return from.ToVector() == start.ToVector() && sigma == noise_sigma &&
-         SameRefinement(options, refinement);
-}
-
-namespace {
-
 void CopyClosedForms(const LaserCalibrationResult& from, LaserCalibrationResult* result) {
   result->closed_form = from.closed_form;
   result->gross_intervals = from.gross_intervals;
@@ -320,7 +302,22 @@ Status WarmStart(const std::vector<const std::vector<LaserInterval>*>& logs, siz
   return Status::Ok();
 }
 
+// Options under which two solves from the same start and whitening are the same solve.
+bool SameRefinement(const LaserRefinementOptions& a, const LaserRefinementOptions& b) {
+  // num_threads: the fused passes split their sums the same way on any number of threads.
+  return a.loss == b.loss && a.loss_scale == b.loss_scale && a.max_iterations == b.max_iterations &&
+         a.per_interval_blocks == b.per_interval_blocks &&
+         (!a.per_interval_blocks || a.num_threads == b.num_threads);
+}
+
 }  // namespace
+
+bool LaserConvexStage::Replaces(const LaserCalibration& from,
+                                const std::vector<Eigen::Vector3d>& sigma,
+                                const LaserRefinementOptions& options) const {
+  return from.ToVector() == start.ToVector() && sigma == noise_sigma &&
+         SameRefinement(options, refinement);
+}
 
 Status ValidateLaserIntervals(const std::vector<LaserInterval>& intervals) {
   if (intervals.empty()) return Status::InvalidInput("the log holds no intervals");
