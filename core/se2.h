@@ -1,6 +1,8 @@
 #ifndef CALIB_CORE_SE2_H_
 #define CALIB_CORE_SE2_H_
 
+#include <calib/core/sin_cos.h>
+
 #include <Eigen/Core>
 #include <cmath>
 
@@ -113,6 +115,15 @@ void ArcSinCos(const T& angle, T* sin_angle, T* cos_angle) {
   const bool small = abs(angle) < T(kSe2SmallAngle);
   *sin_angle = small ? T(0) : sin(angle);
   *cos_angle = small ? T(1) : cos(angle);
+}
+
+// For plain numbers, SinCos: the angle is nearly always a turn within one interval.
+inline void ArcSinCos(const double& angle, double* sin_angle, double* cos_angle) {
+  if (std::abs(angle) < kSe2SmallAngle) {
+    *sin_angle = 0.0, *cos_angle = 1.0;
+  } else {
+    SinCos(angle, sin_angle, cos_angle);
+  }
 }
 
 template <typename T>

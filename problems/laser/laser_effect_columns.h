@@ -3,6 +3,7 @@
 
 #include <calib/core/laser/laser_params.h>
 #include <calib/core/se2.h>
+#include <calib/core/sin_cos.h>
 #include <calib/problems/laser/laser_effect_residual.h>
 #include <calib/problems/laser/laser_residual.h>
 
@@ -61,7 +62,8 @@ inline bool EffectColumnsAtZero(
   const Eigen::Vector2d speed(interval.left_speed, interval.right_speed);
   const Eigen::Vector2d twist = BaseTwist(odometry, speed);
   const double d = twist(0) * duration, a = twist(1) * duration;
-  const double cos_a = std::cos(a), sin_a = std::sin(a);
+  double sin_a, cos_a;
+  SinCos(a, &sin_a, &cos_a);
   double s, c;
   ArcCoefficients(a, sin_a, cos_a, &s, &c);
   const Eigen::Vector3d motion(s * d, c * d, a);

@@ -3,6 +3,7 @@
 
 #include <calib/core/laser/laser_log.h>
 #include <calib/core/se2.h>
+#include <calib/core/sin_cos.h>
 #include <ceres/autodiff_cost_function.h>
 #include <ceres/jet.h>
 
@@ -149,7 +150,8 @@ class LaserResidual {
     const double d = (rl * left + rr * right) / 2.0;
     const double a = (rr * right - rl * left) / b;
     // One sine and cosine of the arc serve S, C, the turn and their derivatives.
-    const double ca = std::cos(a), sa = std::sin(a);
+    double sa, ca;
+    SinCos(a, &sa, &ca);
     double s, c;
     ArcCoefficients(a, sa, ca, &s, &c);
     const double cl = mounting.cos_theta, sl = mounting.sin_theta;

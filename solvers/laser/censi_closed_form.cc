@@ -1,5 +1,6 @@
 #include <calib/core/order_statistic.h>
 #include <calib/core/se2.h>
+#include <calib/core/sin_cos.h>
 #include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/laser/censi_closed_form.h>
 #include <calib/solvers/laser/censi_closed_form_internal.h>
@@ -37,15 +38,13 @@ TranslationRows TranslationEquations(const LaserInterval& interval, double j21, 
     const double right = interval.right_speed * interval.duration_s;
     const double distance = (-j21 * left + j22 * right) / 2.0;
     const double angle = j22 * right - (-j21) * left;
-    so = std::sin(angle);
-    co = std::cos(angle);
+    SinCos(angle, &so, &co);
     double s_over, c_over;
     ArcCoefficients(angle, so, co, &s_over, &c_over);
     c = Pose2d(s_over * distance, c_over * distance, angle);
   } else {
     c = IntervalRobotMotion(-j21, j22, 1.0, interval);
-    co = std::cos(c(2));
-    so = std::sin(c(2));
+    SinCos(c(2), &so, &co);
   }
   const Pose2d& s = interval.sensor_motion;
   TranslationRows l;

@@ -1,4 +1,5 @@
 #include <calib/core/huge_pages.h>
+#include <calib/core/sin_cos.h>
 #include <calib/problems/laser/laser_residual.h>
 #include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/laser/laser_consistency_terms.h>
@@ -45,7 +46,8 @@ double ForwardTravel(const Pose2d& sensor_motion, const Pose2d& base_T_sensor,
 double ForwardTravel(const Pose2d& sensor_motion, const SensorMounting& mounting,
                      Eigen::Vector3d* gradient) {
   const double half = sensor_motion(2) / 2.0;
-  const double sh = std::sin(half), ch = std::cos(half);
+  double sh, ch;
+  SinCos(half, &sh, &ch);
   const double sinc = std::abs(half) < 1e-4 ? 1.0 - half * half / 6.0 : sh / half;
   const Eigen::Vector2d u = Eigen::Vector2d(ch, sh) / sinc;
   const double cf = 1.0 - 2.0 * sh * sh, sf = 2.0 * sh * ch;  // cos φ, sin φ.

@@ -1,5 +1,6 @@
 #include <calib/core/order_statistic.h>
 #include <calib/core/se2.h>
+#include <calib/core/sin_cos.h>
 #include <calib/core/whitening.h>
 #include <calib/problems/laser/laser_residual.h>
 #include <calib/solvers/timing/interval_jitter.h>
@@ -63,7 +64,8 @@ IntervalTimeSensitivity ShiftSensitivity(const OdometryParams& p, const Pose2d& 
         (p.right_radius_m * wheel(1) - p.left_radius_m * wheel(0)) / p.wheelbase_m);
   };
   const Eigen::Vector2d xi_s = twist(speeds.start), xi_e = twist(speeds.end);
-  const double c = std::cos(robot_motion(2)), s = std::sin(robot_motion(2));
+  double s, c;
+  SinCos(robot_motion(2), &s, &c);
   // R'(θ)·ℓ_p: what a unit turn of M does to the mounting's offset.
   const Eigen::Vector2d turned(-s * mount(0) - c * mount(1), c * mount(0) - s * mount(1));
   const auto through_mounting = [&](const Eigen::Vector2d& dt, double dtheta) {

@@ -1,8 +1,10 @@
 #include <calib/core/diff_drive.h>
 #include <calib/core/se2.h>
+#include <calib/core/sin_cos.h>
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -237,6 +239,39 @@ TEST(DiffDriveTest, StepsOfEqualSpeedMatchOneStep) {
   std::vector<WheelStep> steps(7, WheelStep{0.1, 0.05, 0.09});
   ExpectPoseNear(IntegrateWheelSteps(rl, rr, b, steps),
                  WheelStepDisplacement(rl, rr, b, 0.35, 0.63), 1e-13);
+}
+
+// Within an ulp of the true values (long double's) inside ±π/4, libm's beyond; NaN stays NaN.
+TEST(SinCosTest, WithinAnUlpOfTheTrueValues) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> angle(-M_PI / 4, M_PI / 4);
+  const auto ulps = [](double value, long double truth) {
+    const double ulp = std::ldexp(1.0, std::ilogb(static_cast<double>(truth)) - 52);
+    return static_cast<double>(std::fabs(value - truth)) / ulp;
+  };
+  std::vector<double> angles = {0.0, -0.0, 1e-300, 1e-9, -1e-5, 0.1, M_PI / 4, -M_PI / 4};
+  for (int i = 0; i < 200000; ++i) angles.push_back(angle(rng) * std::pow(10.0, -(i % 8)));
+  double worst = 0.0;
+  for (const double a : angles) {
+    double s = 0.0, c = 0.0;
+    SinCos(a, &s, &c);
+    if (a != 0.0) worst = std::max(worst, ulps(s, std::sin(static_cast<long double>(a))));
+    worst = std::max(worst, ulps(c, std::cos(static_cast<long double>(a))));
+  }
+  EXPECT_LT(worst, 1.0);
+  double s = 1.0, c = 0.0;
+  SinCos(-0.0, &s, &c);
+  EXPECT_EQ(s, 0.0);
+  EXPECT_EQ(c, 1.0);
+  for (const double a : {0.8, -2.0, 3.0, 100.0, -1e6}) {
+    SinCos(a, &s, &c);
+    EXPECT_EQ(s, std::sin(a));
+    EXPECT_EQ(c, std::cos(a));
+  }
+  SinCos(std::numeric_limits<double>::quiet_NaN(), &s, &c);
+  EXPECT_TRUE(std::isnan(s) && std::isnan(c));
+  SinCos(std::numeric_limits<double>::infinity(), &s, &c);
+  EXPECT_TRUE(std::isnan(s) && std::isnan(c));
 }
 
 }  // namespace
