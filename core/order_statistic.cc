@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <memory>
 
@@ -65,6 +67,60 @@ double KthSmallest(std::vector<double>* values, size_t k) {
 
 double UpperMedian(std::vector<double>* values) {
   return values->empty() ? 0.0 : KthSmallest(values, values->size() / 2);
+}
+
+namespace {
+
+// The key whose unsigned order is the values' order: −0 as +0, negatives' bits inverted, NaN
+// last.
+uint64_t OrderedKey(double value) {
+  if (std::isnan(value)) return ~uint64_t{0};
+  value += 0.0;  // −0 → +0.
+  uint64_t bits;
+  std::memcpy(&bits, &value, sizeof bits);
+  constexpr uint64_t kSign = uint64_t{1} << 63;
+  return bits & kSign ? ~bits : bits | kSign;
+}
+
+}  // namespace
+
+std::vector<size_t> StableOrder(const std::vector<double>& values) {
+  const size_t n = values.size();
+  std::vector<size_t> order(n);
+  for (size_t k = 0; k < n; ++k) order[k] = k;
+  if (n < 2) return order;
+  constexpr int kBits = 11, kPasses = (64 + kBits - 1) / kBits;
+  constexpr size_t kBuckets = size_t{1} << kBits;
+  std::vector<uint64_t> keys(n), keys_next(n);
+  std::vector<size_t> order_next(n);
+  // Every pass's histogram from one read of the keys.
+  std::vector<size_t> counts(kPasses * kBuckets, 0);
+  for (size_t k = 0; k < n; ++k) {
+    keys[k] = OrderedKey(values[k]);
+    for (int pass = 0; pass < kPasses; ++pass) {
+      ++counts[pass * kBuckets + ((keys[k] >> (pass * kBits)) & (kBuckets - 1))];
+    }
+  }
+  for (int pass = 0; pass < kPasses; ++pass) {
+    size_t* count = counts.data() + pass * kBuckets;
+    const int shift = pass * kBits;
+    // A digit every key shares leaves the order as it is.
+    if (count[(keys[0] >> shift) & (kBuckets - 1)] == n) continue;
+    size_t start = 0;
+    for (size_t b = 0; b < kBuckets; ++b) {
+      const size_t c = count[b];
+      count[b] = start;
+      start += c;
+    }
+    for (size_t i = 0; i < n; ++i) {
+      const size_t to = count[(keys[i] >> shift) & (kBuckets - 1)]++;
+      keys_next[to] = keys[i];
+      order_next[to] = order[i];
+    }
+    keys.swap(keys_next);
+    order.swap(order_next);
+  }
+  return order;
 }
 
 }  // namespace calib

@@ -1,3 +1,4 @@
+#include <calib/core/order_statistic.h>
 #include <calib/solvers/stats/change_point.h>
 #include <calib/solvers/stats/score_test.h>
 
@@ -95,14 +96,7 @@ double ConstantMeanPValue(const Eigen::MatrixXd& series, double trim, size_t* sp
 }
 
 std::vector<size_t> CovariateOrder(const std::vector<double>& covariate) {
-  // The keys beside their rows: the sort reads them in place instead of through the index.
-  std::vector<std::pair<double, size_t>> keyed(covariate.size());
-  for (size_t k = 0; k < covariate.size(); ++k) keyed[k] = {covariate[k], k};
-  std::stable_sort(keyed.begin(), keyed.end(),
-                   [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<size_t> order(keyed.size());
-  for (size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
-  return order;
+  return StableOrder(covariate);
 }
 
 BinnedMeans BinByCovariate(const std::vector<double>& covariate, const Eigen::MatrixXd& values,

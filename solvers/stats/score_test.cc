@@ -197,6 +197,15 @@ ScoreTestResult ScoreTester::Test(const Eigen::MatrixXd& sensitivity) const {
 
 namespace {
 
+// xᵀM⁻¹x for a symmetric 2×2 M; false unless M is positive definite.
+bool QuadraticOfInverse2(const Eigen::Matrix2d& m, const Eigen::Vector2d& x, double* value) {
+  const double det = m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0);
+  if (!(m(0, 0) > 0.0 && m(1, 1) > 0.0 && det > 0.0)) return false;
+  *value =
+      (m(1, 1) * x(0) * x(0) - (m(0, 1) + m(1, 0)) * x(0) * x(1) + m(0, 0) * x(1) * x(1)) / det;
+  return true;
+}
+
 // The suffix sums of ScanChange's loop, in P × M fixed sizes where the caller knows them (the
 // base fit's six parameters and a two-wheel change: three times faster) and dynamic ones
 // otherwise. Fills scan->statistic, index and location; returns the best statistic (< 0: none).
@@ -214,6 +223,9 @@ double ScanChangeSums(const RobustFitBlocks& blocks, const Eigen::MatrixXd& sens
   const size_t n = blocks.size();
   const Eigen::Index p = blocks.jacobian.cols(), m = sensitivity.cols(), d = blocks.dimension();
   const Eigen::LDLT<MatPP> nuisance{MatPP(a_nuisance)};
+  // Fixed sizes: A⁻¹ once, then a product per split instead of a solve.
+  MatPP nuisance_inverse;
+  if constexpr (P != Eigen::Dynamic) nuisance_inverse = nuisance.solve(MatPP::Identity());
   const VecM zero_m = VecM::Zero(m);
   VecM sum_a = zero_m, a(m), score(m);
   MatPM sum_jmr = MatPM::Zero(p, m), b(p, m);
@@ -237,7 +249,11 @@ double ScanChangeSums(const RobustFitBlocks& blocks, const Eigen::MatrixXd& sens
     sum_aa.noalias() += a * a.transpose();
     sum_ag.noalias() += a * gradients.row(j);
     if (j > hi) continue;
-    b = nuisance.solve(sum_jmr);
+    if constexpr (P == Eigen::Dynamic) {
+      b = nuisance.solve(sum_jmr);
+    } else {
+      b.noalias() = nuisance_inverse * sum_jmr;
+    }
     score = sum_a;
     score.noalias() -= b.transpose() * g_sum;
     cross.noalias() = sum_ag * b;
@@ -246,6 +262,23 @@ double ScanChangeSums(const RobustFitBlocks& blocks, const Eigen::MatrixXd& sens
     v *= small_sample;
     info = sum_rmr;
     info.noalias() -= sum_jmr.transpose() * b;
+    if constexpr (M == 2) {
+      // UᵀV⁻¹U and UᵀI⁻¹U by the 2×2 inverses (V, I positive definite: both diagonal entries
+      // and the determinant positive).
+      double statistic, located;
+      if (!QuadraticOfInverse2(v, score, &statistic)) continue;
+      if (!QuadraticOfInverse2(info, score, &located)) located = statistic;
+      scan->statistic[j] = statistic;
+      if (statistic > best) {
+        best = statistic;
+        scan->index = j;
+      }
+      if (located > best_located) {
+        best_located = located;
+        scan->location = j;
+      }
+      continue;
+    }
     v_ldlt.compute(v);
     info_ldlt.compute(info);
     if (v_ldlt.info() != Eigen::Success || !(v_ldlt.vectorD().array() > 0.0).all()) continue;

@@ -58,5 +58,40 @@ TEST(OrderStatisticTest, NaNFallsBackAndMedianIsUpper) {
   EXPECT_EQ(UpperMedian(&empty), 0.0);
 }
 
+std::vector<size_t> StableSortedIndices(const std::vector<double>& values) {
+  std::vector<size_t> order(values.size());
+  for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return values[a] < values[b]; });
+  return order;
+}
+
+// The same permutation as std::stable_sort for every kind of array: empty, one value, ties
+// (equal values keep their order, −0 and +0 among them), negatives, huge and tiny magnitudes,
+// infinities, values that share their high digits, sorted either way.
+TEST(OrderStatisticTest, StableOrderEqualsStableSort) {
+  Random random(5);
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<std::vector<double>> arrays = {{}, {3.0}, {0.0, -0.0, 0.0, -0.0}, {-inf, 1.0, inf}};
+  for (const size_t n : {2, 17, 1000, 5000}) {
+    std::vector<double> normal(n), ties(n), narrow(n), wide(n), ascending(n), descending(n);
+    for (size_t k = 0; k < n; ++k) {
+      normal[k] = random.Normal();
+      ties[k] = static_cast<double>(random.Index(7)) - 3.0;
+      narrow[k] = 1.0 + 1e-12 * random.Uniform();  // Only the low digits differ.
+      wide[k] = std::pow(10.0, random.Uniform(-300.0, 300.0)) * (random.Uniform() < 0.5 ? -1 : 1);
+      ascending[k] = static_cast<double>(k / 3);
+      descending[k] = -ascending[k];
+    }
+    for (auto* a : {&normal, &ties, &narrow, &wide, &ascending, &descending}) arrays.push_back(*a);
+  }
+  for (const std::vector<double>& values : arrays) {
+    EXPECT_EQ(StableOrder(values), StableSortedIndices(values)) << values.size() << " values";
+  }
+  // NaN goes last, whatever its sign.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(StableOrder({nan, 2.0, -nan, -inf, 1.0}), (std::vector<size_t>{3, 4, 1, 0, 2}));
+}
+
 }  // namespace
 }  // namespace calib
