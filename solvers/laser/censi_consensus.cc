@@ -71,6 +71,36 @@ std::vector<size_t> Spread(const std::vector<size_t>& from, int count) {
   return out;
 }
 
+// The consensus search over `trials` drawn subsets: candidate(t) fits the t-th, and a candidate
+// whose median misfit is below the best one's so far (MedianBelow) becomes the best, with
+// score(candidate). The trials run in two fixed halves side by side (while the checks run, the
+// screen's thread waits and its core is free), each from the given best; the second half's best
+// replaces the first's only when its score is lower. That is the sequential search's choice (the
+// lowest score, the earlier on a tie), up to the pretest's rare drops, whatever the threads.
+template <typename T, typename Candidate, typename Below, typename Score>
+void BestOfTrials(int trials, int threads, const Candidate& candidate, const Below& below,
+                  const Score& score, std::optional<T>* best, double* best_score) {
+  constexpr int kHalves = 2;
+  std::optional<T> found[kHalves];
+  double found_score[kHalves] = {*best_score, *best_score};
+  const size_t min_chunk = std::max<size_t>(1, (static_cast<size_t>(trials) + 1) / kHalves);
+  ParallelSplit(static_cast<size_t>(trials), threads, min_chunk,
+                [&](size_t half, size_t begin, size_t end) {
+                  for (size_t t = begin; t < end; ++t) {
+                    const std::optional<T> x = candidate(t);
+                    if (!x || !below(*x, found_score[half])) continue;
+                    found_score[half] = score(*x);
+                    found[half] = x;
+                  }
+                });
+  for (int half = 0; half < kHalves; ++half) {
+    if (found[half] && found_score[half] < *best_score) {
+      *best = found[half];
+      *best_score = found_score[half];
+    }
+  }
+}
+
 double RotationResidual(const LaserInterval& interval, const Eigen::Vector2d& j) {
   return interval.sensor_motion(2) - IntervalWheelRotation(interval).dot(j);
 }
@@ -122,17 +152,19 @@ std::optional<Eigen::Vector2d> RotationConsensus(const std::vector<LaserInterval
   };
   std::optional<Eigen::Vector2d> best = FitRotation(intervals, moving);
   double best_score = best ? score(*best) : std::numeric_limits<double>::infinity();
+  // The pairs drawn in turn up front: the same pairs however the trials are run.
   Random random(kSeed, 1);
-  for (int t = 0; t < options.trials; ++t) {
-    const std::vector<size_t> pair = {moving[random.Index(moving.size())],
-                                      moving[random.Index(moving.size())]};
-    const std::optional<Eigen::Vector2d> j = FitRotation(intervals, pair);
-    if (!j || !MedianBelow(n, best_score, [&](size_t i) { return scored.Residual(i, *j); })) {
-      continue;
-    }
-    best_score = score(*j);
-    best = j;
+  std::vector<std::vector<size_t>> pairs(std::max(options.trials, 0));
+  for (std::vector<size_t>& pair : pairs) {
+    pair = {moving[random.Index(moving.size())], moving[random.Index(moving.size())]};
   }
+  BestOfTrials<Eigen::Vector2d>(
+      options.trials, options.closed_form.num_threads,
+      [&](size_t t) { return FitRotation(intervals, pairs[t]); },
+      [&](const Eigen::Vector2d& j, double bound) {
+        return MedianBelow(n, bound, [&](size_t i) { return scored.Residual(i, j); });
+      },
+      score, &best, &best_score);
   if (!best) return std::nullopt;
   const double cut = options.cut * kMadToSigma * best_score + 1e-12;
   const std::vector<char> gross =
@@ -165,10 +197,11 @@ struct TranslationColumns {
       for (int e = 0; e < 10; ++e) entry[e][i] = rows[i](e / 5, e % 5);
     }
   }
-  double Misfit(size_t i, const Vector5d& x) const {
+  // |L_i x|², compared squared: no square root per interval and trial.
+  double SquaredMisfit(size_t i, const Vector5d& x) const {
     double u = 0.0, v = 0.0;
     for (int c = 0; c < 5; ++c) u += entry[c][i] * x(c), v += entry[5 + c][i] * x(c);
-    return std::sqrt(u * u + v * v);
+    return u * u + v * v;
   }
   std::vector<double> entry[10];
 };
@@ -188,9 +221,10 @@ void TranslationConsensus(const std::vector<LaserInterval>& intervals, const Eig
   for (size_t k : scored)
     rows.push_back(censi_internal::TranslationEquations(intervals[k], j(0), j(1)));
   const TranslationColumns columns(rows);
+  // The median squared misfit (the square of the median misfit: the square root is monotone).
   const auto score = [&](const Vector5d& x) {
     std::vector<double> e(rows.size());
-    for (size_t i = 0; i < rows.size(); ++i) e[i] = columns.Misfit(i, x);
+    for (size_t i = 0; i < rows.size(); ++i) e[i] = columns.SquaredMisfit(i, x);
     return Median(std::move(e));
   };
   std::vector<size_t> all(rows.size());
@@ -198,19 +232,20 @@ void TranslationConsensus(const std::vector<LaserInterval>& intervals, const Eig
   std::optional<Vector5d> best = SolveRows(rows, all, options);
   double best_score = best ? score(*best) : std::numeric_limits<double>::infinity();
   Random random(kSeed, 2);
-  for (int t = 0; t < options.trials; ++t) {
-    std::vector<size_t> subset(4);
+  std::vector<std::vector<size_t>> subsets(std::max(options.trials, 0), std::vector<size_t>(4));
+  for (std::vector<size_t>& subset : subsets) {
     for (size_t& i : subset) i = random.Index(rows.size());
-    const std::optional<Vector5d> x = SolveRows(rows, subset, options);
-    if (!x ||
-        !MedianBelow(rows.size(), best_score, [&](size_t i) { return columns.Misfit(i, *x); })) {
-      continue;
-    }
-    best_score = score(*x);
-    best = x;
   }
+  BestOfTrials<Vector5d>(
+      options.trials, options.closed_form.num_threads,
+      [&](size_t t) { return SolveRows(rows, subsets[t], options); },
+      [&](const Vector5d& x, double bound) {
+        return MedianBelow(rows.size(), bound,
+                           [&](size_t i) { return columns.SquaredMisfit(i, x); });
+      },
+      score, &best, &best_score);
   if (!best) return;
-  const double cut = options.cut * kMadToSigma * best_score + 1e-12;
+  const double cut = options.cut * kMadToSigma * std::sqrt(best_score) + 1e-12;
   const std::vector<char> gross =
       Flags(intervals.size(), options.closed_form.num_threads, [&](size_t k) {
         if (!screen->kept[k]) return false;
