@@ -25,21 +25,14 @@ double Median(std::vector<double> v) { return UpperMedian(&v); }
 
 // Whether Median of value(0 … n−1) is below `bound`, i.e. at least n/2 + 1 values are: a count
 // that stops as soon as it is decided, where most candidates of a consensus search lose (the
-// same answer as Median(…) < bound without the selection, but for the pretest). A loser is only
-// known after about n/2 values, so every 8th value is counted first: a candidate with fewer than
-// half of those below, by 4 binomial σ, is dropped (a winner is, with a chance below 10⁻⁴; the
-// search then keeps a slightly worse candidate). The count runs in blocks, each a tight loop the
-// compiler vectorizes, and decides between blocks.
+// same answer as Median(…) < bound without the selection, but for the sequential test). A loser
+// is only known for sure after about n/2 values, so the values come in SpreadOrder (each prefix
+// an evenly spread sample of the log) and a candidate with fewer than half of those counted so
+// far below, by 4 binomial σ, is dropped (a winner is, with a chance below 10⁻⁴ at each of the
+// few checks; the search then keeps a slightly worse candidate). The count runs in blocks, each
+// a tight loop the compiler vectorizes, and decides between blocks.
 template <typename F>
 bool MedianBelow(size_t n, double bound, const F& value) {
-  constexpr size_t kPretestStride = 8;
-  const size_t sampled = n / kPretestStride;
-  if (sampled >= 64) {
-    size_t below = 0;
-    for (size_t i = 0; i < sampled; ++i) below += value(i * kPretestStride) < bound;
-    if (static_cast<double>(below) < 0.5 * sampled - 2.0 * std::sqrt(static_cast<double>(sampled)))
-      return false;
-  }
   constexpr size_t kBlock = 128;
   const size_t needed = n / 2 + 1;
   size_t below = 0;
@@ -48,8 +41,25 @@ bool MedianBelow(size_t n, double bound, const F& value) {
     for (size_t i = start; i < end; ++i) below += value(i) < bound;
     if (below >= needed) return true;
     if (below + (n - end) < needed) return false;
+    const double counted = static_cast<double>(end);
+    if (static_cast<double>(below) < 0.5 * counted - 2.0 * std::sqrt(counted)) return false;
   }
   return false;
+}
+
+// 0 … n−1 in bit-reversed order (of the next power of two, skipping what is ≥ n): every prefix
+// spreads evenly over them, so that a count over a prefix samples the whole log.
+std::vector<size_t> SpreadOrder(size_t n) {
+  int bits = 0;
+  while ((size_t{1} << bits) < n) ++bits;
+  std::vector<size_t> order;
+  order.reserve(n);
+  for (size_t p = 0; p < (size_t{1} << bits); ++p) {
+    size_t reversed = 0;
+    for (int b = 0; b < bits; ++b) reversed |= ((p >> b) & 1) << (bits - 1 - b);
+    if (reversed < n) order.push_back(reversed);
+  }
+  return order;
 }
 
 // pred(k) for k in [0, n), in parallel chunks (pred only reads).
@@ -109,7 +119,8 @@ double RotationResidual(const LaserInterval& interval, const Eigen::Vector2d& j)
 struct RotationColumns {
   explicit RotationColumns(const std::vector<LaserInterval>& intervals,
                            const std::vector<size_t>& which) {
-    for (size_t k : which) {
+    for (size_t i : SpreadOrder(which.size())) {  // For MedianBelow.
+      const size_t k = which[i];
       const Eigen::Vector2d a = IntervalWheelRotation(intervals[k]);
       left.push_back(a(0)), right.push_back(a(1)), theta.push_back(intervals[k].sensor_motion(2));
     }
@@ -189,12 +200,13 @@ std::optional<Vector5d> SolveRows(const std::vector<TranslationRows>& rows,
   return *x;
 }
 
-// Eq. 16's rows, one array per entry: |L_k x| in a tight loop.
+// Eq. 16's rows, one array per entry (in SpreadOrder): |L_k x| in a tight loop.
 struct TranslationColumns {
   explicit TranslationColumns(const std::vector<TranslationRows>& rows) {
     for (int e = 0; e < 10; ++e) entry[e].resize(rows.size());
+    const std::vector<size_t> order = SpreadOrder(rows.size());  // For MedianBelow.
     for (size_t i = 0; i < rows.size(); ++i) {
-      for (int e = 0; e < 10; ++e) entry[e][i] = rows[i](e / 5, e % 5);
+      for (int e = 0; e < 10; ++e) entry[e][i] = rows[order[i]](e / 5, e % 5);
     }
   }
   // |L_i x|², compared squared: no square root per interval and trial.

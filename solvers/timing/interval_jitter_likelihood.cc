@@ -268,7 +268,7 @@ bool JointMaximum(const JitterData& data, double lo, double hi, Eigen::Vector3d*
   phi << *theta, *jitter_s * *jitter_s;
   // Fisher scoring converges linearly here (about 12× a pass); near the maximum, where the
   // observed information is positive definite, Newton steps take over (quadratically).
-  constexpr double kNewtonBelow = 1e-2;
+  constexpr double kNewtonBelow = 1e-2, kNewtonSettled = 1e-6;
   double change = 1.0;
   for (int iteration = 0; iteration < 50; ++iteration) {
     Eigen::Vector4d score;
@@ -291,7 +291,9 @@ bool JointMaximum(const JitterData& data, double lo, double hi, Eigen::Vector3d*
     phi = next;
     const double jitter = std::sqrt(phi(3));
     if (jitter < lo / 10.0 || jitter > 10.0 * hi) return false;
-    if (change > 1e-10) continue;
+    // Settled when a step moves φ by 1e-10 (relative), or by 1e-6 under Newton's quadratic
+    // convergence: what is left then is of the order of its square (one pass fewer).
+    if (change > 1e-10 && !(observed_used && change < kNewtonSettled)) continue;
     if (!(jitter > lo && jitter < hi)) return false;
     *theta = phi.head<3>();
     *jitter_s = jitter;
