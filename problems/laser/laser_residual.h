@@ -154,31 +154,48 @@ class LaserResidual {
     SinCos(a, &sa, &ca);
     double s, c;
     ArcCoefficients(a, sa, ca, &s, &c);
+    // In scalars (the pass's innermost work; Eigen's 2×2 temporaries cost a third more).
     const double cl = mounting.cos_theta, sl = mounting.sin_theta;
-    const Eigen::Matrix2d to_sensor = (Eigen::Matrix2d() << cl, sl, -sl, cl).finished();
-    const Eigen::Vector2d mount(base_T_sensor[0], base_T_sensor[1]);
-    const Eigen::Matrix2d turn = (Eigen::Matrix2d() << ca, -sa, sa, ca).finished();
-    const Eigen::Vector2d sensor_xy =
-        to_sensor * (Eigen::Vector2d(s * d, c * d) + turn * mount - mount);
+    const double mx = base_T_sensor[0], my = base_T_sensor[1];
+    // w = (S·d, C·d) + (R(a) − I)·ℓ_p, s_p = R(−ℓ_θ)·w.
+    const double wx = s * d + (ca * mx - sa * my) - mx;
+    const double wy = c * d + (sa * mx + ca * my) - my;
+    const double sensor_x = cl * wx + sl * wy, sensor_y = cl * wy - sl * wx;
     const Pose2d& measured = interval.sensor_motion;
     // s_θ as the composition rounds it, (a + ℓ_θ) − ℓ_θ, so that e equals operator()'s.
     const double sensor_theta = (a + base_T_sensor[2]) - base_T_sensor[2];
-    *error = Eigen::Vector3d(measured(0) - sensor_xy(0), measured(1) - sensor_xy(1),
+    *error = Eigen::Vector3d(measured(0) - sensor_x, measured(1) - sensor_y,
                              WrapAngle(measured(2) - sensor_theta));
     if (ds_dp == nullptr) return;
     double ds, dc;
     ArcCoefficientDerivatives(a, sa, ca, &ds, &dc);
-    Eigen::Vector3d by_d, by_a;
-    by_d << to_sensor * Eigen::Vector2d(s, c), 0.0;
-    by_a << to_sensor * (Eigen::Vector2d(ds, dc) * d + Eigen::Vector2d(-sa, ca) * mount(0) +
-                         Eigen::Vector2d(-ca, -sa) * mount(1)),
-        1.0;
-    ds_dp->col(0) = by_d * (left / 2.0) - by_a * (left / b);
-    ds_dp->col(1) = by_d * (right / 2.0) + by_a * (right / b);
-    ds_dp->col(2) = -by_a * (a / b);
-    ds_dp->block<2, 2>(0, 3) = to_sensor * (turn - Eigen::Matrix2d::Identity());
-    ds_dp->block<1, 2>(2, 3).setZero();
-    ds_dp->col(5) << sensor_xy(1), -sensor_xy(0), 0.0;
+    // ∂s_p/∂d = R(−ℓ_θ)·(S, C) and ∂s_p/∂a = R(−ℓ_θ)·u, u = (S', C')·d + R'(a)·ℓ_p.
+    const double by_d_x = cl * s + sl * c, by_d_y = cl * c - sl * s;
+    const double ux = ds * d - sa * mx - ca * my, uy = dc * d + ca * mx - sa * my;
+    const double by_a_x = cl * ux + sl * uy, by_a_y = cl * uy - sl * ux;
+    const double left_d = left / 2.0, left_a = left / b, right_d = right / 2.0, right_a = right / b,
+                 b_a = a / b;
+    Eigen::Matrix<double, 3, 6>& m = *ds_dp;
+    m(0, 0) = by_d_x * left_d - by_a_x * left_a;
+    m(1, 0) = by_d_y * left_d - by_a_y * left_a;
+    m(2, 0) = -left_a;
+    m(0, 1) = by_d_x * right_d + by_a_x * right_a;
+    m(1, 1) = by_d_y * right_d + by_a_y * right_a;
+    m(2, 1) = right_a;
+    m(0, 2) = -by_a_x * b_a;
+    m(1, 2) = -by_a_y * b_a;
+    m(2, 2) = -b_a;
+    // ∂s_p/∂ℓ_p = R(−ℓ_θ)·(R(a) − I), ∂s_p/∂ℓ_θ = (s_y, −s_x).
+    const double cm = ca - 1.0;
+    m(0, 3) = cl * cm + sl * sa;
+    m(0, 4) = sl * cm - cl * sa;
+    m(1, 3) = cl * sa - sl * cm;
+    m(1, 4) = sl * sa + cl * cm;
+    m(2, 3) = 0.0;
+    m(2, 4) = 0.0;
+    m(0, 5) = sensor_y;
+    m(1, 5) = -sensor_x;
+    m(2, 5) = 0.0;
   }
 
  private:
