@@ -141,6 +141,8 @@ class FusedNormalCost : public ceres::CostFunction {
       partial[0].rho += partial[c].rho;
       partial[0].ok = partial[0].ok && partial[c].ok;
     }
+    Eigen::Matrix<double, N, N>& hessian = partial[0].hessian;
+    hessian.template triangularView<Eigen::StrictlyLower>() = hessian.transpose();
     return partial[0];
   }
 
@@ -167,9 +169,11 @@ class FusedNormalCost : public ceres::CostFunction {
         j -= (alpha / s) * r * (r.transpose() * j);
       }
       const Jacobian corrected = sqrt_rho1 * j;
-      // A fixed-size product the compiler unrolls (Eigen's rank update of the upper triangle
-      // goes through its general kernel, several times slower at these sizes).
-      sums.hessian.noalias() += corrected.transpose() * corrected;
+      // The upper triangle only, in loops the compiler unrolls (Eigen's rank update goes through
+      // its general kernel, several times slower at these sizes); the lower is mirrored once.
+      for (int b = 0; b < N; ++b) {
+        for (int a = 0; a <= b; ++a) sums.hessian(a, b) += corrected.col(a).dot(corrected.col(b));
+      }
       sums.gradient.noalias() += corrected.transpose() * (scaling * r);
     }
   }
