@@ -168,13 +168,21 @@ class LaserResidual {
                              WrapAngle(measured(2) - sensor_theta));
     if (ds_dp == nullptr) return;
     double ds, dc;
-    ArcCoefficientDerivatives(a, sa, ca, &ds, &dc);
+    if (std::abs(a) < kSe2SmallAngle) {
+      ArcCoefficientDerivatives(a, sa, ca, &ds, &dc);
+    } else {
+      // As ArcCoefficientDerivatives, by one reciprocal instead of two divisions.
+      const double inverse_a2 = 1.0 / (a * a);
+      ds = (a * ca - sa) * inverse_a2;
+      dc = (a * sa - 1.0 + ca) * inverse_a2;
+    }
     // ∂s_p/∂d = R(−ℓ_θ)·(S, C) and ∂s_p/∂a = R(−ℓ_θ)·u, u = (S', C')·d + R'(a)·ℓ_p.
     const double by_d_x = cl * s + sl * c, by_d_y = cl * c - sl * s;
     const double ux = ds * d - sa * mx - ca * my, uy = dc * d + ca * mx - sa * my;
     const double by_a_x = cl * ux + sl * uy, by_a_y = cl * uy - sl * ux;
-    const double left_d = left / 2.0, left_a = left / b, right_d = right / 2.0, right_a = right / b,
-                 b_a = a / b;
+    const double inverse_b = 1.0 / b;
+    const double left_d = left / 2.0, left_a = left * inverse_b, right_d = right / 2.0,
+                 right_a = right * inverse_b, b_a = a * inverse_b;
     Eigen::Matrix<double, 3, 6>& m = *ds_dp;
     m(0, 0) = by_d_x * left_d - by_a_x * left_a;
     m(1, 0) = by_d_y * left_d - by_a_y * left_a;
