@@ -86,7 +86,7 @@ std::vector<size_t> Spread(const std::vector<size_t>& from, int count) {
 // score(candidate). The trials run in two fixed halves side by side (while the checks run, the
 // screen's thread waits and its core is free), each from the given best; the second half's best
 // replaces the first's only when its score is lower. That is the sequential search's choice (the
-// lowest score, the earlier on a tie), up to the pretest's rare drops, whatever the threads.
+// lowest score, the earlier on a tie), up to MedianBelow's rare drops, whatever the threads.
 template <typename T, typename Candidate, typename Below, typename Score>
 void BestOfTrials(int trials, int threads, const Candidate& candidate, const Below& below,
                   const Score& score, std::optional<T>* best, double* best_score) {
