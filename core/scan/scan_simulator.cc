@@ -160,6 +160,8 @@ Status CheckScanOptions(const ScanSimOptions& o) {
 // the encoders, from the laser simulator's own streams.
 struct ScanTiming {
   std::vector<double> stamps_s, sample_s, all_samples_s;
+  // Per row: which sample it holds (a logger faster than the sensor writes one twice).
+  std::vector<size_t> sample_index;
   std::vector<EncoderSample> encoders;
 };
 
@@ -170,10 +172,14 @@ ScanTiming MakeTiming(const ScanSimOptions& options) {
     LoggedTimingTruth logged;
     streams = SimulateLoggedLaserStreams(options.laser, *options.logging, nullptr, &logged);
     timing.sample_s = logged.sensor_sample_time_s;
+    timing.sample_index = logged.sensor_sample_index;
     timing.all_samples_s = logged.all_sensor_sample_times_s;
   } else {
     streams = SimulateLaserStreams(options.laser, options.encoder_rate_hz);
-    for (const StampedPose& pose : streams.sensor_poses) timing.sample_s.push_back(pose.t_s);
+    for (const StampedPose& pose : streams.sensor_poses) {
+      timing.sample_index.push_back(timing.sample_s.size());
+      timing.sample_s.push_back(pose.t_s);
+    }
     timing.all_samples_s = timing.sample_s;
   }
   for (const StampedPose& pose : streams.sensor_poses) timing.stamps_s.push_back(pose.t_s);
@@ -253,6 +259,12 @@ StatusOr<ScanSimulation> SimulateScans(const ScanSimOptions& options) {
     const std::vector<Pose2d> bases = truth.path.WorldTBase(beam_times);
     truth.sweep_start_s.push_back(start_s);
     truth.world_T_sensor.push_back(Compose(bases[0], truth.base_T_sensor));
+    // A held sample is written again as it was: the same ranges under a new stamp.
+    if (k > 0 && timing.sample_index[k] == timing.sample_index[k - 1]) {
+      scan.ranges_m = sim.scans.back().ranges_m;
+      sim.scans.push_back(std::move(scan));
+      continue;
+    }
     scan.ranges_m.resize(n);
     for (int i = 0; i < n; ++i) {
       const Pose2d sensor = Compose(bases[time_increment > 0.0 ? i : 0], truth.base_T_sensor);

@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <set>
 #include <string>
 
 // The calib commands. Each takes its options struct (filled from the flags in flags.cc, the only
@@ -104,6 +105,9 @@ struct SimulateOptions {
   double sweep = 0.0;             // Duration of one sweep (s); 0: instantaneous.
   std::string world = "mixed";    // rooms, corridor, clutter or mixed.
   bool upside_down = false;       // The lidar mounted upside down (its own scans; tf says so).
+  // The motion flags given on the command line (max_wheel_speed, mean_interval, interval_jitter,
+  // segment_mean, speed_time_constant): the scan robot keeps its own defaults for the others.
+  std::set<std::string> given;
 };
 int RunSimulate(const SimulateOptions& options);
 

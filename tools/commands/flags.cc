@@ -184,7 +184,8 @@ DEFINE_double(repeat_fraction, kSimulate.repeat_fraction,
 DEFINE_int32(beams, kSimulate.beams,
              "simulate (scans): beams per scan; > 0 simulates a lidar robot's raw scans in a "
              "world of walls (0.1 m wheels, 0.5 m wheelbase, 10 Hz scans, up to 0.5 m/s; "
-             "--intervals, --seed, --trajectory, the effect and logging flags apply) and writes "
+             "--intervals, --seed, --trajectory, the effect and logging flags apply, and the "
+             "motion flags when given) and writes "
              "OUT.json (the bag generators' robot messages) or a directory with odometry.csv and "
              "scans.csv");
 DEFINE_double(field_of_view, kSimulate.field_of_view_deg,
@@ -292,6 +293,10 @@ SimulateOptions SimulateOptionsFromFlags() {
   options.sweep = FLAGS_sweep;
   options.world = FLAGS_world;
   options.upside_down = FLAGS_upside_down;
+  for (const char* name : {"max_wheel_speed", "mean_interval", "interval_jitter", "segment_mean",
+                           "speed_time_constant"}) {
+    if (!gflags::GetCommandLineFlagInfoOrDie(name).is_default) options.given.insert(name);
+  }
   return options;
 }
 

@@ -31,6 +31,13 @@ StatusOr<ScanSimOptions> ScanOptions(const SimulateOptions& flags, const LaserSi
   o.laser.seed = laser.seed;
   o.laser.trajectory = laser.trajectory;
   o.laser.effects = laser.effects;
+  // The motion flags given replace the scan robot's own defaults.
+  const auto given = [&](const char* name) { return flags.given.count(name) > 0; };
+  if (given("max_wheel_speed")) o.laser.max_wheel_speed = laser.max_wheel_speed;
+  if (given("mean_interval")) o.laser.mean_interval_s = laser.mean_interval_s;
+  if (given("interval_jitter")) o.laser.interval_jitter_s = laser.interval_jitter_s;
+  if (given("segment_mean")) o.laser.segment_mean_s = laser.segment_mean_s;
+  if (given("speed_time_constant")) o.laser.speed_time_constant_s = laser.speed_time_constant_s;
   if (!model.IsClean()) o.logging = model;
   CALIB_ASSIGN_OR_RETURN(o.world.kind, ParseWorld(flags.world));
   o.world.seed = flags.seed;
