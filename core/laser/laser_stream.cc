@@ -278,14 +278,31 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
   const bool cubic = CubicBetweenPolls(gap_limit / 5.0);
 
   const auto by_time = [](const EncoderSample& s, double t) { return s.t_s < t; };
+  // A pose equal to the one before is a held repeat (the logger picked up the same sample again,
+  // stamped later) or a sensor at rest: the interval runs on to the next distinct pose, as the
+  // timing's samples do (core/timing/stream_samples.h). Held repeats as intervals of their own
+  // had no motion over a pick-up period of turning wheels, which fast turns made look like a
+  // wheel of the wrong sign.
+  std::vector<size_t> distinct;
+  for (size_t k = first; k < last; ++k) {
+    if (distinct.empty() || poses[k].world_T_sensor != poses[distinct.back()].world_T_sensor) {
+      distinct.push_back(k);
+    }
+  }
+  if (distinct.size() < 2) {
+    return Status::InvalidInput(names.poses +
+                                ": every sensor pose within the odometry time span "
+                                "is the same: the sensor never moved");
+  }
   LaserLog log;
   log.source = names.source;
   log.has_timestamps = true;
-  log.intervals.reserve(last - first - 1);
+  log.intervals.reserve(distinct.size() - 1);
   bool pending_gap = false;
-  for (size_t k = first; k + 1 < last; ++k) {
+  for (size_t i = 0; i + 1 < distinct.size(); ++i) {
+    const size_t k = distinct[i], next = distinct[i + 1];
     const double ta = poses[k].t_s;
-    const double tb = poses[k + 1].t_s;
+    const double tb = poses[next].t_s;
     // j: last sample at or before ta; m: first sample at or after tb. Samples j+1..m-1 lie
     // strictly inside the interval.
     const size_t m = static_cast<size_t>(
@@ -293,7 +310,7 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
     size_t j = static_cast<size_t>(std::lower_bound(odometry.begin(), odometry.end(), ta, by_time) -
                                    odometry.begin());
     if (odometry[j].t_s > ta) --j;
-    bool gap = poses[k].segment != poses[k + 1].segment;
+    bool gap = poses[k].segment != poses[next].segment;
     for (size_t s = j; s < m && !gap; ++s) {
       gap = odometry[s + 1].t_s - odometry[s].t_s > gap_limit;
     }
@@ -306,7 +323,7 @@ StatusOr<LaserLog> BuildFromStreams(const std::vector<EncoderSample>& odometry,
     LaserInterval interval;
     interval.start_s = ta;
     interval.duration_s = tb - ta;
-    interval.sensor_motion = Between(poses[k].world_T_sensor, poses[k + 1].world_T_sensor);
+    interval.sensor_motion = Between(poses[k].world_T_sensor, poses[next].world_T_sensor);
     interval.sensor_motion(2) = WrapAngle(interval.sensor_motion(2));
     interval.gap_before = pending_gap;
     pending_gap = false;

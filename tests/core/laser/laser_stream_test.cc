@@ -71,6 +71,29 @@ TEST_F(LaserStreamReadTest, RepeatedStampWithOtherValuesNamesBothLines) {
       << log.message();
 }
 
+// A pose repeated under a later stamp (a logger picking up the same sample again) is no interval
+// of its own: the interval runs from its first pick-up to the next sample, as the timing's
+// samples do. As an interval it had no motion over a pick-up period of turning wheels.
+TEST_F(LaserStreamReadTest, HeldRepeatsAreNoIntervals) {
+  Write("t,left,right\n0,0,0\n0.02,0.1,0.1\n0.04,0.2,0.2\n0.06,0.3,0.3\n0.08,0.4,0.4\n",
+        "t,x,y,theta\n0.01,0,0,0\n0.03,0.1,0,0\n0.05,0.1,0,0\n0.07,0.2,0,0\n");
+  const StatusOr<LaserLog> log = ReadLaserLog(dir_.string());
+  ASSERT_TRUE(log.ok()) << log.message();
+  ASSERT_EQ(log->intervals.size(), 2u);
+  EXPECT_EQ(log->intervals[1].line, 3);
+  EXPECT_NEAR(log->intervals[1].start_s, 0.03, 1e-12);
+  EXPECT_NEAR(log->intervals[1].duration_s, 0.04, 1e-12);
+  EXPECT_NEAR(log->intervals[1].sensor_motion(0), 0.1, 1e-12);
+  EXPECT_NEAR(log->intervals[1].left_speed, 5.0, 1e-9);
+  // A sensor that never moves gives no interval at all, and says so.
+  Write("t,left,right\n0,0,0\n0.02,0.1,0.1\n0.04,0.2,0.2\n",
+        "t,x,y,theta\n0.01,1,2,0\n0.03,1,2,0\n");
+  const StatusOr<LaserLog> still = ReadLaserLog(dir_.string());
+  ASSERT_FALSE(still.ok());
+  EXPECT_NE(still.message().find("sensor_poses.csv: every sensor pose"), std::string::npos)
+      << still.message();
+}
+
 // The simulator's streams: encoder polls on a regular grid, scan poses at its irregular but
 // exact interval ends. Both are sample times, neither shows a free-running signature.
 TEST_F(LaserStreamReadTest, SimulatedStreamsAreSampleTimes) {
