@@ -7,6 +7,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <initializer_list>
 #include <limits>
 #include <map>
@@ -53,11 +54,34 @@ Status ParseRange(const CsvReader& csv, size_t column, const char* name, float* 
                               "'");
 }
 
+// t may repeat only in a record written twice (the reader of the scans drops it with a warning).
 Status CheckIncreasing(const CsvReader& csv, const std::vector<LaserScan>& scans, double t) {
-  if (scans.empty() || t > scans.back().stamp_s) return Status::Ok();
+  if (scans.empty() || t >= scans.back().stamp_s) return Status::Ok();
   return Status::InvalidInput(
       csv.Where() + "t = " + Num(t) + " does not increase (the scan before, line " +
       std::to_string(scans.back().record) + ", has t = " + Num(scans.back().stamp_s) + ")");
+}
+
+bool SameRecord(const LaserScan& a, const LaserScan& b) {
+  const auto same = [](double x, double y) { return x == y || (std::isnan(x) && std::isnan(y)); };
+  return a.stamp_s == b.stamp_s && a.angle_min_rad == b.angle_min_rad &&
+         a.angle_increment_rad == b.angle_increment_rad &&
+         a.time_increment_s == b.time_increment_s && same(a.range_min_m, b.range_min_m) &&
+         same(a.range_max_m, b.range_max_m) && a.ranges_m.size() == b.ranges_m.size() &&
+         std::memcmp(a.ranges_m.data(), b.ranges_m.data(), a.ranges_m.size() * sizeof(float)) == 0;
+}
+
+// The last scan read, when its t repeats the one before, must repeat all of it.
+Status CheckRepeat(const std::string& source, const std::vector<LaserScan>& scans) {
+  const size_t n = scans.size();
+  if (n < 2 || scans[n - 1].stamp_s != scans[n - 2].stamp_s ||
+      SameRecord(scans[n - 1], scans[n - 2])) {
+    return Status::Ok();
+  }
+  return Status::InvalidInput(
+      source + ":" + std::to_string(scans[n - 1].record) + ": t = " + Num(scans[n - 1].stamp_s) +
+      " repeats the scan before (line " + std::to_string(scans[n - 2].record) +
+      ") with other values (a record written twice would repeat them)");
 }
 
 // The optional per-scan columns time_increment, range_min, range_max (defaults 0, 0, +inf).
@@ -127,6 +151,7 @@ StatusOr<std::vector<LaserScan>> ParseWide(std::string_view text, const std::str
           ParseRange(csv, kFirstRange + k, range_names[k].c_str(), &scan.ranges_m[k]));
     }
     scans.push_back(std::move(scan));
+    CALIB_RETURN_IF_ERROR(CheckRepeat(source, scans));
   }
   return scans;
 }
@@ -167,9 +192,14 @@ StatusOr<std::vector<LaserScan>> ParseLong(std::string_view text, const std::str
     CALIB_RETURN_IF_ERROR(csv.Number(kT, &t));
     CALIB_RETURN_IF_ERROR(csv.Number(kAngle, &angle));
     CALIB_RETURN_IF_ERROR(ParseRange(csv, kRange, "range", &range));
-    if (scans.empty() || t != scans.back().stamp_s) {
+    // A scan's rows share t; its first angle again under the same t starts the scan written twice.
+    const bool again = !scans.empty() && t == scans.back().stamp_s && angle == angles.front();
+    if (scans.empty() || t != scans.back().stamp_s || again) {
       CALIB_RETURN_IF_ERROR(CheckIncreasing(csv, scans, t));
-      if (!scans.empty()) CALIB_RETURN_IF_ERROR(FinishLongScan(source, angles, &scans.back()));
+      if (!scans.empty()) {
+        CALIB_RETURN_IF_ERROR(FinishLongScan(source, angles, &scans.back()));
+        CALIB_RETURN_IF_ERROR(CheckRepeat(source, scans));
+      }
       scans.push_back(NewScan(csv, t));
       CALIB_RETURN_IF_ERROR(ReadOptional(csv, kTimeIncrement, &scans.back()));
       angles.clear();
@@ -177,7 +207,10 @@ StatusOr<std::vector<LaserScan>> ParseLong(std::string_view text, const std::str
     angles.push_back(angle);
     scans.back().ranges_m.push_back(range);
   }
-  if (!scans.empty()) CALIB_RETURN_IF_ERROR(FinishLongScan(source, angles, &scans.back()));
+  if (!scans.empty()) {
+    CALIB_RETURN_IF_ERROR(FinishLongScan(source, angles, &scans.back()));
+    CALIB_RETURN_IF_ERROR(CheckRepeat(source, scans));
+  }
   return scans;
 }
 

@@ -14,7 +14,8 @@
 // - long, one beam per row, the rows of a scan sharing t (and contiguous):
 //     t,angle,range[,time_increment][,range_min][,range_max]
 // A range cell that is empty, nan or inf (any sign, any case) is no return. t must increase from
-// scan to scan. Ranges are floats; the writer's text reads back to the same float.
+// scan to scan, but for a scan written twice (every value repeated: kept here, dropped with a
+// warning by LaserLogFromScans). Ranges are floats; the writer's text reads back to the same float.
 namespace calib {
 
 enum class ScanCsvLayout { kWide, kLong };

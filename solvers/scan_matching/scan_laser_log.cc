@@ -37,33 +37,45 @@ std::string FailureSummary(const ScanOdometryResult& r) {
   return out + "): those scans are left out, as gaps";
 }
 
-Status CheckInputs(const std::vector<LaserScan>& scans, const std::vector<EncoderSample>& encoders,
-                   const std::string& scans_name, const std::string& wheels_name) {
-  if (scans.size() < 3) {
-    return Status::InvalidInput(scans_name + ": " + std::to_string(scans.size()) +
-                                " scan(s): the calibration needs many scans of a moving robot");
-  }
-  if (encoders.size() < 2) {
-    return Status::InvalidInput(wheels_name + ": " + std::to_string(encoders.size()) +
-                                " wheel-angle sample(s): at least two are needed");
-  }
-  for (size_t i = 1; i < scans.size(); ++i) {
-    if (!(scans[i].stamp_s > scans[i - 1].stamp_s)) {
-      return Status::InvalidInput(scans_name + ": record " + std::to_string(scans[i].record) +
-                                  ": stamp " + std::to_string(scans[i].stamp_s) +
-                                  " does not follow the previous scan's " +
-                                  std::to_string(scans[i - 1].stamp_s));
-    }
-  }
-  return Status::Ok();
-}
-
 // The same sample picked up again (a driver or logger that republishes the latest scan): the
 // same beams and ranges, bit for bit (NaN included).
 bool SameSample(const LaserScan& a, const LaserScan& b) {
   return a.angle_min_rad == b.angle_min_rad && a.angle_increment_rad == b.angle_increment_rad &&
          a.ranges_m.size() == b.ranges_m.size() &&
          std::memcmp(a.ranges_m.data(), b.ranges_m.data(), a.ranges_m.size() * sizeof(float)) == 0;
+}
+
+// The scans' indices without exact duplicates (a record written twice: the stamp and the ranges
+// of the scan before); a stamp that repeats with other ranges, or goes back, is an error.
+StatusOr<std::vector<size_t>> CheckInputs(const std::vector<LaserScan>& scans,
+                                          const std::vector<EncoderSample>& encoders,
+                                          const std::string& scans_name,
+                                          const std::string& wheels_name, int* duplicates) {
+  if (encoders.size() < 2) {
+    return Status::InvalidInput(wheels_name + ": " + std::to_string(encoders.size()) +
+                                " wheel-angle sample(s): at least two are needed");
+  }
+  std::vector<size_t> rows;
+  for (size_t i = 0; i < scans.size(); ++i) {
+    if (i > 0 && scans[i].stamp_s == scans[i - 1].stamp_s && SameSample(scans[i], scans[i - 1])) {
+      ++*duplicates;
+      continue;
+    }
+    if (i > 0 && !(scans[i].stamp_s > scans[i - 1].stamp_s)) {
+      const bool same = scans[i].stamp_s == scans[i - 1].stamp_s;
+      return Status::InvalidInput(
+          scans_name + ": record " + std::to_string(scans[i].record) + ": stamp " +
+          Num(scans[i].stamp_s) + (same ? " repeats" : " does not follow") +
+          " the previous scan's " + Num(scans[i - 1].stamp_s) +
+          (same ? " with other ranges (a record written twice would repeat them)" : ""));
+    }
+    rows.push_back(i);
+  }
+  if (rows.size() < 3) {
+    return Status::InvalidInput(scans_name + ": " + std::to_string(rows.size()) +
+                                " scan(s): the calibration needs many scans of a moving robot");
+  }
+  return rows;
 }
 
 // The scans' period: the median step between their stamps (0 for fewer than two).
@@ -211,13 +223,20 @@ StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
   const std::string& source = names.source;
   const std::string scans_name = names.scans.empty() ? source + " (scans)" : names.scans;
   const std::string wheels_name = names.wheels.empty() ? source + " (wheel angles)" : names.wheels;
-  CALIB_RETURN_IF_ERROR(CheckInputs(scans, encoders, scans_name, wheels_name));
+  int duplicates = 0;
+  CALIB_ASSIGN_OR_RETURN(const std::vector<size_t> rows,
+                         CheckInputs(scans, encoders, scans_name, wheels_name, &duplicates));
+  ScanLog out;
+  if (duplicates > 0) {
+    out.warnings.push_back(scans_name + ": " + std::to_string(duplicates) +
+                           " exact duplicate scan(s) dropped (same stamp and ranges as the scan "
+                           "before)");
+  }
   // A repeated sample is not matched again: it gets its original's pose, which the streams then
   // count as a held repeat (its stamp is a pick-up time).
-  ScanLog out;
   std::vector<const LaserScan*> distinct;
-  std::vector<int> distinct_of(scans.size());
-  for (size_t i = 0; i < scans.size(); ++i) {
+  std::vector<int> distinct_of(scans.size(), -1);
+  for (const size_t i : rows) {
     if (distinct.empty() || !SameSample(scans[i], *distinct.back())) {
       distinct.push_back(&scans[i]);
       out.distinct_scans.push_back(static_cast<int>(i));
@@ -234,7 +253,7 @@ StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
   out.failed_matches = static_cast<int>(r.failed.size());
   std::set<int> segments, keyframes;
   std::vector<StampedPose> poses;
-  for (size_t i = 0; i < scans.size(); ++i) {
+  for (const size_t i : rows) {
     const int d = distinct_of[i];
     if (r.chain[d] < 0) continue;
     StampedPose p = r.poses[d];

@@ -101,7 +101,9 @@ void ExpectError(const std::string& text, const std::vector<std::string>& words)
 
 TEST(ScanCsvTest, BadInputsNameFileLineAndProblem) {
   const std::string header = "t,angle_min,angle_increment,range_0,range_1\n";
-  ExpectError(header + "1,0,0.1,1,2\n1,0,0.1,1,2\n", {"bad.csv:3", "does not increase"});
+  ExpectError(header + "1,0,0.1,1,2\n0.5,0,0.1,1,2\n", {"bad.csv:3", "does not increase"});
+  ExpectError(header + "1,0,0.1,1,2\n1,0,0.1,1,3\n",
+              {"bad.csv:3", "repeats the scan before (line 2)"});
   ExpectError(header + "1,0,0.1,1,2\n2,0,0.1,1\n", {"bad.csv:3", "fields"});
   ExpectError(header + "1,0,0.1,1,x2\n", {"bad.csv:2", "range_1", "not a number", "x2"});
   ExpectError(header + "1,abc,0.1,1,2\n", {"bad.csv:2", "angle_min"});
@@ -111,7 +113,26 @@ TEST(ScanCsvTest, BadInputsNameFileLineAndProblem) {
   ExpectError("t,angle\n1,0\n", {"bad.csv", "range"});
   ExpectError("t,angle,range\n2,0,1\n1,0,1\n", {"bad.csv:3", "does not increase"});
   ExpectError("t,angle,range\n1,0,1\n1,0.1,1\n1,0.3,1\n", {"bad.csv:3", "even grid"});
+  ExpectError("t,angle,range\n1,0,1\n1,0.1,1\n1,0,1\n1,0.1,2\n", {"bad.csv:4", "repeats"});
   ExpectError("", {"bad.csv", "no header"});
+}
+
+// A scan written twice (every value repeated) is read as two scans, for LaserLogFromScans to
+// drop with a warning; in the long layout its first angle again under the same t starts it.
+TEST(ScanCsvTest, AScanWrittenTwiceIsReadTwice) {
+  const std::string wide =
+      "t,angle_min,angle_increment,range_0,range_1\n1,0,0.1,1,nan\n"
+      "1,0,0.1,1,nan\n2,0,0.1,1.5,2\n";
+  const std::string lines = "t,angle,range\n1,0,1\n1,0.1,\n1,0,1\n1,0.1,\n2,0,1.5\n2,0.1,2\n";
+  for (const std::string& text : {wide, lines}) {
+    const StatusOr<std::vector<LaserScan>> scans = ParseScanCsv(text, "twice.csv");
+    ASSERT_TRUE(scans.ok()) << scans.message();
+    ASSERT_EQ(scans->size(), 3u);
+    EXPECT_EQ((*scans)[1].stamp_s, 1.0);
+    ASSERT_EQ((*scans)[1].ranges_m.size(), 2u);
+    EXPECT_TRUE(std::isnan((*scans)[1].ranges_m[1]));
+    EXPECT_EQ((*scans)[2].ranges_m[1], 2.0f);
+  }
 }
 
 TEST(ScanCsvTest, FileRoundTrip) {

@@ -408,6 +408,34 @@ TEST(ScanLaserLog, TooFewScansOrStampsOutOfOrderAreErrors) {
   EXPECT_NE(log.message().find("does not follow"), std::string::npos) << log.message();
 }
 
+// A scan written twice (a recorder that stored the message twice: same stamp, same ranges) is
+// dropped with a warning; a stamp repeated with other ranges is an error naming the record.
+TEST(ScanLaserLog, ExactDuplicateScansAreDroppedWithAWarning) {
+  StatusOr<ScanSimulation> sim = SimulateScans(Robot(40, 4));
+  ASSERT_TRUE(sim.ok()) << sim.message();
+  const ScanLogNames names{"run.mcap", "", "run.mcap /scan"};
+  const StatusOr<ScanLog> clean = LaserLogFromScans(sim->scans, sim->encoders, names);
+  ASSERT_TRUE(clean.ok()) << clean.message();
+  std::vector<LaserScan> scans;
+  for (size_t i = 0; i < sim->scans.size(); ++i) {
+    scans.push_back(sim->scans[i]);
+    if (i % 5 == 2) scans.push_back(sim->scans[i]);
+  }
+  StatusOr<ScanLog> log = LaserLogFromScans(scans, sim->encoders, names);
+  ASSERT_TRUE(log.ok()) << log.message();
+  EXPECT_EQ(log->distinct_scans.size(), sim->scans.size());
+  EXPECT_EQ(log->log.intervals.size(), clean->log.intervals.size());
+  const bool warned = std::any_of(log->warnings.begin(), log->warnings.end(), [](const auto& w) {
+    return w.find("run.mcap /scan: 8 exact duplicate scan(s) dropped") != std::string::npos;
+  });
+  EXPECT_TRUE(warned);
+  scans[3].ranges_m[0] += 0.01f;
+  log = LaserLogFromScans(scans, sim->encoders, names);
+  ASSERT_FALSE(log.ok());
+  EXPECT_NE(log.message().find("record 2: stamp"), std::string::npos) << log.message();
+  EXPECT_NE(log.message().find("repeats the previous scan's"), std::string::npos) << log.message();
+}
+
 // The same beams listed from the last measured to the first (each keeps its angle and range).
 void ListAgainstTheirOrder(LaserScan* scan) {
   scan->angle_min_rad += (scan->ranges_m.size() - 1.0) * scan->angle_increment_rad;
