@@ -73,14 +73,50 @@ std::vector<bool> Steady(const std::vector<bool>& trusted,
   return steady;
 }
 
-// Whole sensor periods per interval as the motion counts them (stamp step × measured over wheel
-// motion), where it is trusted and within a quarter of a whole number; else 0.
+// The sensor's period in stamp steps as the motion counts it (stamp step × measured over wheel
+// motion, `steady` intervals): 1 where the counts sit near whole numbers. A logger slower than its
+// free-running sensor holds one or two periods per stamp step, so its counts sit near multiples of
+// P/step instead (0.77 and 1.54 for a 100 ms sensor picked up every 130 ms) and its stamps' median
+// step is not the period: the largest unit in [0.5, 0.9] whose multiples hold 90 % of the counts
+// (within a tenth of the unit), refined as their median per multiple, where whole numbers hold
+// under half of them.
+double MotionUnit(const std::vector<double>& stamp_ratio, const std::vector<double>& motion_ratio,
+                  const std::vector<bool>& steady) {
+  std::vector<double> counted;
+  for (size_t k = 1; k < steady.size() && counted.size() < 2000; ++k) {
+    if (steady[k]) counted.push_back(stamp_ratio[k] * motion_ratio[k]);
+  }
+  if (counted.size() < 20) return 1.0;
+  const auto held = [&](double unit) {
+    int near = 0;
+    for (const double c : counted) {
+      const double m = std::round(c / unit);
+      near += m >= 1.0 && std::abs(c / unit - m) < 0.1;
+    }
+    return static_cast<double>(near) / counted.size();
+  };
+  if (held(1.0) >= 0.5) return 1.0;
+  for (double unit = 0.9; unit >= 0.5; unit -= 0.001) {
+    if (held(unit) < 0.9) continue;
+    std::vector<double> units;
+    for (const double c : counted) {
+      const double m = std::round(c / unit);
+      if (m >= 1.0 && std::abs(c / unit - m) < 0.1) units.push_back(c / m);
+    }
+    std::nth_element(units.begin(), units.begin() + units.size() / 2, units.end());
+    return units[units.size() / 2];
+  }
+  return 1.0;
+}
+
+// Whole sensor periods (of `unit` stamp steps) per interval as the motion counts them, where it
+// is trusted and within a quarter of a whole number; else 0.
 std::vector<int> MotionPeriods(const std::vector<double>& stamp_ratio,
                                const std::vector<double>& motion_ratio,
-                               const std::vector<bool>& trusted) {
+                               const std::vector<bool>& trusted, double unit) {
   std::vector<int> periods(stamp_ratio.size(), 0);
   for (size_t k = 1; k < periods.size(); ++k) {
-    const double counted = stamp_ratio[k] * motion_ratio[k];
+    const double counted = stamp_ratio[k] * motion_ratio[k] / unit;
     if (trusted[k] && counted > 0.75 && std::abs(counted - std::round(counted)) < 0.25) {
       periods[k] = static_cast<int>(std::round(counted));
     }
@@ -147,10 +183,10 @@ bool StampsCountPeriods(const StreamSamples& data, const IntervalMotion& m,
 // wrong P they might name still has to beat the stamp model's evidence.
 std::optional<PickUpClock> PickUpClockOf(const StreamSamples& data,
                                          const std::optional<PickUpClock>& pick_up_known,
-                                         const std::vector<int>& motion_periods) {
+                                         const std::vector<int>& motion_periods, double period_s) {
   std::optional<PickUpClock> pick_up = pick_up_known ? pick_up_known : FitPickUpClock(data);
   if (!pick_up || !pick_up->NamesEverySample()) {
-    if (std::optional<PickUpClock> counted = FitPickUpClock(data, motion_periods)) {
+    if (std::optional<PickUpClock> counted = FitPickUpClock(data, motion_periods, period_s)) {
       pick_up = std::move(counted);
     }
   }
@@ -161,6 +197,7 @@ std::optional<PickUpClock> PickUpClockOf(const StreamSamples& data,
 struct PeriodCount {
   IntervalMotion motion;
   std::vector<int> motion_periods;
+  double unit = 1.0;  // MotionUnit.
   bool stamps_count = false;
 };
 
@@ -168,8 +205,9 @@ PeriodCount CountPeriods(const StreamSamples& data, const LatentTimeState& s) {
   PeriodCount c;
   const Eigen::Vector3d weight = s.noise_sigma.cwiseInverse().cwiseAbs2();
   c.motion = MeasureIntervalMotion(data, s, weight);
-  c.motion_periods = MotionPeriods(c.motion.stamp_ratio, c.motion.motion_ratio,
-                                   Steady(c.motion.trusted, c.motion.wheel_motion, weight));
+  const std::vector<bool> steady = Steady(c.motion.trusted, c.motion.wheel_motion, weight);
+  c.unit = MotionUnit(c.motion.stamp_ratio, c.motion.motion_ratio, steady);
+  c.motion_periods = MotionPeriods(c.motion.stamp_ratio, c.motion.motion_ratio, steady, c.unit);
   c.stamps_count = StampsCountPeriods(data, c.motion, c.motion_periods);
   return c;
 }
@@ -178,6 +216,17 @@ PeriodCount CountPeriods(const StreamSamples& data, const LatentTimeState& s) {
 
 bool StampsCountSensorPeriods(const StreamSamples& data, const LatentTimeState& state) {
   return data.samples.size() >= 2 && CountPeriods(data, state).stamps_count;
+}
+
+std::optional<PickUpClock> MotionCountedPickUpClock(const StreamSamples& data,
+                                                    const LatentTimeState& state) {
+  if (data.samples.size() < 2) return std::nullopt;
+  const PeriodCount count = CountPeriods(data, state);
+  if (count.stamps_count) return std::nullopt;
+  std::optional<PickUpClock> clock =
+      FitPickUpClock(data, count.motion_periods, count.unit * data.sensor_period_s);
+  if (clock && !clock->NamesEverySample()) return std::nullopt;
+  return clock;
 }
 
 bool TimesStrayFromEveryClock(const StreamSamples& data, const TimingModelFit& stamps) {
@@ -197,7 +246,10 @@ LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModel
   const PeriodCount count = CountPeriods(data, s);
   const IntervalMotion& m = count.motion;
   const std::vector<int>& motion_periods = count.motion_periods;
-  const bool on_grid = count.stamps_count;
+  // A clock that names every sample given by the caller outranks the grid test here: at the
+  // stamp model's state the motion may confirm nothing (its noise took the skips in), and stamps
+  // that no motion contradicts then pass for a grid of the period.
+  const bool on_grid = count.stamps_count && !(pick_up_known && pick_up_known->NamesEverySample());
   const size_t n = data.samples.size();
   std::vector<double> steps(n, 0.0);
   for (size_t k = 1; k < n; ++k) {
@@ -210,7 +262,7 @@ LatentTimeState ClockStartFromTimes(const StreamSamples& data, const TimingModel
   s.period_prior_s = s.period_prior_sigma_s = 0.0;
   if (!on_grid) {
     if (const std::optional<PickUpClock> pick_up =
-            PickUpClockOf(data, pick_up_known, motion_periods)) {
+            PickUpClockOf(data, pick_up_known, motion_periods, count.unit * data.sensor_period_s)) {
       for (size_t k = 1; k < n; ++k) steps[k] = pick_up->indices[k] - pick_up->indices[k - 1];
       s.clock_indices_named = pick_up->NamesEverySample();
       if (s.clock_indices_named) {

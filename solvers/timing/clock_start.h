@@ -27,6 +27,14 @@ bool TimesStrayFromEveryClock(const StreamSamples& data, const TimingModelFit& s
 // model to start from.
 bool StampsCountSensorPeriods(const StreamSamples& data, const LatentTimeState& state);
 
+// The pick-up clock that the skips the motion counts name (FitPickUpClock), the motion at
+// `state`'s calibration; empty where the stamps count the periods or it names not every sample.
+// A logger slower than its sensor holds nothing, and the stamp model's latent times blur its
+// skips (its scan noise took them in: no interval stayed trusted), so the count is taken at the
+// stamp-as-truth fit.
+std::optional<PickUpClock> MotionCountedPickUpClock(const StreamSamples& data,
+                                                    const LatentTimeState& state);
+
 // The clock model's starting point from a fit of the stamp model: whole periods per interval
 // (from the stamps where they sit on the period's grid and the motion agrees; pick-up stamps with
 // held repeats, or skips the motion counts over steady stretches, name them exactly through

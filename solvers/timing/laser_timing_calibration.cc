@@ -284,6 +284,7 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
   }
   std::optional<LatentTimeState> clock_start;
   if (try_clock) {
+    if (!pick_up && !named) pick_up = MotionCountedPickUpClock(data, initial);
     clock_start = ClockStartFromTimes(data, best, pick_up);
     // Sample times that stray from every grid rule a clock out, unless holds or counted skips
     // named its samples (a logger whose own steps wander still picks up a clock's samples).

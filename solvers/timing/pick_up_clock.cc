@@ -192,12 +192,13 @@ std::vector<Candidate> Narrow(const std::vector<Pair>& pairs, size_t count, doub
 }  // namespace
 
 std::optional<PickUpClock> FitPickUpClock(const StreamSamples& data,
-                                          const std::vector<int>& motion_periods) {
-  if (data.samples.size() < 2 || !(data.sensor_period_s > 0.0)) return std::nullopt;
+                                          const std::vector<int>& motion_periods, double period_s) {
+  const double guess_s = period_s > 0.0 ? period_s : data.sensor_period_s;
+  if (data.samples.size() < 2 || !(guess_s > 0.0)) return std::nullopt;
   int telling = static_cast<int>(data.held_stamp_s.size());
   for (size_t k = 1; k < data.samples.size() && k < motion_periods.size(); ++k) {
     const double steps =
-        std::round((data.samples[k].stamp_s - data.samples[k - 1].stamp_s) / data.sensor_period_s);
+        std::round((data.samples[k].stamp_s - data.samples[k - 1].stamp_s) / guess_s);
     telling += motion_periods[k] > 0 && motion_periods[k] != steps;
   }
   if (telling < kMinHolds) return std::nullopt;
@@ -206,8 +207,8 @@ std::optional<PickUpClock> FitPickUpClock(const StreamSamples& data,
   // as P does: every run of the coarse grid within one of the fewest is a candidate. Longer
   // prefixes narrow the basin of the true P as 1/(pairs used), and the candidates with it.
   size_t count = std::min<size_t>(kFirstPairs, pairs.size());
-  const double step = 2.0 * kSearchSpan * data.sensor_period_s / kCoarseSteps;
-  const double lo = (1.0 - kSearchSpan) * data.sensor_period_s;
+  const double step = 2.0 * kSearchSpan * guess_s / kCoarseSteps;
+  const double lo = (1.0 - kSearchSpan) * guess_s;
   std::vector<Candidate> candidates;
   for (int i = 0; i <= kCoarseSteps; ++i) {
     candidates.push_back({lo + step * i, lo + step * i, lo + step * i, 0});

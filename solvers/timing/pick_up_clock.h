@@ -41,9 +41,11 @@ struct PickUpClock {
 // than its sensor never holds, but its skips (two periods of motion in one stamp step) pin P and
 // c the same way, and between them, where the robot stood still, the clock names the skips the
 // motion could not see. These counts then stand in for the holds (3 at least that differ from the
-// stamps' step).
+// stamps' step). `period_s` (0: the stamps' median step) centres the search: a logger much
+// slower than its sensor steps by more than a period.
 std::optional<PickUpClock> FitPickUpClock(const StreamSamples& data,
-                                          const std::vector<int>& motion_periods = {});
+                                          const std::vector<int>& motion_periods = {},
+                                          double period_s = 0.0);
 
 }  // namespace calib
 
