@@ -1,6 +1,7 @@
 #include <calib/core/timing/stamp_timing.h>
 #include <calib/core/timing/stream_samples.h>
 #include <calib/solvers/laser/laser_consistency.h>
+#include <calib/solvers/laser/laser_dead_reckoning.h>
 #include <calib/solvers/timing/clock_start.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 #include <calib/solvers/timing/pick_up_clock.h>
@@ -158,6 +159,29 @@ void FillCalibration(const TimingModelFit& fit, const LaserCalibrationOptions& o
   out->noise_sigma = {fit.state.noise_sigma};
   out->warnings.clear();
   out->observability = AnalyzeLaserObservability(out->covariance, out->estimate, out->census);
+}
+
+// The timing-free totals (laser_consistency.h) at the timing-aware estimate, over the intervals
+// between the samples' estimated times with that estimate's inliers. A total telescopes only
+// across the intervals it counts: on the stamps' intervals the samples that a logger slower than
+// its sensor skipped were the stamp-as-truth fit's outliers, and leaving them out read as a 7σ
+// rotation mismatch where the estimate was within 1σ. The timing enters at the window ends only,
+// as on the stamps.
+LaserConsistency TimingFreeTotals(const LaserLog& stamped, const LaserCalibrationOptions& options,
+                                  const LaserTimingResult& result) {
+  const LaserCalibrationResult& c = result.calibration;
+  const StatusOr<LaserLog> timed = LaserLogFromStreams(
+      result.timed_streams.odometry, result.timed_streams.sensor_poses, "streams");
+  if (!timed.ok()) {
+    return CheckLaserConsistency(stamped.intervals, c.estimate, c.covariance,
+                                 result.stamps_as_truth.noise_sigma.front(),
+                                 result.stamps_as_truth.is_inlier.front());
+  }
+  const Eigen::Vector3d& sigma = c.noise_sigma.front();
+  return CheckLaserConsistency(
+      timed->intervals, c.estimate, c.covariance, sigma,
+      ClassifyLaserInliers(LaserIntervalErrors(timed->intervals, c.estimate), sigma,
+                           options.inlier_chi2));
 }
 
 // τ, the period and the per-sample times with their σ.
@@ -362,10 +386,7 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
   if (!best.converged) {
     result.warnings.push_back("the timing-aware refinement stopped before converging");
   }
-  // The timing-free totals, now at the timing-aware estimate.
-  result.calibration.consistency = CheckLaserConsistency(
-      log.intervals, result.calibration.estimate, result.calibration.covariance,
-      result.stamps_as_truth.noise_sigma.front(), result.stamps_as_truth.is_inlier.front());
+  result.calibration.consistency = TimingFreeTotals(log, options.calibration, result);
   result.warnings.insert(result.warnings.end(), result.calibration.consistency.warnings.begin(),
                          result.calibration.consistency.warnings.end());
   result.calibration.warnings = result.warnings;
