@@ -5,7 +5,6 @@
 #include <cmath>
 #include <limits>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 namespace calib {
@@ -16,20 +15,16 @@ StatusOr<ScanPointCalibration> RefineRobotOnScanPoints(const RobotMessages& bag,
   const RobotBagLog& log = two_stage.log;
   const LaserTimingResult& timing = two_stage.result;
   const std::vector<LaserScan>& scans = bag.scans.at(log.topics.scan_topic);
-  // The timing's samples are named by their line, the scan's record + 1. A timing whose offset
-  // the intervals hardly determine (σ over a quarter of the scan period: few intervals, e.g. a
-  // corridor's degenerate matches) would place the beams anywhere; then the stamps are the start
-  // and the refinement's own offset δ takes the timing up.
-  std::unordered_map<int64_t, double> time_of_line;
-  const bool timed = !(timing.time_offset_stddev_s > 0.25 * timing.sensor_period_s);
-  for (size_t k = 0; timed && k < timing.sample_line.size() && k < timing.sample_time_s.size();
-       ++k) {
-    time_of_line[timing.sample_line[k]] = timing.sample_time_s[k];
-  }
+  // A timing whose offset the intervals hardly determine would place the beams anywhere; then
+  // the stamps are the start and the refinement's own offset δ takes the timing up.
+  const SweepStarts placed = ScanSweepStarts(scans, timing);
+  const bool timed = !placed.start_s.empty();
+  const auto placed_at = [&](int i) {
+    return timed ? placed.start_s[i] : std::numeric_limits<double>::quiet_NaN();
+  };
   std::vector<double> corrections;
   for (const int i : log.scans.distinct_scans) {
-    const auto it = time_of_line.find(scans[i].record + 1);
-    if (it != time_of_line.end()) corrections.push_back(it->second - scans[i].stamp_s);
+    if (std::isfinite(placed_at(i))) corrections.push_back(placed_at(i) - scans[i].stamp_s);
   }
   double median_correction_s = 0.0;
   if (!corrections.empty()) {
@@ -47,8 +42,8 @@ StatusOr<ScanPointCalibration> RefineRobotOnScanPoints(const RobotMessages& bag,
   input.encoders = &log.scans.log.streams.odometry;
   input.source = bag.source + " " + log.topics.scan_topic;
   for (const int i : log.scans.distinct_scans) {
-    const auto it = time_of_line.find(scans[i].record + 1);
-    const double t = it != time_of_line.end() ? it->second : scans[i].stamp_s + median_correction_s;
+    const double t =
+        std::isfinite(placed_at(i)) ? placed_at(i) : scans[i].stamp_s + median_correction_s;
     // A scan the timing did not place may fall out of order with its timed neighbours.
     if (!input.first_beam_time_s.empty() && !(t > input.first_beam_time_s.back())) continue;
     if (prepare) {

@@ -60,11 +60,11 @@ std::vector<BeamTiming> Candidates(double recorded_s, double rotation_s) {
 // spin make a sweep's ends overlap, and which way that is depends on the timing under test.
 std::vector<size_t> TurningScans(const std::vector<LaserScan>& scans,
                                  const std::vector<EncoderSample>& encoders,
-                                 const WheelsAndMounting& robot, double time_offset_s,
+                                 const WheelsAndMounting& robot, const SweepStarts& starts,
                                  double period_s, const BeamTimingOptions& options) {
   std::vector<std::pair<double, size_t>> turns[2];  // Left, right; the largest first after sorting.
   for (size_t i = 0; i < scans.size(); ++i) {
-    const double t = scans[i].stamp_s + time_offset_s;
+    const double t = starts(i, scans[i].stamp_s);
     const double turn = SensorMotionBetween(encoders, t, t + period_s, robot)(2);
     if (std::abs(turn) >= options.min_turn_rad) turns[turn < 0.0].emplace_back(-std::abs(turn), i);
   }
@@ -119,7 +119,7 @@ void AddBracketed(const std::vector<Eigen::Vector2d>& other,
 // number to *count.
 void AddSeam(const LaserScan& listed, const BeamTiming& timing,
              const std::vector<EncoderSample>& encoders, const WheelsAndMounting& robot,
-             double time_offset_s, const BeamTimingOptions& options, double* sum, int* count) {
+             double start_s, const BeamTimingOptions& options, double* sum, int* count) {
   const LaserScan scan = WithBeamTiming(listed, timing);
   const int n = static_cast<int>(scan.ranges_m.size());
   const double increment = std::abs(scan.angle_increment_rad);
@@ -127,8 +127,7 @@ void AddSeam(const LaserScan& listed, const BeamTiming& timing,
   if (n < 4 * k) return;
   ScanPointsOptions deskew;
   if (scan.SweepSeconds() > 0.0) {
-    deskew.sweep =
-        SweepMotionOver(encoders, scan.stamp_s + time_offset_s, scan.SweepSeconds(), robot);
+    deskew.sweep = SweepMotionOver(encoders, start_s, scan.SweepSeconds(), robot);
   }
   const StatusOr<ScanPoints> points = MakeScanPoints(scan, deskew);
   if (!points.ok() || !points->full_circle) return;
@@ -175,7 +174,7 @@ LaserScan WithBeamTiming(const LaserScan& scan, const BeamTiming& timing) {
 
 BeamTimingCheck CheckBeamTiming(const std::vector<LaserScan>& scans,
                                 const std::vector<EncoderSample>& encoders,
-                                const WheelsAndMounting& robot, double time_offset_s,
+                                const WheelsAndMounting& robot, const SweepStarts& starts,
                                 const std::string& name, const BeamTimingOptions& options) {
   BeamTimingCheck check;
   if (scans.size() < 2 || encoders.size() < 2 || !robot.known()) return check;
@@ -188,14 +187,15 @@ BeamTimingCheck CheckBeamTiming(const std::vector<LaserScan>& scans,
   const std::vector<BeamTiming> candidates = Candidates(recorded_s, rotation_s);
   check.recorded = check.chosen = candidates.front();
   const std::vector<size_t> turning =
-      TurningScans(scans, encoders, robot, time_offset_s, period_s, options);
+      TurningScans(scans, encoders, robot, starts, period_s, options);
   check.scans = static_cast<int>(turning.size());
   if (check.scans < options.min_scans) return check;
   for (const BeamTiming& timing : candidates) {
     double sum = 0.0;
     int points = 0;
     for (const size_t i : turning)
-      AddSeam(scans[i], timing, encoders, robot, time_offset_s, options, &sum, &points);
+      AddSeam(scans[i], timing, encoders, robot, starts(i, scans[i].stamp_s), options, &sum,
+              &points);
     // Too few compared points (no full circle, gaps at every seam): this timing is not judged.
     check.candidates.emplace_back(timing, points >= options.min_points
                                               ? sum / points

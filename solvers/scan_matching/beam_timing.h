@@ -55,11 +55,11 @@ struct BeamTimingOptions {
 };
 
 // `scans` in stamp order (as the calibration reads them, mirrored if upside down), `robot` a first
-// calibration, `time_offset_s` its estimate of when the scans were taken after their stamps (on
-// the wheels' clock); `name` names the scans in the warning.
+// calibration, `starts` its estimate of when the scans were taken (on the wheels' clock); `name`
+// names the scans in the warning.
 BeamTimingCheck CheckBeamTiming(const std::vector<LaserScan>& scans,
                                 const std::vector<EncoderSample>& encoders,
-                                const WheelsAndMounting& robot, double time_offset_s,
+                                const WheelsAndMounting& robot, const SweepStarts& starts,
                                 const std::string& name, const BeamTimingOptions& options = {});
 
 }  // namespace calib

@@ -6,6 +6,7 @@
 #include <calib/core/se2.h>
 #include <calib/solvers/scan_matching/scan_points.h>
 
+#include <cmath>
 #include <vector>
 
 // The sensor's motion from the wheel angles through given (nominal or calibrated) wheels and
@@ -17,6 +18,19 @@ struct WheelsAndMounting {
   Pose2d base_T_sensor = Pose2d::Zero();
   // A zero radius or wheelbase gives no motion to go by.
   bool known() const;
+};
+
+// When each scan's sweep began on the wheels' clock: where a timing calibration placed the scan,
+// start_s[i] (per scan of the input; NaN where it did not), else its stamp + offset_s. Pick-up
+// stamps lag their samples by anything up to a period: one offset for all misplaced the sweeps
+// of a logger slower than its sensor by ±50 ms, enough for the beam-timing check to take another
+// timing in fast turns.
+struct SweepStarts {
+  double offset_s = 0.0;
+  std::vector<double> start_s;
+  double operator()(size_t i, double stamp_s) const {
+    return i < start_s.size() && std::isfinite(start_s[i]) ? start_s[i] : stamp_s + offset_s;
+  }
 };
 
 // The sensor's displacement between two times (the wheel angles interpolated, one arc).

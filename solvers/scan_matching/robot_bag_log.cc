@@ -7,7 +7,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <limits>
 #include <set>
+#include <unordered_map>
 
 namespace calib {
 namespace {
@@ -147,6 +149,22 @@ Status CheckWheelReadings(const RobotBagLog& log) {
 
 }  // namespace
 
+SweepStarts ScanSweepStarts(const std::vector<LaserScan>& scans, const LaserTimingResult& timing) {
+  SweepStarts starts;
+  starts.offset_s = timing.time_offset_s;
+  if (timing.time_offset_stddev_s > 0.25 * timing.sensor_period_s) return starts;
+  std::unordered_map<int64_t, double> time_of_line;  // The timing names a sample by its line.
+  for (size_t k = 0; k < timing.sample_line.size() && k < timing.sample_time_s.size(); ++k) {
+    time_of_line[timing.sample_line[k]] = timing.sample_time_s[k];
+  }
+  starts.start_s.assign(scans.size(), std::numeric_limits<double>::quiet_NaN());
+  for (size_t i = 0; i < scans.size(); ++i) {
+    const auto it = time_of_line.find(scans[i].record + 1);
+    if (it != time_of_line.end()) starts.start_s[i] = it->second;
+  }
+  return starts;
+}
+
 LaserScan MirroredScan(const LaserScan& scan) {
   LaserScan out = scan;
   out.angle_min_rad = -scan.angle_min_rad;
@@ -187,7 +205,7 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
   if (options.calibrated) {
     scan_options.nominal = options.calibrated->odometry;
     scan_options.nominal_base_T_sensor = options.calibrated->base_T_sensor;
-    scan_options.sweep_time_offset_s = options.calibrated_time_offset_s;
+    scan_options.sweep_starts = options.calibrated_sweep_starts;
   } else if (options.nominal_wheel_radius_m > 0.0 && options.nominal_wheelbase_m > 0.0) {
     scan_options.nominal =
         OdometryParams{options.nominal_wheel_radius_m, options.nominal_wheel_radius_m,
@@ -201,7 +219,7 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
   if (!out.beam_timing && options.check_beam_timing && options.calibrated) {
     out.beam_timing = CheckBeamTiming(scans, wheels.samples,
                                       {scan_options.nominal, scan_options.nominal_base_T_sensor},
-                                      scan_options.sweep_time_offset_s, names.scans);
+                                      scan_options.sweep_starts, names.scans);
   }
   if (out.beam_timing && out.beam_timing->changed) {
     for (LaserScan& scan : scans) scan = WithBeamTiming(scan, out.beam_timing->chosen);
@@ -230,6 +248,7 @@ constexpr size_t kFirstPassScans = 3000;
 // kSettledSigmas of its σ, at most kMaxPasses.
 constexpr int kMaxPasses = 8;
 constexpr double kSettledSigmas = 0.1;
+constexpr double kRecheckSigmas = 1.0;
 
 // The largest move of a parameter between two calibrations, in σ of the later one.
 double MovedSigmas(const LaserCalibrationResult& before, const LaserCalibrationResult& after) {
@@ -277,9 +296,14 @@ StatusOr<RobotBagCalibration> CalibrateTwoStage(const RobotMessages& bag,
   double moved = 0.0;
   for (bool settled = false; !settled && passes < kMaxPasses;) {
     deskewed.calibrated = out.result.calibration.estimate;
-    deskewed.calibrated_time_offset_s = out.result.time_offset_s;
+    deskewed.calibrated_sweep_starts = ScanSweepStarts(scans, out.result);
     const LaserCalibrationResult before = out.result.calibration;
-    if (!deskewed.beam_timing) deskewed.beam_timing = out.log.beam_timing;
+    // The beams' timing is judged again while the calibration it goes through still moves by
+    // kRecheckSigmas between passes: the first pass matched skewed sweeps, and its calibration and
+    // timing can be far off (a slower logger's clock not yet found put the sweeps ~65 ms early,
+    // where a 30 % longer sweep closed them best). Then it is kept.
+    const bool recheck = !options.beam_timing && (passes == 1 || !(moved < kRecheckSigmas));
+    deskewed.beam_timing = recheck ? std::nullopt : out.log.beam_timing;
     CALIB_RETURN_IF_ERROR(CalibratePass(probe, deskewed, timing, &out));
     ++passes;
     moved = MovedSigmas(before, out.result.calibration);
@@ -287,7 +311,7 @@ StatusOr<RobotBagCalibration> CalibrateTwoStage(const RobotMessages& bag,
   }
   if (long_log) {
     deskewed.calibrated = out.result.calibration.estimate;
-    deskewed.calibrated_time_offset_s = out.result.time_offset_s;
+    deskewed.calibrated_sweep_starts = ScanSweepStarts(scans, out.result);
     CALIB_RETURN_IF_ERROR(CalibratePass(bag, deskewed, timing, &out));
     ++passes;
   }

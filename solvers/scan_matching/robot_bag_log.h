@@ -35,9 +35,10 @@ struct RobotBagOptions {
   // A calibration of this robot (a first pass): the matcher's guesses and the de-skewing of each
   // sweep then go through it instead of the nominal values.
   std::optional<LaserCalibration> calibrated;
-  // With `calibrated`: its estimate of when the scans were taken after their stamps (the wheels'
-  // clock), where the de-skewing follows the sensor (a stamp at the sweep's end, not its start).
-  double calibrated_time_offset_s = 0.0;
+  // With `calibrated`: its estimate of when the scans were taken (the wheels' clock; per scan of
+  // the scan topic, ScanSweepStarts), where the de-skewing follows the sensor (a stamp at the
+  // sweep's end, not its start; a pick-up stamp up to a period after its sample).
+  SweepStarts calibrated_sweep_starts;
   // When set, the calibration is refined against the scan points after the two-stage route; and
   // where that route cannot calibrate (too few matches), the scan points calibrate alone from
   // the nominal wheels (CalibrateOnScanPointsAlone).
@@ -88,6 +89,12 @@ struct RobotBagCalibration {
 StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& bag,
                                                      const RobotBagOptions& options,
                                                      const LaserTimingOptions& timing);
+
+// When each of `scans` (the bag's scan topic) was taken on the wheels' clock, by `timing`: its
+// estimated sample time where the timing placed it (by record), else its stamp + the timing's
+// offset. Where the timing hardly determined the offset (σ over a quarter of the scan period: few
+// intervals, e.g. a corridor's degenerate matches) it places none (start_s empty).
+SweepStarts ScanSweepStarts(const std::vector<LaserScan>& scans, const LaserTimingResult& timing);
 
 // A laser scan seen from its mirror image (y → −y): the scans of a sensor mounted upside down,
 // in a frame whose z axis points up like the base's. Every angle changes sign (the increment

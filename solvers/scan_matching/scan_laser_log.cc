@@ -150,25 +150,24 @@ void WarnInstantScans(const std::vector<const LaserScan*>& scans, const ScanOdom
       scans_name.c_str(), 1e3 * ScanPeriod(scans), turn * 180.0 / M_PI, 1e3 * travel));
 }
 
-// Matches scans [begin, end), each seeded (and de-skewed) through the nominal wheels when known.
-StatusOr<ScanOdometryResult> MatchRun(const std::vector<const LaserScan*>& scans, size_t begin,
-                                      size_t end, const std::vector<EncoderSample>& encoders,
+// Matches scans [begin, end), each seeded (and de-skewed) through the nominal wheels when known;
+// start_s[i]: when scan i's sweep began on the wheels' clock.
+StatusOr<ScanOdometryResult> MatchRun(const std::vector<const LaserScan*>& scans,
+                                      const std::vector<double>& start_s, size_t begin, size_t end,
+                                      const std::vector<EncoderSample>& encoders,
                                       const ScanLogOptions& options, double max_sweep_s) {
   const WheelsAndMounting robot = Nominal(options);
   const bool nominal = robot.known();
-  const double offset_s = options.sweep_time_offset_s;
   ScanOdometry odometry(options.matching);
   for (size_t i = begin; i < end; ++i) {
     const LaserScan& scan = *scans[i];
     Pose2d guess = Pose2d::Zero();
-    if (i > begin && nominal) {
-      guess = SensorMotionBetween(encoders, scans[i - 1]->stamp_s + offset_s,
-                                  scan.stamp_s + offset_s, robot);
-    }
+    if (i > begin && nominal)
+      guess = SensorMotionBetween(encoders, start_s[i - 1], start_s[i], robot);
     std::optional<SweepMotion> sweep;
     const double sweep_s = scan.SweepSeconds();
     if (options.deskew && nominal && sweep_s > 0.0 && sweep_s <= max_sweep_s) {
-      sweep = SweepMotionOver(encoders, scan.stamp_s + offset_s, sweep_s, robot);
+      sweep = SweepMotionOver(encoders, start_s[i], sweep_s, robot);
     }
     CALIB_RETURN_IF_ERROR(odometry.AddScan(scan, guess, sweep));
   }
@@ -199,15 +198,17 @@ void Append(ScanOdometryResult tail, ScanOdometryResult* head) {
 constexpr size_t kScansPerThread = 1000;
 
 StatusOr<ScanOdometryResult> MatchScans(const std::vector<const LaserScan*>& scans,
+                                        const std::vector<double>& start_s,
                                         const std::vector<EncoderSample>& encoders,
                                         const ScanLogOptions& options, double max_sweep_s) {
   if (scans.size() < 2 * kScansPerThread)
-    return MatchRun(scans, 0, scans.size(), encoders, options, max_sweep_s);
+    return MatchRun(scans, start_s, 0, scans.size(), encoders, options, max_sweep_s);
   const size_t half = scans.size() / 2;
   auto second = std::async(std::launch::async, [&] {
-    return MatchRun(scans, half, scans.size(), encoders, options, max_sweep_s);
+    return MatchRun(scans, start_s, half, scans.size(), encoders, options, max_sweep_s);
   });
-  StatusOr<ScanOdometryResult> first = MatchRun(scans, 0, half, encoders, options, max_sweep_s);
+  StatusOr<ScanOdometryResult> first =
+      MatchRun(scans, start_s, 0, half, encoders, options, max_sweep_s);
   StatusOr<ScanOdometryResult> rest = second.get();
   if (!first.ok()) return first;
   if (!rest.ok()) return rest;
@@ -244,8 +245,13 @@ StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
     distinct_of[i] = static_cast<int>(distinct.size()) - 1;
   }
   const auto start = std::chrono::steady_clock::now();
+  std::vector<double> start_s;
+  for (size_t d = 0; d < distinct.size(); ++d) {
+    start_s.push_back(options.sweep_starts(out.distinct_scans[d], distinct[d]->stamp_s));
+  }
   const double max_sweep_s = MaxSweep(distinct, options, scans_name, &out.warnings);
-  CALIB_ASSIGN_OR_RETURN(out.matching, MatchScans(distinct, encoders, options, max_sweep_s));
+  CALIB_ASSIGN_OR_RETURN(out.matching,
+                         MatchScans(distinct, start_s, encoders, options, max_sweep_s));
   out.matching_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const ScanOdometryResult& r = out.matching;

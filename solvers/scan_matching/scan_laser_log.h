@@ -28,9 +28,9 @@ struct ScanLogOptions {
   // With a nominal radius and beams at their own times: each scan is de-skewed with the
   // sensor's motion over its sweep from the wheels, one piece per encoder step.
   bool deskew = true;
-  // The scans were taken this long after their stamps on the wheels' clock (a first
-  // calibration's estimate): the de-skewing and the matcher's guesses follow the sensor there.
-  double sweep_time_offset_s = 0.0;
+  // When the scans were taken on the wheels' clock (a first calibration's estimate, per input
+  // scan): the de-skewing and the matcher's guesses follow the sensor there.
+  SweepStarts sweep_starts;
   // A sweep (time_increment × beams) longer than this many scan periods (the median step between
   // the stamps) cannot be, e.g. a time_increment in ms: such scans are taken as instantaneous,
   // with a warning.
