@@ -27,6 +27,14 @@ namespace fs = std::filesystem;
 // A bearing this far beyond ±π is still taken as wrapped (rounding in the writer's own output).
 constexpr double kBearingSlack = 1e-9;
 
+// One warning for the exact duplicates (same stamp and values as the record before) dropped.
+void WarnDuplicates(const std::string& source, int duplicates, std::vector<std::string>* warnings) {
+  if (duplicates == 0 || warnings == nullptr) return;
+  warnings->push_back(source + ": " + std::to_string(duplicates) +
+                      " exact duplicate record(s) dropped (same stamp and values as the record "
+                      "before)");
+}
+
 std::string At(const std::string& source, int64_t line) {
   return line > 0 ? source + ":" + std::to_string(line) + ": " : source + ": ";
 }
@@ -222,6 +230,7 @@ StatusOr<std::vector<BearingRun>> ParseOdometry(std::string_view text, const std
   if (records.empty()) return NoSamples(csv);
   std::vector<BearingRun> out;
   std::vector<StreamTiming> timings;
+  int duplicates = 0;
   for (auto& [id, given] : records) {
     if (timing != nullptr) {
       timings.push_back(AnalyzeStreamTiming(given.stamps_s, given.values, "odometry",
@@ -229,7 +238,9 @@ StatusOr<std::vector<BearingRun>> ParseOdometry(std::string_view text, const std
     }
     StreamRecords kept = std::move(given);
     kept.value_names = {"left", "right"};
-    CALIB_RETURN_IF_ERROR(DropExactDuplicates(source, &kept));
+    int dropped = 0;
+    CALIB_RETURN_IF_ERROR(DropExactDuplicates(source, &kept, &dropped));
+    duplicates += dropped;
     BearingRun run;
     run.id = id;
     for (size_t k = 0; k < kept.stamps_s.size(); ++k) {
@@ -248,6 +259,7 @@ StatusOr<std::vector<BearingRun>> ParseOdometry(std::string_view text, const std
     out.push_back(std::move(run));
   }
   if (timing != nullptr) *timing = PoolStreamTiming(timings, "odometry", source);
+  WarnDuplicates(source, duplicates, warnings);
   return out;
 }
 
@@ -279,6 +291,7 @@ Status ParseBearings(std::string_view text, const std::string& source,
   }
   if (records.empty()) return NoSamples(csv);
   std::vector<StreamTiming> timings;
+  int duplicates = 0;
   for (BearingRun& run : *runs) {
     const auto found = records.find(run.id);
     if (found == records.end()) continue;  // Refused below, in the runs' order.
@@ -288,11 +301,14 @@ Status ParseBearings(std::string_view text, const std::string& source,
                                             source + " run " + std::to_string(run.id)));
     }
     kept.value_names = {"bearing"};
-    CALIB_RETURN_IF_ERROR(DropExactDuplicates(source, &kept));
+    int dropped = 0;
+    CALIB_RETURN_IF_ERROR(DropExactDuplicates(source, &kept, &dropped));
+    duplicates += dropped;
     for (size_t k = 0; k < kept.stamps_s.size(); ++k) {
       run.bearings.push_back(BearingSample{kept.stamps_s[k], kept.values[k], kept.lines[k]});
     }
   }
+  WarnDuplicates(source, duplicates, warnings);
   DropIsolatedGlitches(source, runs, warnings);
   for (const BearingRun& run : *runs) {
     if (records.count(run.id) == 0) {

@@ -1,5 +1,6 @@
 #include <calib/core/bearing/bearing_log_io.h>
 #include <calib/solvers/bearing/bearing_consistency.h>
+#include <calib/solvers/bearing/bearing_input_checks.h>
 #include <calib/solvers/bearing/bearing_text.h>
 #include <calib/solvers/bearing/calibrate_bearing.h>
 #include <calib/solvers/bearing/calibrate_bearing_internal.h>
@@ -462,7 +463,12 @@ StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
   CALIB_RETURN_IF_ERROR(
       bearing_calibration::FinishTiming(&final_problem, &result).Prefixed(source + ": "));
   result.covariance_seconds = Seconds(clock);
-  CALIB_RETURN_IF_ERROR(CheckDetermined(options, &result).Prefixed(source + ": "));
+  if (const Status determined = CheckDetermined(options, &result); !determined.ok()) {
+    // Swapped wheel columns can leave a log that looks undetermined.
+    if (!options.check_readings) return determined.Prefixed(source + ": ");
+    return SwappedOr(log, options, determined.message(), result.noise.bearing_sigma_rad,
+                     determined.Prefixed(source + ": "));
+  }
   SummarizeRuns(log, final_problem, *inlier, &result);
   JudgeOutliers(&result);
   result.is_inlier = *inlier;
@@ -472,6 +478,7 @@ StatusOr<BearingCalibrationResult> CalibrateBearing(const BearingLog& log,
                                                     std::move(result)));
   }
   bearing_calibration::AddStreamTimingWarnings(log, &result);
+  if (options.check_readings) CALIB_RETURN_IF_ERROR(CheckBearingReadings(log, options, result));
   return result;
 }
 

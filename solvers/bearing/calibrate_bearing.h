@@ -88,6 +88,9 @@ struct BearingCalibrationOptions {
   double undetermined_angle_stddev_rad = 1.0;
   double undetermined_relative_stddev = 0.5;
   std::function<void(const std::string&)> progress;  // Optional progress lines.
+  // Refuse an estimate that reads the wheels wrongly (a sign, swapped columns, another unit:
+  // bearing_input_checks.h).
+  bool check_readings = true;
 };
 
 // Where the adjustment started: Martinelli's closed form (circular runs) or the coarse search

@@ -121,6 +121,15 @@ TEST_F(BearingLogIoTest, ExactDuplicatesAreDroppedAndTimingIsPooled) {
   for (const std::string& note : bearings.notes)
     pooled |= note.find("pooled over 2 run") != std::string::npos;
   EXPECT_TRUE(pooled);
+  // Each file's duplicates are said once, in a warning.
+  const std::vector<std::string> expected = {
+      (dir_ / "odometry.csv").string() + ": 1 exact duplicate record(s) dropped",
+      (dir_ / "bearings.csv").string() + ": 1 exact duplicate record(s) dropped"};
+  for (const std::string& sentence : expected) {
+    bool said = false;
+    for (const std::string& w : log->warnings) said |= w.find(sentence) == 0;
+    EXPECT_TRUE(said) << sentence;
+  }
 }
 
 // Every error names the file, the line where there is one, and the problem.
