@@ -237,6 +237,7 @@ StatusOr<std::vector<BearingRun>> ParseOdometry(std::string_view text, const std
                                             source + " run " + std::to_string(id)));
     }
     StreamRecords kept = std::move(given);
+    CALIB_RETURN_IF_ERROR(CheckStampUnit(kept.stamps_s, source + " run " + std::to_string(id)));
     kept.value_names = {"left", "right"};
     int dropped = 0;
     CALIB_RETURN_IF_ERROR(DropExactDuplicates(source, &kept, &dropped));

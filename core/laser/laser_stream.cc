@@ -212,6 +212,8 @@ StatusOr<LaserStreams> PrepareStreams(StreamRecords odometry, StreamRecords pose
                                       const StreamNames& names, std::vector<StreamTiming>* timing,
                                       std::vector<std::string>* warnings,
                                       const std::vector<int>& segments = {}) {
+  CALIB_RETURN_IF_ERROR(CheckStampUnit(odometry.stamps_s, names.odometry));
+  CALIB_RETURN_IF_ERROR(CheckStampUnit(poses.stamps_s, names.poses));
   const std::vector<double> given_stamps = poses.stamps_s;
   const int turns =
       UnwrapWheelAngles(&odometry.values, 2, 0) + UnwrapWheelAngles(&odometry.values, 2, 1);

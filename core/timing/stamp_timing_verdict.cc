@@ -1,5 +1,7 @@
 // The verdict and notes of a stream timing, pooling over runs, and the readers' duplicates.
+#include <calib/core/text_format.h>
 #include <calib/core/text_number.h>
+#include <calib/core/timing/sample_clock.h>
 #include <calib/core/timing/stamp_timing.h>
 #include <calib/core/timing/stamp_timing_internal.h>
 
@@ -185,6 +187,29 @@ StreamTiming PoolStreamTiming(const std::vector<StreamTiming>& runs, const std::
     pooled.notes.insert(pooled.notes.end(), run.notes.begin() + 1, run.notes.end());
   }
   return pooled;
+}
+
+Status CheckStampUnit(const std::vector<double>& stamps_s, const std::string& source) {
+  if (stamps_s.size() < 3) return Status::Ok();
+  const double step = MedianStep(stamps_s);
+  const double largest = std::max(std::abs(stamps_s.front()), std::abs(stamps_s.back()));
+  if (!(step > kMaxStampStepS) && !(largest > 1e14)) return Status::Ok();
+  const struct {
+    double per_second;
+    const char* name;
+  } units[] = {{1e3, "milliseconds"}, {1e6, "microseconds"}, {1e9, "nanoseconds"}};
+  std::string guess = "another unit";
+  for (const auto& unit : units) {
+    if (step / unit.per_second <= kMaxStampStepS && largest / unit.per_second <= 1e14) {
+      guess = Format("%s (divide t by %.0e)", unit.name, unit.per_second);
+      break;
+    }
+  }
+  return Status::InvalidInput(
+      source +
+      Format(": the stamps step by %.6g (median) and reach %.6g; t is read in seconds, ", step,
+             largest) +
+      "and these look like " + guess);
 }
 
 Status DropExactDuplicates(const std::string& source, StreamRecords* records, int* dropped) {

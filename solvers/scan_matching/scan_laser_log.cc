@@ -3,6 +3,7 @@
 #include <calib/core/se2.h>
 #include <calib/core/text_format.h>
 #include <calib/core/text_number.h>
+#include <calib/core/timing/stamp_timing.h>
 #include <calib/solvers/scan_matching/nominal_motion.h>
 #include <calib/solvers/scan_matching/scan_laser_log.h>
 
@@ -55,6 +56,12 @@ StatusOr<std::vector<size_t>> CheckInputs(const std::vector<LaserScan>& scans,
     return Status::InvalidInput(wheels_name + ": " + std::to_string(encoders.size()) +
                                 " wheel-angle sample(s): at least two are needed");
   }
+  std::vector<double> stamps;
+  for (const EncoderSample& e : encoders) stamps.push_back(e.t_s);
+  CALIB_RETURN_IF_ERROR(CheckStampUnit(stamps, wheels_name));
+  stamps.clear();
+  for (const LaserScan& scan : scans) stamps.push_back(scan.stamp_s);
+  CALIB_RETURN_IF_ERROR(CheckStampUnit(stamps, scans_name));
   std::vector<size_t> rows;
   for (size_t i = 0; i < scans.size(); ++i) {
     if (i > 0 && scans[i].stamp_s == scans[i - 1].stamp_s && SameSample(scans[i], scans[i - 1])) {

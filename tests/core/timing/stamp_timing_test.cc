@@ -282,6 +282,36 @@ TEST(StampTimingTest, PoolsRuns) {
   EXPECT_NE(Notes(p).find("pooled over 2 run(s)"), std::string::npos) << Notes(p);
 }
 
+// Stamps in ms, µs or ns (a bag exported as integers, a logger's own clock) are named, with the
+// divisor; seconds pass, whatever the epoch, and so do slow streams within 10 s a step.
+TEST(StampTimingTest, StampsInAnotherUnitAreNamed) {
+  std::vector<double> seconds;
+  for (int k = 0; k < 100; ++k) seconds.push_back(1.7e9 + 0.02 * k);
+  EXPECT_TRUE(CheckStampUnit(seconds, "odometry.csv").ok());
+  const struct {
+    double scale;
+    const char* words;
+  } cases[] = {{1e3, "milliseconds (divide t by 1e+03)"},
+               {1e6, "microseconds (divide t by 1e+06)"},
+               {1e9, "nanoseconds (divide t by 1e+09)"}};
+  for (const auto& c : cases) {
+    std::vector<double> scaled;
+    for (int k = 0; k < 100; ++k) scaled.push_back(c.scale * 0.02 * k);
+    const Status status = CheckStampUnit(scaled, "odometry.csv");
+    ASSERT_FALSE(status.ok()) << c.words;
+    EXPECT_EQ(status.code(), StatusCode::kInvalidInput);
+    EXPECT_NE(status.message().find("odometry.csv: the stamps step by"), std::string::npos);
+    EXPECT_NE(status.message().find(c.words), std::string::npos) << status.message();
+  }
+  // Nanoseconds since 1970 step like seconds would at 0.02 ns: the epoch names them.
+  std::vector<double> epoch_ns;
+  for (int k = 0; k < 100; ++k) epoch_ns.push_back(1.7e18 + 2e7 * k);
+  EXPECT_NE(CheckStampUnit(epoch_ns, "scans.csv").message().find("nanoseconds"), std::string::npos);
+  std::vector<double> slow;
+  for (int k = 0; k < 100; ++k) slow.push_back(5.0 * k);
+  EXPECT_TRUE(CheckStampUnit(slow, "bearings.csv").ok());
+}
+
 TEST(StampTimingTest, DropExactDuplicatesNamesBothLines) {
   StreamRecords records;
   records.stamps_s = {3.0, 3.2, 3.2, 3.4};
