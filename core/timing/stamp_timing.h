@@ -111,9 +111,10 @@ struct StreamRecords {
 // Stamps in seconds, as every reader wants them: a median step over kMaxStampStepS (no robot's
 // encoders, scans or bearings come that rarely) or a stamp beyond 1e14 (nanoseconds since 1970)
 // is an error naming `source` and the unit the stamps look like (ms, µs or ns: the first that
-// brings the median step within 10 s). Too few stamps to tell: Ok.
+// brings the median step within 10 s). Too few stamps to tell: Ok. `field` names the column.
 inline constexpr double kMaxStampStepS = 10.0;
-Status CheckStampUnit(const std::vector<double>& stamps_s, const std::string& source);
+Status CheckStampUnit(const std::vector<double>& stamps_s, const std::string& source,
+                      const std::string& field = "t");
 
 // Drops consecutive exact duplicates (same stamp, same values) from `records`; `dropped` (may be
 // null) receives how many. A repeated stamp with different values is an error naming both lines and

@@ -189,7 +189,8 @@ StreamTiming PoolStreamTiming(const std::vector<StreamTiming>& runs, const std::
   return pooled;
 }
 
-Status CheckStampUnit(const std::vector<double>& stamps_s, const std::string& source) {
+Status CheckStampUnit(const std::vector<double>& stamps_s, const std::string& source,
+                      const std::string& field) {
   if (stamps_s.size() < 3) return Status::Ok();
   const double step = MedianStep(stamps_s);
   const double largest = std::max(std::abs(stamps_s.front()), std::abs(stamps_s.back()));
@@ -201,14 +202,14 @@ Status CheckStampUnit(const std::vector<double>& stamps_s, const std::string& so
   std::string guess = "another unit";
   for (const auto& unit : units) {
     if (step / unit.per_second <= kMaxStampStepS && largest / unit.per_second <= 1e14) {
-      guess = Format("%s (divide t by %.0e)", unit.name, unit.per_second);
+      guess = Format("%s (divide %s by %.0e)", unit.name, field.c_str(), unit.per_second);
       break;
     }
   }
   return Status::InvalidInput(
       source +
-      Format(": the stamps step by %.6g (median) and reach %.6g; t is read in seconds, ", step,
-             largest) +
+      Format(": the stamps step by %.6g (median) and reach %.6g; %s is read in seconds, ", step,
+             largest, field.c_str()) +
       "and these look like " + guess);
 }
 

@@ -2,6 +2,7 @@
 #include <calib/core/order_statistic.h>
 #include <calib/core/se2.h>
 #include <calib/core/text_format.h>
+#include <calib/core/timing/stamp_timing.h>
 #include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/laser/censi_closed_form.h>
 #include <calib/solvers/laser/censi_consensus.h>
@@ -265,6 +266,10 @@ constexpr size_t kCheckedIntervals = 50000;
 
 Status CheckLaserInput(const LaserLog& log, const LaserInputCheckOptions& options) {
   if (log.intervals.empty()) return Status::Ok();
+  // Durations in ms scale the wheel rotation (speed × T) as ticks would: said first, as such.
+  std::vector<double> ends = {0.0};
+  for (const LaserInterval& in : log.intervals) ends.push_back(ends.back() + in.duration_s);
+  CALIB_RETURN_IF_ERROR(CheckStampUnit(ends, log.source + " (the intervals' T, summed)", "T"));
   std::vector<LaserInterval> subset;
   if (log.intervals.size() > kCheckedIntervals) {
     subset = EveryNthInterval(log.intervals,

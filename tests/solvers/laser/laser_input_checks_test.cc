@@ -121,6 +121,17 @@ TEST(LaserInputChecksTest, TicksAreRefusedWithTheConversionAndConvertedExactly) 
   EXPECT_FALSE(ConvertWheelTicks(0.0, &log).ok());
 }
 
+// T in milliseconds makes the wheel rotation (speed × T) a thousand times too large, as ticks
+// would: the durations say which, before the wheels are looked at.
+TEST(LaserInputChecksTest, DurationsInMillisecondsAreNamedNotTakenForTicks) {
+  LaserLog log = GoodLog();
+  for (LaserInterval& interval : log.intervals) {
+    ASSERT_TRUE(interval.steps.empty());  // A tuple's interval: wheel speeds and T.
+    interval.duration_s *= 1e3;
+  }
+  ExpectRefused(log, {"robot.csv (the intervals' T, summed)", "milliseconds (divide T by 1e+03)"});
+}
+
 TEST(LaserInputChecksTest, TicksInStreamsAreConvertedInTheSamplesToo) {
   LaserStreams streams;
   GoodStreamLog(&streams);
