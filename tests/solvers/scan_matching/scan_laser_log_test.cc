@@ -582,16 +582,14 @@ TEST(ScanLaserLog, ALoggerSlowerThanTheLidarIsDeskewedAtEachSamplesTime) {
   logging.logger_period_s = 0.13;
   logging.logger_jitter_s = 0.003;
   o.logging = logging;
-  const StatusOr<ScanSimulation> sim = SimulateScans(o);
-  ASSERT_TRUE(sim.ok()) << sim.message();
-  const StatusOr<RobotBagCalibration> r =
-      CalibrateRobotMessages(ScanSimulationMessages(*sim), RobotBagOptions(), kTiming);
+  ScanSimTruth truth;
+  const StatusOr<RobotBagCalibration> r = CalibrateSimulatedBag(o, "run.mcap", &truth);
   ASSERT_TRUE(r.ok()) << r.message();
   EXPECT_EQ(r->result.sensor_clock, "free_running");
   EXPECT_NEAR(r->result.sensor_period_s, 0.1, 1e-4);
   ASSERT_TRUE(r->log.beam_timing.has_value());
   EXPECT_FALSE(r->log.beam_timing->changed) << r->log.beam_timing->warning;
-  EXPECT_LE(WorstZ(r->result.calibration, sim->truth), 3.0);
+  EXPECT_LE(WorstZ(r->result.calibration, truth), 3.0);
 }
 
 // Each scan's sweep start is its sample time where the timing placed it (by record), else its
