@@ -79,6 +79,8 @@ Status AddSensorSamples(const std::vector<StampedPose>& poses, const std::string
     last_kept = after != enc.begin() && after != enc.end();
     if (!last_kept) {  // Outside the encoder span.
       ++out->outside_encoder_span;
+      const double by = std::max(enc.front().t_s - stamp, stamp - enc.back().t_s);
+      out->outside_by_s = std::max(out->outside_by_s, by);
       continue;
     }
     out->samples.push_back(StreamSample{stamp, p.world_T_sensor, static_cast<int>(k) + 1, p.line,

@@ -34,6 +34,7 @@ struct StreamSamples {
   std::vector<double> held_stamp_s;
   int exact_duplicates_dropped = 0;  // Records repeating the previous one's stamp and values.
   int outside_encoder_span = 0;      // Sensor samples stamped before or after every encoder.
+  double outside_by_s = 0.0;         // The farthest of them from the span (s).
   double encoder_period_s = 0.0;     // Median stamp step.
   double sensor_period_s = 0.0;      // Median stamp step of the distinct samples.
 };

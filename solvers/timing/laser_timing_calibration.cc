@@ -254,7 +254,11 @@ StatusOr<LaserTimingResult> CalibrateLaserStreams(const LaserStreams& streams,
   LaserTimingResult result;
   result.held_repeats_dropped = data.held_repeats_dropped;
   result.intervals = static_cast<int>(data.interval_start.size());
-  if (data.outside_encoder_span > 0) {
+  // A stream that stops a sample later than the other is how recordings end: a sample or two
+  // within two periods of the span is counted in the JSON (samples_outside_encoder_span) only.
+  const double edge_s = 2.0 * std::max(data.sensor_period_s, data.encoder_period_s);
+  result.outside_encoder_span = data.outside_encoder_span;
+  if (data.outside_encoder_span > 2 || data.outside_by_s > edge_s) {
     result.warnings.push_back(std::to_string(data.outside_encoder_span) + " of " +
                               std::to_string(streams.sensor_poses.size()) +
                               " sensor samples lie outside the encoders' time span and are not "

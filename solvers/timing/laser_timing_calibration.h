@@ -46,6 +46,7 @@ struct LaserTimingResult {
   // the intervals built from them carry the timing model (diagnose searches on them).
   LaserStreams timed_streams;
   int held_repeats_dropped = 0;
+  int outside_encoder_span = 0;  // Sensor samples stamped beyond the encoders' span (not used).
   int intervals = 0;
   // Lag-1 correlation (x, y, θ) of the errors of intervals that share a sample; pose_errors: near
   // −1/2, the scan poses err independently and the covariance carries the lag-1 term.

@@ -39,6 +39,7 @@ nlohmann::ordered_json LatentTimingJson(const LaserTimingResult& r) {
   if (r.free_running_score) out["scores"]["free_running"] = *r.free_running_score;
   out["intervals"] = r.intervals;
   out["held_repeats_dropped"] = r.held_repeats_dropped;
+  out["samples_outside_encoder_span"] = r.outside_encoder_span;
   out["neighbour_error_correlation"] = {r.neighbour_correlation(0), r.neighbour_correlation(1),
                                         r.neighbour_correlation(2)};
   out["pose_errors"] = r.pose_errors;

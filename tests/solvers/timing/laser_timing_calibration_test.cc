@@ -291,6 +291,21 @@ TEST(LaserTimingCalibration, SamplesOutsideTheEncoderSpanAreNamed) {
   }
   EXPECT_TRUE(named);
   EXPECT_LT(r->intervals, 320);
+  EXPECT_GT(r->outside_encoder_span, 250);
+  // A stream that ends a sample after the other is how recordings end: counted, not warned.
+  streams = SimulateLaserStreams(ScanningRobot(600, 3), 50.0, &truth);
+  const double last_encoder_s = streams.odometry.back().t_s;
+  while (streams.sensor_poses.back().t_s > last_encoder_s) streams.sensor_poses.pop_back();
+  StampedPose late = streams.sensor_poses.back();
+  late.t_s = last_encoder_s + 0.05;
+  late.world_T_sensor(0) += 0.01;
+  streams.sensor_poses.push_back(late);
+  const StatusOr<LaserTimingResult> edge = CalibrateLaserStreams(streams);
+  ASSERT_TRUE(edge.ok()) << edge.message();
+  EXPECT_EQ(edge->outside_encoder_span, 1);
+  for (const std::string& w : edge->calibration.warnings) {
+    EXPECT_EQ(w.find("outside the encoders' time span"), std::string::npos) << w;
+  }
 }
 
 // A sensor stream whose rows all repeat one sample's values (a logger stuck on a dead sensor) is
