@@ -78,6 +78,11 @@ struct RobotMessages {
   std::vector<TransformStamped> tf, tf_static;  // From /tf and /tf_static (tf2_msgs/TFMessage).
   // Topics kept raw: every topic of a known encoder type (encoder_messages.h) and those asked for.
   std::map<std::string, RawTopic> raw;
+  // JointState topics whose positions are raw encoder counts (a log that is no bag: csm_log.h),
+  // with the counts per wheel turn its source implies, 0 when it does not say.
+  std::map<std::string, double> joint_counts_per_turn;
+  // Which robot the source's counts per turn are known for, for the output.
+  std::string counts_per_turn_source;
 };
 
 struct BagReadOptions {

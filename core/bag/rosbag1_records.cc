@@ -1,5 +1,5 @@
-#include <bzlib.h>
 #include <calib/core/bag/rosbag1_records.h>
+#include <calib/core/bz2_decompress.h>
 #include <lz4frame.h>
 
 #include <algorithm>
@@ -14,50 +14,22 @@ constexpr uint32_t kMaxChunkBytes = uint32_t{1} << 28;
 std::string Quoted(std::string_view s) { return "'" + std::string(s) + "'"; }
 
 // The output buffer grows as the decompressor fills it, up to the chunk's stated size, so that
-// a corrupt size field costs no more memory than the data really decompresses to.
+// a corrupt size field costs no more memory than the data really decompress to.
 void Grow(std::string* out, size_t used, uint32_t size) {
   const size_t next = std::max<size_t>(used * 2, size_t{1} << 16);
   out->resize(std::min<size_t>(next, size));
 }
 
 Status DecompressBz2(std::string_view data, uint32_t size, std::string* out) {
-  bz_stream stream{};
-  if (BZ2_bzDecompressInit(&stream, 0, 0) != BZ_OK) return Status::Internal("bz2: cannot init");
-  std::unique_ptr<bz_stream, int (*)(bz_stream*)> guard(&stream, BZ2_bzDecompressEnd);
-  stream.next_in = const_cast<char*>(data.data());
-  stream.avail_in = static_cast<unsigned>(data.size());
-  size_t used = 0;
-  out->clear();
-  while (true) {
-    if (used == out->size()) {
-      if (used == size) {
-        // Full: the stream must end here (a zero-length call lets bz2 say so).
-        char probe = 0;
-        stream.next_out = &probe;
-        stream.avail_out = 1;
-        const int ret = BZ2_bzDecompress(&stream);
-        if (ret == BZ_STREAM_END && stream.avail_out == 1) return Status::Ok();
-        return Status::InvalidInput("bz2 data decompress to more than the stated size " +
-                                    std::to_string(size));
-      }
-      Grow(out, used, size);
-    }
-    stream.next_out = out->data() + used;
-    stream.avail_out = static_cast<unsigned>(out->size() - used);
-    const int ret = BZ2_bzDecompress(&stream);
-    used = out->size() - stream.avail_out;
-    if (ret == BZ_STREAM_END) break;
-    if (ret != BZ_OK) {
-      return Status::InvalidInput("bz2 data are corrupt (libbz2 error " + std::to_string(ret) +
-                                  ")");
-    }
-    if (stream.avail_in == 0 && stream.avail_out != 0) {
-      return Status::InvalidInput("bz2 data end before their stream does (truncated)");
-    }
+  // One byte more than stated: output that reaches it says the size field is wrong.
+  bool ended = false;
+  CALIB_RETURN_IF_ERROR(Bz2Decompress(data, {size_t{size} + 1, false}, out, &ended));
+  if (out->size() > size) {
+    return Status::InvalidInput("bz2 data decompress to more than the stated size " +
+                                std::to_string(size));
   }
-  out->resize(used);
-  if (used != size) {
-    return Status::InvalidInput("bz2 data decompress to " + std::to_string(used) +
+  if (out->size() != size) {
+    return Status::InvalidInput("bz2 data decompress to " + std::to_string(out->size()) +
                                 " bytes, the chunk states " + std::to_string(size));
   }
   return Status::Ok();

@@ -71,16 +71,45 @@ Status EncoderAngles(const RobotMessages& bag, const RobotBagOptions& options, R
   return Status::Ok();
 }
 
+// A JointState topic in raw counts (a CSM log's encoders): per turn, the user's count or the one
+// its source implies; any other topic in the unit the flags give (radians by default).
+StatusOr<double> JointRadiansPerUnit(const RobotMessages& bag, const std::string& topic,
+                                     const RobotBagOptions& options) {
+  const auto counts = bag.joint_counts_per_turn.find(topic);
+  if (counts == bag.joint_counts_per_turn.end() || options.wheel_radians_per_unit != 1.0) {
+    return options.wheel_radians_per_unit;
+  }
+  if (!(counts->second > 0.0)) {
+    return Status::InvalidInput(bag.source + " " + topic +
+                                ": the wheels are encoder counts, and the log does not say how "
+                                "many make a wheel turn: give --ticks_per_rev");
+  }
+  return 2.0 * M_PI / counts->second;
+}
+
+std::string CountsNote(const RobotMessages& bag, const std::string& topic,
+                       double radians_per_unit) {
+  if (!bag.joint_counts_per_turn.count(topic)) return "";
+  return Format(": %.6g counts a turn", 2.0 * M_PI / radians_per_unit) +
+         (radians_per_unit == 2.0 * M_PI / bag.joint_counts_per_turn.at(topic) &&
+                  !bag.counts_per_turn_source.empty()
+              ? ", " + bag.counts_per_turn_source + "; --ticks_per_rev for another robot"
+              : "");
+}
+
 Status WheelAngles(const RobotMessages& bag, const RobotBagOptions& options, RobotBagLog* out,
                    WheelAngleStream* wheels) {
   const PickedTopics& t = out->topics;
   if (!t.joint_state_topic.empty()) {
+    CALIB_ASSIGN_OR_RETURN(const double radians_per_unit,
+                           JointRadiansPerUnit(bag, t.joint_state_topic, options));
     CALIB_ASSIGN_OR_RETURN(
         *wheels, WheelAnglesFromJointStates(bag.joint_states.at(t.joint_state_topic), t.left_joint,
                                             t.right_joint, bag.source + " " + t.joint_state_topic,
-                                            options.wheel_radians_per_unit));
+                                            radians_per_unit));
     out->wheel_source = t.joint_state_topic + " (" + t.left_joint + ", " + t.right_joint +
-                        (wheels->from_velocities ? ": velocities integrated" : "") + ")";
+                        (wheels->from_velocities ? ": velocities integrated" : "") +
+                        CountsNote(bag, t.joint_state_topic, radians_per_unit) + ")";
     if (wheels->from_velocities) {
       out->warnings.push_back(
           "the JointState messages carry the wheels' velocities but no positions: the wheel "

@@ -186,8 +186,9 @@ DEFINE_int32(beams, kSimulate.beams,
              "world of walls (0.1 m wheels, 0.5 m wheelbase, 10 Hz scans, up to 0.5 m/s; "
              "--intervals, --seed, --trajectory, the effect and logging flags apply, and the "
              "motion flags when given) and writes "
-             "OUT.json (the bag generators' robot messages) or a directory with odometry.csv and "
-             "scans.csv");
+             "OUT.json (the bag generators' robot messages), OUT.log (a CSM laser log with wheel "
+             "encoder counts, as Censi et al.'s Khepera logged them) or a directory with "
+             "odometry.csv and scans.csv");
 DEFINE_double(field_of_view, kSimulate.field_of_view_deg,
               "simulate (scans): field of view (degrees)");
 DEFINE_double(range_noise, kSimulate.range_noise, "simulate (scans): range noise sigma (m)");

@@ -1,4 +1,5 @@
 #include <calib/core/bag/robot_bag.h>
+#include <calib/core/scan/csm_log.h>
 #include <calib/core/scan/laser_scan.h>
 #include <calib/core/scan/scan_directory.h>
 #include <calib/core/text_number.h>
@@ -15,7 +16,7 @@ constexpr double kLongestRotationPeriodS = 10.0;
 }  // namespace
 
 bool IsRobotInput(const std::string& input) {
-  return LooksLikeRobotBag(input) || IsScanDirectory(input);
+  return LooksLikeRobotBag(input) || IsScanDirectory(input) || LooksLikeCsmLog(input);
 }
 
 StatusOr<RobotInput> ReadRobotInput(const CalibrateOptions& flags) {
@@ -54,8 +55,13 @@ StatusOr<RobotInput> ReadRobotInput(const CalibrateOptions& flags) {
   o.check_beam_timing = flags.lidar_beam_timing == "auto";
   BagReadOptions read;
   if (!flags.encoder_topic.empty()) read.raw_topics.insert(flags.encoder_topic);
-  CALIB_ASSIGN_OR_RETURN(out.bag, IsScanDirectory(flags.input) ? ReadScanDirectory(flags.input)
-                                                               : ReadRobotBag(flags.input, read));
+  if (IsScanDirectory(flags.input)) {
+    CALIB_ASSIGN_OR_RETURN(out.bag, ReadScanDirectory(flags.input));
+  } else if (!LooksLikeRobotBag(flags.input) && LooksLikeCsmLog(flags.input)) {
+    CALIB_ASSIGN_OR_RETURN(out.bag, ReadCsmLog(flags.input));
+  } else {
+    CALIB_ASSIGN_OR_RETURN(out.bag, ReadRobotBag(flags.input, read));
+  }
   if (period_s > 0.0) {
     for (auto& [topic, scans] : out.bag.scans) AssumeRotationPeriod(period_s, &scans);
   }

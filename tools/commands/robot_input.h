@@ -8,8 +8,8 @@
 
 #include <string>
 
-// A robot's recording on the command line (a ROS bag, a bag directory, or a directory of
-// scans.csv and odometry.csv), read with the options its flags give; shared by calibrate and
+// A robot's recording on the command line (a ROS bag, a bag directory, a directory of
+// scans.csv and odometry.csv, or a CSM laser log with the wheels' counts: csm_log.h), read with the options its flags give; shared by calibrate and
 // diagnose.
 namespace calib::cli {
 

@@ -1,8 +1,10 @@
 // `calib simulate --beams N`: a lidar robot's raw scans and wheel angles with the truth.
 #include <calib/core/bag/robot_messages_json.h>
 #include <calib/core/laser/laser_log_io.h>
+#include <calib/core/scan/csm_log.h>
 #include <calib/core/scan/scan_csv.h>
 #include <calib/core/scan/scan_simulator.h>
+#include <calib/core/text_file.h>
 #include <calib/core/text_number.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/simulate_scans.h>
@@ -80,14 +82,18 @@ int SimulateScanRobot(const SimulateOptions& flags, const LaserSimOptions& laser
   if (!sim.ok()) return Fail(sim.message());
   const std::filesystem::path path(flags.output);
   Status written;
+  if (flags.upside_down && path.extension() != ".json") {
+    return Fail(
+        "--upside_down needs OUT.json: a scans directory or CSM log has no tf to say the lidar "
+        "is upside down, and its scans would be taken as an upright lidar's");
+  }
   if (path.extension() == ".json") {
     written = WriteRobotMessagesJson(ScanSimulationMessages(*sim), flags.output);
+  } else if (path.extension() == ".log") {
+    // As Censi et al.'s Khepera logged it: counts of its encoders, stamps of 2008.
+    written = WriteWholeFile(flags.output, CsmLogText(sim->scans, sim->encoders,
+                                                      kCensiKheperaCountsPerTurn, 1.2e9));
   } else if (!path.has_extension()) {
-    if (flags.upside_down) {
-      return Fail(
-          "--upside_down needs OUT.json: the scans directory has no tf to say the lidar "
-          "is upside down, and its scans would be taken as an upright lidar's");
-    }
     written = WriteLaserStream(sim->encoders, {}, flags.output);
     if (written.ok()) {
       std::filesystem::remove(path / "sensor_poses.csv");
@@ -95,8 +101,9 @@ int SimulateScanRobot(const SimulateOptions& flags, const LaserSimOptions& laser
     }
   } else {
     return Fail(
-        "--beams writes OUT.json (robot messages for the bag generators) or a directory "
-        "(odometry.csv, scans.csv), got " +
+        "--beams writes OUT.json (robot messages for the bag generators), OUT.log (a CSM laser "
+        "log with wheel encoder counts, as Censi et al.'s) or a directory (odometry.csv, "
+        "scans.csv), got " +
         flags.output);
   }
   if (!written.ok()) return Fail(written.message());

@@ -1,0 +1,53 @@
+#ifndef CALIB_CORE_SCAN_CSM_LOG_H_
+#define CALIB_CORE_SCAN_CSM_LOG_H_
+
+#include <calib/core/bag/robot_messages.h>
+#include <calib/core/encoder_sample.h>
+#include <calib/core/scan/laser_scan.h>
+#include <calib/core/status.h>
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+// A laser log in the JSON format of Censi's Canonical Scan Matcher (CSM), as the raw logs of
+// Censi et al. (2013) hold it: a stream of JSON objects, one per scan, optionally bzip2-compressed
+// (log.log.bz2). Each object holds
+//   "readings": ranges in m (null, NaN or ≤ 0: no return), "valid": 0/1 per beam (optional),
+//   "theta": each beam's angle in rad, or "min_theta", "max_theta" and "nrays",
+//   "timestamp": [s, µs] (the scan's time),
+// and from the robot either
+//   "left", "right": the wheel encoders' counts, with "leftTimestamp", "rightTimestamp" ([s, µs],
+//   when each was read; the scan's time without them), or
+//   "odometry": [x, y, θ], the robot's own dead reckoning.
+// Other fields are ignored. It is read as a bag would be: the scans on a topic "scans" (frame
+// "laser"), the counts as the joints "left_wheel" and "right_wheel" of a JointState topic
+// "encoders" (in counts: RobotMessages::joint_counts_per_turn), the odometry as a topic
+// "odometry". Each wheel's counts are read at the midpoint of the two encoders' stamps, each
+// interpolated along its own readings; a reading repeated under its stamp (attached to the next
+// scan again) is one sample.
+namespace calib {
+
+// The counts per wheel turn of the Khepera III in Censi et al.'s logs (their synchronizer's
+// ticks_to_rad = 2π / (691.2 · 4): 691.2 lines a turn, ×4 for the quadrature). A log whose
+// encoders carry their own stamps (leftTimestamp) is theirs.
+constexpr double kCensiKheperaCountsPerTurn = 691.2 * 4.0;
+
+// Whether `path` is a regular file (plain or .bz2) whose first JSON object has "readings".
+bool LooksLikeCsmLog(const std::string& path);
+
+StatusOr<RobotMessages> ReadCsmLog(const std::string& path);
+
+// The same over the (decompressed) text; `source` names it in messages.
+StatusOr<RobotMessages> ReadCsmLogText(std::string_view text, const std::string& source);
+
+// A simulated robot's scans and wheel angles as such a log: each scan with the counts (rounded,
+// `counts_per_turn` a wheel turn) and stamps of the latest encoder sample at or before it, every
+// time shifted by epoch_s.
+std::string CsmLogText(const std::vector<LaserScan>& scans,
+                       const std::vector<EncoderSample>& encoders, double counts_per_turn,
+                       double epoch_s);
+
+}  // namespace calib
+
+#endif  // CALIB_CORE_SCAN_CSM_LOG_H_

@@ -1,0 +1,152 @@
+#include <bzlib.h>
+#include <calib/core/scan/csm_log.h>
+#include <calib/core/text_file.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "tests/scratch_dir.h"
+
+namespace calib {
+namespace {
+
+// Two beams at −0.1 and 0.1 rad, the second without a return.
+std::string Record(double t_s, int left, int right, double left_t_s, double right_t_s) {
+  const auto stamp = [](double t) {
+    const double s = std::floor(t);
+    return "[" + std::to_string(static_cast<int64_t>(s)) + ", " +
+           std::to_string(static_cast<int64_t>(std::round(1e6 * (t - s)))) + "]";
+  };
+  return "{\"nrays\": 2, \"min_theta\": -0.1, \"max_theta\": 0.1, \"theta\": [-0.1, 0.1], "
+         "\"readings\": [1.5, null], \"valid\": [1, 0], \"odometry\": [0, 0, 0], "
+         "\"timestamp\": " + stamp(t_s) + ", \"left\": " + std::to_string(left) +
+         ", \"right\": " + std::to_string(right) + ", \"leftTimestamp\": " + stamp(left_t_s) +
+         ", \"rightTimestamp\": " + stamp(right_t_s) + "}\n";
+}
+
+TEST(CsmLog, ScansAndEncoderCountsAsABagHoldsThem) {
+  // The right encoder is read 2 ms after the left, both moving at 1000 counts/s; the third scan
+  // carries the second's reading again.
+  const std::string text = Record(10.0, 0, 0, 9.998, 10.0) + Record(10.2, 200, -200, 10.198, 10.2) +
+                           Record(10.4, 200, -200, 10.198, 10.2) +
+                           Record(10.6, 600, -600, 10.598, 10.6);
+  const StatusOr<RobotMessages> bag = ReadCsmLogText(text, "log.log");
+  ASSERT_TRUE(bag.ok()) << bag.message();
+  const std::vector<LaserScan>& scans = bag->scans.at("scans");
+  ASSERT_EQ(scans.size(), 4u);
+  EXPECT_DOUBLE_EQ(scans[1].stamp_s, 10.2);
+  EXPECT_DOUBLE_EQ(scans[0].angle_min_rad, -0.1);
+  EXPECT_DOUBLE_EQ(scans[0].angle_increment_rad, 0.2);
+  EXPECT_TRUE(scans[0].IsReturn(0));
+  EXPECT_FALSE(scans[0].IsReturn(1));
+  EXPECT_EQ(scans[2].record, 2);
+
+  const std::vector<JointState>& joints = bag->joint_states.at("encoders");
+  ASSERT_EQ(joints.size(), 3u);  // The repeated reading is one sample.
+  for (const JointState& j : joints) {
+    // At the midpoint of the two stamps, each wheel interpolated along its own readings
+    // (extrapolated before the first right reading and after the last left one).
+    EXPECT_NEAR(j.position[0], 1000.0 * (j.stamp_s - 9.998), 1e-6) << j.stamp_s;
+    EXPECT_NEAR(j.position[1], -1000.0 * (j.stamp_s - 10.0), 1e-6) << j.stamp_s;
+  }
+  EXPECT_NEAR(joints[1].stamp_s, 10.199, 1e-9);
+  EXPECT_DOUBLE_EQ(bag->joint_counts_per_turn.at("encoders"), kCensiKheperaCountsPerTurn);
+  EXPECT_TRUE(bag->odometry.empty());  // Zero everywhere: the robot did not report any.
+}
+
+TEST(CsmLog, NonFiniteLiteralsAndStreamsOfObjectsAreRead) {
+  // Python's json writes NaN; records may share a line.
+  std::string text =
+      "{\"readings\": [NaN, 2.0, Infinity], \"min_theta\": -1, \"max_theta\": 1, "
+      "\"timestamp\": [5, 0], \"odometry\": [0.1, 0, 0]}{\"readings\": [1, 2, 3], "
+      "\"min_theta\": -1, \"max_theta\": 1, \"timestamp\": [5, 200000], \"odometry\": [0.2, 0, "
+      "0.1]}";
+  const StatusOr<RobotMessages> bag = ReadCsmLogText(text, "py.log");
+  ASSERT_TRUE(bag.ok()) << bag.message();
+  const LaserScan& scan = bag->scans.at("scans").front();
+  EXPECT_FALSE(scan.IsReturn(0));
+  EXPECT_TRUE(scan.IsReturn(1));
+  EXPECT_FALSE(scan.IsReturn(2));
+  EXPECT_DOUBLE_EQ(scan.angle_increment_rad, 1.0);
+  EXPECT_TRUE(bag->joint_states.empty());
+  ASSERT_EQ(bag->odometry.at("odometry").size(), 2u);
+  EXPECT_DOUBLE_EQ(bag->odometry.at("odometry")[1].position.x(), 0.2);
+}
+
+TEST(CsmLog, BadRecordsAreNamed) {
+  const std::string good = Record(1.0, 0, 0, 1.0, 1.0);
+  const auto error = [](const std::string& text) {
+    const StatusOr<RobotMessages> bag = ReadCsmLogText(text, "bad.log");
+    return bag.ok() ? std::string("ok") : bag.message();
+  };
+  EXPECT_NE(error(good + good.substr(0, 60)).find("bad.log record 1 (line 2): the file ends "
+                                                  "inside the record (truncated)"),
+            std::string::npos)
+      << error(good + good.substr(0, 60));
+  EXPECT_NE(error(good + "{\"readings\": [1], \"theta\": [0]}").find("record 1 (line 2): no "
+                                                                     "\"timestamp\""),
+            std::string::npos);
+  EXPECT_NE(error("{\"readings\": [1, 2, 3], \"theta\": [0, 0.1, 0.3], \"timestamp\": [1, 0]}")
+                .find("theta[1] = 0.1 is off the scan's even grid"),
+            std::string::npos);
+  EXPECT_NE(error("{\"readings\": [1], \"theta\": [0], \"timestamp\": [1, 0], \"left\": 3}")
+                .find("\"left\" and \"right\" must both be encoder counts"),
+            std::string::npos);
+  EXPECT_NE(error("{\"readings\": [1, 2], \"nrays\": 3, \"theta\": [0, 1], \"timestamp\": [1, "
+                  "0]}")
+                .find("nrays is not the number of readings (2)"),
+            std::string::npos);
+  EXPECT_NE(error("[1, 2]").find("record 0 (line 1): expected a JSON object"), std::string::npos);
+  EXPECT_NE(error("  \n").find("bad.log: no scan records (empty log)"), std::string::npos);
+}
+
+std::string Bz2(const std::string& text) {
+  std::string out(text.size() + text.size() / 100 + 600, '\0');
+  unsigned size = static_cast<unsigned>(out.size());
+  EXPECT_EQ(BZ2_bzBuffToBuffCompress(out.data(), &size, const_cast<char*>(text.data()),
+                                     static_cast<unsigned>(text.size()), 9, 0, 0),
+            BZ_OK);
+  out.resize(size);
+  return out;
+}
+
+// The authors' archives hold log.log.bz2: read as it is, told from a tuple file by its content;
+// a file that pbzip2 wrote as several streams reads whole; a truncated one is an error.
+TEST(CsmLog, Bz2FilesAreReadAndToldApart) {
+  const testing::ScratchDir dir("csm_log_test");
+  const auto file = [&](const char* name) { return (dir.path() / name).string(); };
+  std::string text;
+  for (int k = 0; k < 50; ++k) text += Record(1.0 + 0.2 * k, 10 * k, 10 * k, 1.0 + 0.2 * k, 1.0 + 0.2 * k);
+  const std::string path = file("log.log.bz2");
+  ASSERT_TRUE(WriteWholeFile(path, Bz2(text.substr(0, text.size() / 2)) +
+                                       Bz2(text.substr(text.size() / 2)))
+                  .ok());
+  EXPECT_TRUE(LooksLikeCsmLog(path));
+  const StatusOr<RobotMessages> bag = ReadCsmLog(path);
+  ASSERT_TRUE(bag.ok()) << bag.message();
+  EXPECT_EQ(bag->scans.at("scans").size(), 50u);
+  EXPECT_EQ(bag->source, path);
+
+  const std::string plain = file("log.log");
+  ASSERT_TRUE(WriteWholeFile(plain, text).ok());
+  EXPECT_TRUE(LooksLikeCsmLog(plain));
+  const std::string tuples = file("l90.tuple");
+  ASSERT_TRUE(WriteWholeFile(tuples, "{ \"T\": 1, \"phi_l\": 1, \"phi_r\": 1, \"sm\": [0, 0, 0] }").ok());
+  EXPECT_FALSE(LooksLikeCsmLog(tuples));
+  EXPECT_FALSE(LooksLikeCsmLog(dir.path().string()));
+
+  const std::string cut = file("cut.log.bz2");
+  const std::string packed = Bz2(text);
+  ASSERT_TRUE(WriteWholeFile(cut, packed.substr(0, packed.size() - 40)).ok());
+  const StatusOr<RobotMessages> truncated = ReadCsmLog(cut);
+  ASSERT_FALSE(truncated.ok());
+  EXPECT_NE(truncated.message().find("cut.log.bz2: bz2 data end before their stream does"),
+            std::string::npos)
+      << truncated.message();
+}
+
+}  // namespace
+}  // namespace calib
