@@ -83,6 +83,9 @@ struct RobotMessages {
   std::map<std::string, double> joint_counts_per_turn;
   // Which robot the source's counts per turn are known for, for the output.
   std::string counts_per_turn_source;
+  // Where a recording joined from several logs starts again (the first stamp of each log after
+  // the first): nothing spans them.
+  std::vector<double> restarts_s;
 };
 
 struct BagReadOptions {

@@ -38,6 +38,21 @@ bool LooksLikeCsmLog(const std::string& path);
 
 StatusOr<RobotMessages> ReadCsmLog(const std::string& path);
 
+// Whether `path` is a directory holding CSM logs (in it or its subdirectories: an archive of
+// experiments such as the authors' exp*/log.log.bz2), and those logs, sorted by path.
+bool IsCsmLogDirectory(const std::string& path);
+std::vector<std::string> CsmLogsIn(const std::string& directory);
+
+// Several logs of one robot (the experiments of one configuration) as one recording, in the
+// order of their first stamps, named `source`. Each log after the first goes on after the one
+// before it: a log whose clock starts before the previous log ends (restarted) is shifted to
+// start 10 s after it, and its counts go on from the previous log's last counts (a logger that
+// restarts its counters). The scan matching never spans two logs: their gap breaks the track.
+StatusOr<RobotMessages> ReadCsmLogs(const std::vector<std::string>& paths,
+                                    const std::string& source);
+// The same over logs read (ReadCsmLog, ReadCsmLogText).
+StatusOr<RobotMessages> JoinCsmLogs(std::vector<RobotMessages> logs, const std::string& source);
+
 // The same over the (decompressed) text; `source` names it in messages.
 StatusOr<RobotMessages> ReadCsmLogText(std::string_view text, const std::string& source);
 

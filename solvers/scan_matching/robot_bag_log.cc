@@ -214,6 +214,9 @@ StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,
   const StatusOr<PlanarMounting> mounting = MountingFromTf(bag, out.base_frame, out.sensor_frame);
   ScanLogOptions scan_options;
   scan_options.matching = options.matching;
+  for (const double r : bag.restarts_s) {
+    scan_options.restarts_s.push_back(r + options.sensor_time_offset_s);
+  }
   scan_options.keep_unmatched = options.keep_unmatched;
   if (mounting.ok()) {
     out.nominal_mounting = *mounting;

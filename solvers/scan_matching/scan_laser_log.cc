@@ -204,23 +204,66 @@ void Append(ScanOdometryResult tail, ScanOdometryResult* head) {
 // one interval (at the split) is lost.
 constexpr size_t kScansPerThread = 1000;
 
+// The runs matched apart: [begin, end) between the recording's restarts (each restart's first
+// scan starts a run), a run of 2 × kScansPerThread scans or more in two halves.
+std::vector<std::pair<size_t, size_t>> MatchRuns(const std::vector<const LaserScan*>& scans,
+                                                 const std::vector<double>& restarts_s) {
+  std::vector<size_t> cuts = {0};
+  for (const double r : restarts_s) {
+    const auto at = std::lower_bound(scans.begin(), scans.end(), r,
+                                     [](const LaserScan* s, double t) { return s->stamp_s < t; });
+    const size_t i = static_cast<size_t>(at - scans.begin());
+    if (i > cuts.back() && i < scans.size()) cuts.push_back(i);
+  }
+  cuts.push_back(scans.size());
+  std::vector<std::pair<size_t, size_t>> runs;
+  for (size_t k = 0; k + 1 < cuts.size(); ++k) {
+    const size_t begin = cuts[k], end = cuts[k + 1];
+    if (end - begin < 2 * kScansPerThread) {
+      runs.emplace_back(begin, end);
+    } else {
+      runs.emplace_back(begin, begin + (end - begin) / 2);
+      runs.emplace_back(begin + (end - begin) / 2, end);
+    }
+  }
+  return runs;
+}
+
+// Pose segments that start where no run does: the matching lost its track there (a run's own
+// start, a thread's half or a restart of the recording, is no loss).
+int LostTracks(const ScanOdometryResult& r, const std::vector<std::pair<size_t, size_t>>& runs) {
+  std::set<size_t> planned;
+  for (const auto& run : runs) planned.insert(run.first);
+  std::set<int> seen;
+  int lost = 0;
+  for (size_t i = 0; i < r.chain.size(); ++i) {
+    if (r.chain[i] >= 0 && seen.insert(r.chain[i]).second && !planned.count(i)) ++lost;
+  }
+  return lost;
+}
+
 StatusOr<ScanOdometryResult> MatchScans(const std::vector<const LaserScan*>& scans,
                                         const std::vector<double>& start_s,
                                         const std::vector<EncoderSample>& encoders,
                                         const ScanLogOptions& options, double max_sweep_s) {
-  if (scans.size() < 2 * kScansPerThread)
-    return MatchRun(scans, start_s, 0, scans.size(), encoders, options, max_sweep_s);
-  const size_t half = scans.size() / 2;
-  auto second = std::async(std::launch::async, [&] {
-    return MatchRun(scans, start_s, half, scans.size(), encoders, options, max_sweep_s);
-  });
-  StatusOr<ScanOdometryResult> first =
-      MatchRun(scans, start_s, 0, half, encoders, options, max_sweep_s);
-  StatusOr<ScanOdometryResult> rest = second.get();
-  if (!first.ok()) return first;
-  if (!rest.ok()) return rest;
-  Append(std::move(rest).value(), &*first);
-  return first;
+  const std::vector<std::pair<size_t, size_t>> runs = MatchRuns(scans, options.restarts_s);
+  const auto match = [&](size_t k) {
+    return MatchRun(scans, start_s, runs[k].first, runs[k].second, encoders, options, max_sweep_s);
+  };
+  // Two at a time, on two threads.
+  std::vector<StatusOr<ScanOdometryResult>> matched;
+  for (size_t k = 0; k < runs.size(); k += 2) {
+    std::future<StatusOr<ScanOdometryResult>> second;
+    if (k + 1 < runs.size()) second = std::async(std::launch::async, match, k + 1);
+    matched.push_back(match(k));
+    if (second.valid()) matched.push_back(second.get());
+  }
+  for (const StatusOr<ScanOdometryResult>& m : matched) {
+    if (!m.ok()) return m.status();
+  }
+  ScanOdometryResult out = std::move(matched.front()).value();
+  for (size_t k = 1; k < matched.size(); ++k) Append(std::move(matched[k]).value(), &out);
+  return out;
 }
 
 }  // namespace
@@ -301,8 +344,9 @@ StatusOr<ScanLog> LaserLogFromScans(const std::vector<LaserScan>& scans,
   out.segments = static_cast<int>(segments.size());
   out.keyframes = static_cast<int>(keyframes.size());
   if (out.failed_matches > 0) out.warnings.push_back(FailureSummary(r));
-  if (out.segments > 1) {
-    out.warnings.push_back("the scan matching lost its track " + std::to_string(out.segments - 1) +
+  const int lost = LostTracks(r, MatchRuns(distinct, options.restarts_s));
+  if (lost > 0) {
+    out.warnings.push_back("the scan matching lost its track " + std::to_string(lost) +
                            " time(s) and restarted: no interval spans a restart");
   }
   StatusOr<LaserLog> log = LaserLogFromStreams(encoders, poses, source, wheels_name,

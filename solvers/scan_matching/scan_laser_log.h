@@ -39,6 +39,9 @@ struct ScanLogOptions {
   // anyway, with the wheel angles, the matching and `unmatched` saying why (for a calibration on
   // the scan points alone) instead of failing.
   bool keep_unmatched = false;
+  // Times (the scans' clock) at which the recording starts again (logs joined into one): the
+  // matching starts a new pose segment at the first scan from each, so that no interval spans it.
+  std::vector<double> restarts_s;
 };
 
 struct ScanLog {

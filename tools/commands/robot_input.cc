@@ -7,16 +7,33 @@
 #include <calib/tools/commands/laser_input.h>
 #include <calib/tools/commands/robot_input.h>
 
+#include <filesystem>
+#include <vector>
+
 namespace calib::cli {
 namespace {
 
 // No spinning lidar turns slower than this (the slowest turn at a few Hz).
 constexpr double kLongestRotationPeriodS = 10.0;
 
+// The CSM laser logs `input` names: one, several separated by commas, or a directory of them
+// (the experiments of one configuration); empty when it names none.
+std::vector<std::string> CsmLogsOf(const std::string& input) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(input, ec)) {
+    return LooksLikeRobotBag(input) ? std::vector<std::string>() : CsmLogsIn(input);
+  }
+  const std::vector<std::string> paths = SplitCommas(input);
+  for (const std::string& path : paths) {
+    if (!LooksLikeCsmLog(path)) return {};
+  }
+  return paths;
+}
+
 }  // namespace
 
 bool IsRobotInput(const std::string& input) {
-  return LooksLikeRobotBag(input) || IsScanDirectory(input) || LooksLikeCsmLog(input);
+  return LooksLikeRobotBag(input) || IsScanDirectory(input) || !CsmLogsOf(input).empty();
 }
 
 StatusOr<RobotInput> ReadRobotInput(const CalibrateOptions& flags) {
@@ -57,8 +74,10 @@ StatusOr<RobotInput> ReadRobotInput(const CalibrateOptions& flags) {
   if (!flags.encoder_topic.empty()) read.raw_topics.insert(flags.encoder_topic);
   if (IsScanDirectory(flags.input)) {
     CALIB_ASSIGN_OR_RETURN(out.bag, ReadScanDirectory(flags.input));
-  } else if (!LooksLikeRobotBag(flags.input) && LooksLikeCsmLog(flags.input)) {
-    CALIB_ASSIGN_OR_RETURN(out.bag, ReadCsmLog(flags.input));
+  } else if (const std::vector<std::string> logs = CsmLogsOf(flags.input); !logs.empty()) {
+    CALIB_ASSIGN_OR_RETURN(out.bag, logs.size() == 1 && logs.front() == flags.input
+                                        ? ReadCsmLog(flags.input)
+                                        : ReadCsmLogs(logs, flags.input));
   } else {
     CALIB_ASSIGN_OR_RETURN(out.bag, ReadRobotBag(flags.input, read));
   }

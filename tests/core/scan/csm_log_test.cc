@@ -148,5 +148,41 @@ TEST(CsmLog, Bz2FilesAreReadAndToldApart) {
       << truncated.message();
 }
 
+// An archive of experiments (exp1/log.log.bz2, exp2/log.log): one recording, the second log's
+// restarted clock and counters moved to go on after the first's, its start a restart.
+TEST(CsmLog, ExperimentsOfOneRobotAreJoined) {
+  const testing::ScratchDir dir("csm_log_test");
+  std::filesystem::create_directories(dir.path() / "exp1");
+  std::filesystem::create_directories(dir.path() / "exp2");
+  std::string first, second;
+  for (int k = 0; k < 5; ++k) {
+    const double t = 100.0 + 0.2 * k;
+    first += Record(t, 10 * k, 20 * k, t, t);
+    second += Record(t - 0.4, 5 * k, 5 * k, t - 0.4, t - 0.4);  // A clock that overlaps.
+  }
+  ASSERT_TRUE(WriteWholeFile((dir.path() / "exp1" / "log.log.bz2").string(), Bz2(first)).ok());
+  ASSERT_TRUE(WriteWholeFile((dir.path() / "exp2" / "log.log").string(), second).ok());
+  ASSERT_TRUE(WriteWholeFile((dir.path() / "exp2" / "notes.txt").string(), "not a log").ok());
+  EXPECT_TRUE(IsCsmLogDirectory(dir.path().string()));
+  const std::vector<std::string> logs = CsmLogsIn(dir.path().string());
+  ASSERT_EQ(logs.size(), 2u);
+  const StatusOr<RobotMessages> bag = ReadCsmLogs(logs, "l90");
+  ASSERT_TRUE(bag.ok()) << bag.message();
+  EXPECT_EQ(bag->source, "l90");
+  // exp2 starts first, and exp1, which starts before exp2 ends, follows 10 s after its end.
+  const std::vector<LaserScan>& scans = bag->scans.at("scans");
+  ASSERT_EQ(scans.size(), 10u);
+  EXPECT_NEAR(scans[4].stamp_s, 100.4, 1e-9);
+  EXPECT_NEAR(scans[5].stamp_s, 110.4, 1e-9);
+  ASSERT_EQ(bag->restarts_s.size(), 1u);
+  EXPECT_NEAR(bag->restarts_s[0], 110.4, 1e-9);
+  EXPECT_EQ(scans[5].record, 5);
+  const std::vector<JointState>& joints = bag->joint_states.at("encoders");
+  ASSERT_EQ(joints.size(), 10u);
+  EXPECT_DOUBLE_EQ(joints[5].position[0], 20.0);  // exp2 ended at 20 counts; exp1 goes on.
+  EXPECT_DOUBLE_EQ(joints[6].position[1], 40.0);
+  EXPECT_EQ(bag->topics.front().message_count, 10);
+}
+
 }  // namespace
 }  // namespace calib

@@ -63,5 +63,37 @@ TEST(CsmLogCalibration, ARawLogLikeCensisIsCalibratedFromItsScans) {
   EXPECT_NE(log->wheel_source.find("4096 counts a turn)"), std::string::npos) << log->wheel_source;
 }
 
+// Two experiments of the robot joined (the second's clock and counters restarted): the matching
+// starts again at the join without calling it a lost track, and the calibration is within 3σ.
+TEST(CsmLogCalibration, ExperimentsJoinedAreCalibratedTogether) {
+  std::vector<RobotMessages> logs;
+  ScanSimTruth truth;
+  for (const uint64_t seed : {5, 6}) {
+    const StatusOr<ScanSimulation> sim = SimulateScans(Khepera(seed));
+    ASSERT_TRUE(sim.ok()) << sim.message();
+    truth = sim->truth;
+    const StatusOr<RobotMessages> log = ReadCsmLogText(
+        CsmLogText(sim->scans, sim->encoders, kCensiKheperaCountsPerTurn, 1.2e9), "exp");
+    ASSERT_TRUE(log.ok()) << log.message();
+    logs.push_back(*log);
+  }
+  const StatusOr<RobotMessages> joined = JoinCsmLogs(std::move(logs), "l90");
+  ASSERT_TRUE(joined.ok()) << joined.message();
+  const StatusOr<RobotBagCalibration> r =
+      CalibrateRobotMessages(*joined, RobotBagOptions(), LaserTimingOptions());
+  ASSERT_TRUE(r.ok()) << r.message();
+  EXPECT_EQ(r->log.scans.segments, 2);
+  for (const auto* list : {&r->log.warnings, &r->log.scans.warnings}) {
+    for (const std::string& w : *list) EXPECT_EQ(w.find("lost its track"), std::string::npos) << w;
+  }
+  LaserCalibration t;
+  t.odometry = truth.odometry;
+  t.base_T_sensor = truth.base_T_sensor;
+  const LaserCalibrationResult& c = r->result.calibration;
+  const LaserParamVector z = (c.estimate.ToVector() - t.ToVector()).cwiseQuotient(c.stddev);
+  std::printf("z %+.2f %+.2f %+.2f %+.2f %+.2f %+.2f\n", z(0), z(1), z(2), z(3), z(4), z(5));
+  EXPECT_LE(z.cwiseAbs().maxCoeff(), 3.0);
+}
+
 }  // namespace
 }  // namespace calib

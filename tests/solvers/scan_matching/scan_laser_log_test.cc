@@ -592,6 +592,22 @@ TEST(ScanLaserLog, ALoggerSlowerThanTheLidarIsDeskewedAtEachSamplesTime) {
   EXPECT_LE(WorstZ(r->result.calibration, truth), 3.0);
 }
 
+// A log of 2000 scans or more is matched in two halves on two threads: two pose segments, but
+// no track was lost, and no warning says so (every log over 3.5 minutes at 10 Hz had one).
+TEST(ScanLaserLog, ThreadHalvesOfALongLogAreNoLostTrack) {
+  ScanSimOptions o = Robot(2100, 12);
+  o.beams = 180;
+  const StatusOr<ScanSimulation> sim = SimulateScans(o);
+  ASSERT_TRUE(sim.ok()) << sim.message();
+  const StatusOr<ScanLog> log = LaserLogFromScans(sim->scans, sim->encoders, {"long", "", ""});
+  ASSERT_TRUE(log.ok()) << log.message();
+  EXPECT_EQ(log->segments, 2);
+  EXPECT_EQ(log->failed_matches, 0);
+  for (const std::string& w : log->warnings) {
+    EXPECT_EQ(w.find("lost its track"), std::string::npos) << w;
+  }
+}
+
 // Each scan's sweep start is its sample time where the timing placed it (by record), else its
 // stamp + the offset; a timing that hardly fixed the offset places none.
 TEST(ScanLaserLog, SweepStartsFollowTheTimingsSampleTimes) {
