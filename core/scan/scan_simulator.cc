@@ -115,6 +115,13 @@ LaserSimOptions DefaultScanLaserOptions() {
   return options;
 }
 
+void AddMastAndGuard(ScanSimOptions* options) {
+  const double deg = M_PI / 180.0;
+  options->body.push_back({130.0 * deg, 140.0 * deg, 0.15});
+  options->body.push_back({-140.0 * deg, -130.0 * deg, 0.15});
+  options->body.push_back({170.0 * deg, 190.0 * deg, 0.25});
+}
+
 namespace {
 
 Status CheckScanOptions(const ScanSimOptions& o) {
@@ -270,6 +277,12 @@ StatusOr<ScanSimulation> SimulateScans(const ScanSimOptions& options) {
       const Pose2d sensor = Compose(bases[time_increment > 0.0 ? i : 0], truth.base_T_sensor);
       double range = sim.world.CastRay(sensor.head<2>(), sensor(2) + mirror * scan.BeamAngle(i),
                                        options.range_max_m);
+      for (const ScanSimOptions::BodySector& b : options.body) {
+        const double a = std::remainder(scan.BeamAngle(i) - b.from_rad, 2.0 * M_PI);
+        const double width = std::remainder(b.to_rad - b.from_rad, 2.0 * M_PI);
+        // [from, to), robust to the rounding of angles that fall on its ends.
+        if (a > -1e-9 && a < width - 1e-9) range = std::min(range, b.range_m);
+      }
       range += options.range_noise_sigma_m * noise.Normal();  // Drawn for every beam.
       const bool dropped = missing.Uniform() < options.missing_probability;
       const bool valid = !dropped && range >= options.range_min_m && range <= options.range_max_m;

@@ -44,6 +44,11 @@ class RobotPath {
 
 LaserSimOptions DefaultScanLaserOptions();  // 10 Hz scans of a 0.5 m/s robot, 101 scans.
 
+struct ScanSimOptions;
+// Two posts at ±135° (10° wide, 0.15 m) and a guard behind (20° wide, 0.25 m): 11 % of a full
+// circle's beams on the robot's body.
+void AddMastAndGuard(ScanSimOptions* options);
+
 struct ScanSimOptions {
   // The motion and the scan times: one scan at each of the laser simulator's interval boundaries
   // (num_intervals + 1 scans, every mean_interval_s ± interval_jitter_s). effects.time_offset_s
@@ -65,6 +70,12 @@ struct ScanSimOptions {
   // in its frame and so clockwise as seen from the base, and tf (ScanSimulationMessages) says so.
   // base_T_sensor is the pose of the upright frame it is mirrored into.
   bool upside_down = false;
+  // Parts of the robot in the lidar's view (posts, a guard): beams between the angles (the
+  // lidar's frame, rad) return from range_m, nearer than any wall.
+  struct BodySector {
+    double from_rad, to_rad, range_m;
+  };
+  std::vector<BodySector> body;
   double encoder_rate_hz = 100.0;  // Without a logging model; 0: encoders at the scan times.
   std::string frame_id = "laser";
   uint64_t seed = 1;  // Range noise, missing returns (the motion uses laser.seed).

@@ -1,5 +1,6 @@
 #include <calib/core/bag/encoder_messages.h>
 #include <calib/core/bag/wheel_angles.h>
+#include <calib/core/scan/self_returns.h>
 #include <calib/core/text_format.h>
 #include <calib/solvers/laser/laser_input_checks.h>
 #include <calib/solvers/scan_calibration/robot_scan_points.h>
@@ -371,11 +372,9 @@ StatusOr<RobotBagCalibration> ScanPointsAlone(const RobotMessages& bag,
   return CalibrateOnScanPointsAlone(bag, options, std::move(log).value(), why);
 }
 
-}  // namespace
-
-StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& bag,
-                                                     const RobotBagOptions& options,
-                                                     const LaserTimingOptions& timing) {
+StatusOr<RobotBagCalibration> CalibrateMasked(const RobotMessages& bag,
+                                              const RobotBagOptions& options,
+                                              const LaserTimingOptions& timing) {
   StatusOr<RobotBagCalibration> two_stage = CalibrateTwoStage(bag, options, timing);
   if (!two_stage.ok()) {
     const StatusCode code = two_stage.status().code();
@@ -398,6 +397,43 @@ StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& bag,
     }
   }
   return out;
+}
+
+// The recording with its self-returns masked, when it has any (else nullopt: use it as it is),
+// and what was done, for the notes.
+std::optional<RobotMessages> WithoutSelfReturns(const RobotMessages& bag,
+                                                const RobotBagOptions& options,
+                                                std::vector<std::string>* notes) {
+  if (!bag.restarts_s.empty()) {
+    notes->push_back(std::to_string(bag.restarts_s.size() + 1) +
+                     " logs joined into one recording: the scan matching starts again at each");
+  }
+  if (!options.mask_self_returns) return std::nullopt;
+  const StatusOr<PickedTopics> topics = PickRobotTopics(bag, options.topics);
+  if (!topics.ok()) return std::nullopt;
+  const std::vector<LaserScan>& scans = bag.scans.at(topics->scan_topic);
+  const SelfReturns self = FindSelfReturns(scans);
+  if (self.beams.empty()) return std::nullopt;
+  notes->push_back(self.Describe(static_cast<int>(scans.size())));
+  RobotMessages masked = bag;
+  MaskBeams(self.beams, &masked.scans[topics->scan_topic]);
+  return masked;
+}
+
+}  // namespace
+
+StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& recording,
+                                                     const RobotBagOptions& options,
+                                                     const LaserTimingOptions& timing) {
+  std::vector<std::string> notes;
+  const std::optional<RobotMessages> masked = WithoutSelfReturns(recording, options, &notes);
+  const RobotMessages& bag = masked ? *masked : recording;
+  StatusOr<RobotBagCalibration> calibrated = CalibrateMasked(bag, options, timing);
+  if (calibrated.ok()) {
+    std::vector<std::string>& out = calibrated->log.notes;
+    out.insert(out.begin(), notes.begin(), notes.end());
+  }
+  return calibrated;
 }
 
 }  // namespace calib

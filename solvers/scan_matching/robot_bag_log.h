@@ -48,6 +48,8 @@ struct RobotBagOptions {
   // `beam_timing` already holds a check, whose timing then applies to every scan.
   bool check_beam_timing = true;
   std::optional<BeamTimingCheck> beam_timing;
+  // Beams that return from the robot's own body (self_returns.h) are left out of every scan.
+  bool mask_self_returns = true;
 };
 
 struct RobotBagLog {
@@ -63,6 +65,9 @@ struct RobotBagLog {
   int matching_passes = 1;
   std::optional<BeamTimingCheck> beam_timing;  // The check of the beams' timing, once made.
   std::vector<std::string> warnings;
+  // What calib did to the recording that is no problem of it (beams on the robot's body left
+  // out, logs joined): in the summary and the JSON, not in the verdict.
+  std::vector<std::string> notes;
 };
 
 StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,

@@ -192,6 +192,39 @@ TEST_F(BagCliTest, AScansCsvDirectoryCalibratesWithinThreeSigma) {
   ExpectFailure(log, "", {"scans.csv:3"});
 }
 
+// The raw format of Censi et al.'s recordings (a CSM laser log with the wheels' encoder counts,
+// one per experiment, bzip2-compressed in a directory per experiment): `calib simulate` writes
+// one, and a directory of two calibrates as one recording within 3σ, with the robot's body in
+// the lidar's view left out. A truncated log is named by record.
+TEST_F(BagCliTest, CsmLogsOfExperimentsCalibrateWithinThreeSigma) {
+  const fs::path archive = dir_ / "l90";
+  const fs::path truth_path = dir_ / "truth.json";
+  for (const int seed : {21, 22}) {
+    fs::create_directories(archive / ("exp" + std::to_string(seed)));
+    const fs::path log = archive / ("exp" + std::to_string(seed)) / "log.log";
+    const CliRun simulated = ::calib::testing::RunCalib(
+        "simulate --beams 360 --intervals 300 --seed " + std::to_string(seed) +
+            " --self_returns --output " + log.string() + " --truth " + truth_path.string(),
+        dir_);
+    ASSERT_EQ(simulated.exit_code, 0) << simulated.err;
+  }
+  const CliRun run = Calibrate(archive);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json json = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+  ExpectWithinThreeSigma(json, nlohmann::json::parse(ReadFile(truth_path))["estimate"]);
+  EXPECT_EQ(json["recording"]["scan_matching"]["segments"], 2);
+  const std::string notes = json["recording"]["notes"].dump();
+  EXPECT_NE(notes.find("2 logs joined"), std::string::npos) << notes;
+  EXPECT_NE(notes.find("the robot's own body, left out"), std::string::npos) << notes;
+  EXPECT_NE(json["recording"]["wheel_angles"].get<std::string>().find("2764.8 counts a turn"),
+            std::string::npos);
+
+  const fs::path cut = dir_ / "cut.log";
+  const std::string text = ReadFile(archive / "exp21" / "log.log");
+  std::ofstream(cut) << text.substr(0, text.find('\n', text.find('\n') + 1) + 200);
+  ExpectFailure(cut, "", {"cut.log record 2 (line 3): the file ends inside the record"});
+}
+
 // A driver that leaves time_increment 0 on a lidar that sweeps. Trusted (--lidar_beam_timing
 // driver), calibrate warns (b was 4.9σ off on this log, the verdict "check"), and
 // --lidar_rotation_period gives the beams their times back. Checked (the default), the sweeps'

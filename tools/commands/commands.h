@@ -36,8 +36,10 @@ struct CalibrateOptions {
   double nominal_wheel_radius = 0.0, nominal_wheelbase = 0.0;
   // The lidar's rotation period (s) for scans without beam times (time_increment 0); 0: none.
   double lidar_rotation_period_s = 0.0;
-  std::string lidar_beam_timing = "auto";  // auto: checked against the scans; driver: trusted.
-  std::string wheel_angle_unit = "rad";    // rad, deg, or ticks:N.
+  std::string lidar_beam_timing = "auto";   // auto: checked against the scans; driver: trusted.
+  std::string lidar_self_returns = "mask";  // mask: beams on the robot's body left out; keep.
+  double lidar_min_range_m = 0.0;           // Ranges nearer are no return (0: the scans' own).
+  std::string wheel_angle_unit = "rad";     // rad, deg, or ticks:N.
   double ticks_per_rev = 0.0;  // > 0: wheel readings are encoder ticks, this many per turn.
   bool scan_points = false;    // Refine against the scan points after the two-stage route.
   // A known sensor latency: a sample stamped t was taken at t + this (raw streams, bags, bearing
@@ -105,6 +107,7 @@ struct SimulateOptions {
   double sweep = 0.0;             // Duration of one sweep (s); 0: instantaneous.
   std::string world = "mixed";    // rooms, corridor, clutter or mixed.
   bool upside_down = false;       // The lidar mounted upside down (its own scans; tf says so).
+  bool self_returns = false;      // Parts of the robot in the lidar's view (AddMastAndGuard).
   // The motion flags given on the command line (max_wheel_speed, mean_interval, interval_jitter,
   // segment_mean, speed_time_constant): the scan robot keeps its own defaults for the others.
   std::set<std::string> given;

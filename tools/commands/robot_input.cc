@@ -7,6 +7,7 @@
 #include <calib/tools/commands/laser_input.h>
 #include <calib/tools/commands/robot_input.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <vector>
 
@@ -70,6 +71,15 @@ StatusOr<RobotInput> ReadRobotInput(const CalibrateOptions& flags) {
                                 ": auto (checked against the scans) or driver (trusted)");
   }
   o.check_beam_timing = flags.lidar_beam_timing == "auto";
+  if (flags.lidar_self_returns != "mask" && flags.lidar_self_returns != "keep") {
+    return Status::InvalidInput("--lidar_self_returns " + flags.lidar_self_returns +
+                                ": mask (the robot's own body left out) or keep");
+  }
+  o.mask_self_returns = flags.lidar_self_returns == "mask";
+  if (!(flags.lidar_min_range_m >= 0.0 && flags.lidar_min_range_m < 100.0)) {
+    return Status::InvalidInput("--lidar_min_range " + Num(flags.lidar_min_range_m) +
+                                ": the nearest range (m) that is a return, in [0, 100)");
+  }
   BagReadOptions read;
   if (!flags.encoder_topic.empty()) read.raw_topics.insert(flags.encoder_topic);
   if (IsScanDirectory(flags.input)) {
@@ -83,6 +93,11 @@ StatusOr<RobotInput> ReadRobotInput(const CalibrateOptions& flags) {
   }
   if (period_s > 0.0) {
     for (auto& [topic, scans] : out.bag.scans) AssumeRotationPeriod(period_s, &scans);
+  }
+  for (auto& [topic, scans] : out.bag.scans) {
+    for (LaserScan& scan : scans) {
+      scan.range_min_m = std::max(scan.range_min_m, flags.lidar_min_range_m);
+    }
   }
   return out;
 }

@@ -49,6 +49,7 @@ StatusOr<ScanSimOptions> ScanOptions(const SimulateOptions& flags, const LaserSi
   o.missing_probability = flags.missing_returns;
   o.sweep_s = flags.sweep;
   o.upside_down = flags.upside_down;
+  if (flags.self_returns) AddMastAndGuard(&o);
   o.seed = flags.seed;
   return o;
 }
@@ -67,6 +68,7 @@ nlohmann::ordered_json ScanTruthJson(const ScanSimulation& sim, const SimulateOp
                         {"sweep", flags.sweep},
                         {"world", flags.world},
                         {"upside_down", flags.upside_down},
+                        {"self_returns", flags.self_returns},
                         {"seed", flags.seed},
                         {"trajectory", flags.trajectory}};
   return json;
@@ -91,8 +93,8 @@ int SimulateScanRobot(const SimulateOptions& flags, const LaserSimOptions& laser
     written = WriteRobotMessagesJson(ScanSimulationMessages(*sim), flags.output);
   } else if (path.extension() == ".log") {
     // As Censi et al.'s Khepera logged it: counts of its encoders, stamps of 2008.
-    written = WriteWholeFile(flags.output, CsmLogText(sim->scans, sim->encoders,
-                                                      kCensiKheperaCountsPerTurn, 1.2e9));
+    written = WriteWholeFile(
+        flags.output, CsmLogText(sim->scans, sim->encoders, kCensiKheperaCountsPerTurn, 1.2e9));
   } else if (!path.has_extension()) {
     written = WriteLaserStream(sim->encoders, {}, flags.output);
     if (written.ok()) {

@@ -69,6 +69,7 @@ nlohmann::ordered_json RobotLogJson(const RobotBagLog& log, const LaserCalibrati
   }
   if (log.beam_timing) out["beam_timing"] = BeamTimingJson(*log.beam_timing);
   out["warnings"] = log.warnings;
+  out["notes"] = log.notes;
   return out;
 }
 
@@ -99,6 +100,7 @@ std::string RobotLogSummary(const RobotBagLog& log, const LaserCalibrationResult
                   v(0) / nominal.wheel_radius_m, v(1) / nominal.wheel_radius_m,
                   v(2) / nominal.wheelbase_m);
   }
+  for (const std::string& n : log.notes) out += "  note: " + n + "\n";
   for (const std::string& w : log.warnings) out += "  warning: " + w + "\n";
   return out;
 }
