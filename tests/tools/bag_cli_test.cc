@@ -219,6 +219,14 @@ TEST_F(BagCliTest, CsmLogsOfExperimentsCalibrateWithinThreeSigma) {
   EXPECT_NE(json["recording"]["wheel_angles"].get<std::string>().find("2764.8 counts a turn"),
             std::string::npos);
 
+  // Kept, the body's beams are matched; nearer than --lidar_min_range they are no returns.
+  const CliRun near = Calibrate(archive, "--lidar_self_returns keep --lidar_min_range 0.3");
+  ASSERT_EQ(near.exit_code, 0) << near.err;
+  const nlohmann::json without = nlohmann::json::parse(ReadFile(dir_ / "out.json"));
+  EXPECT_EQ(without["recording"]["notes"].dump().find("own body"), std::string::npos);
+  ExpectWithinThreeSigma(without, nlohmann::json::parse(ReadFile(truth_path))["estimate"]);
+  ExpectFailure(archive, "--lidar_self_returns drop", {"--lidar_self_returns drop: mask"});
+
   const fs::path cut = dir_ / "cut.log";
   const std::string text = ReadFile(archive / "exp21" / "log.log");
   std::ofstream(cut) << text.substr(0, text.find('\n', text.find('\n') + 1) + 200);
