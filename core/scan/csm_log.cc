@@ -23,6 +23,9 @@ constexpr const char* kOdometryTopic = "odometry";
 // How far a beam's "theta" may lie off its scan's even grid (rad): Hokuyo and SICK angles are
 // exact steps; more says the beams are not one scan's.
 constexpr double kGridToleranceRad = 1e-4;
+// Nearer readings are no return: below every lidar's range, where a Hokuyo's error codes sit
+// (1–19 mm: no echo, too bright, ...).
+constexpr double kMinReadingM = 0.02;
 // The bytes read to tell the format (after decompression).
 constexpr size_t kSniffBytes = 64 * 1024;
 // A whole log decompresses to at most this much.
@@ -119,8 +122,10 @@ class CsmParser {
   // One past the '}' that closes the object at p.
   StatusOr<size_t> RecordEnd(size_t p, int64_t line) const {
     if (text_[p] != '{') {
-      return Status::InvalidInput(Where(source_, record_, line) + ": expected a JSON object ('{'), "
-                                  "found '" + std::string(text_.substr(p, 20)) + "'");
+      return Status::InvalidInput(Where(source_, record_, line) +
+                                  ": expected a JSON object ('{'), "
+                                  "found '" +
+                                  std::string(text_.substr(p, 20)) + "'");
     }
     int depth = 0;
     bool in_string = false;
@@ -128,8 +133,10 @@ class CsmParser {
     for (size_t i = p; i < limit; ++i) {
       const char c = text_[i];
       if (in_string) {
-        if (c == '\\') ++i;
-        else if (c == '"') in_string = false;
+        if (c == '\\')
+          ++i;
+        else if (c == '"')
+          in_string = false;
       } else if (c == '"') {
         in_string = true;
       } else if (c == '{' || c == '[') {
@@ -192,12 +199,13 @@ class CsmParser {
       return Status::InvalidInput(where + ": \"theta\" must hold one angle per reading (" +
                                   std::to_string(n) + ")");
     }
-    const std::optional<double> lo = record.contains("min_theta") ? Number(record["min_theta"])
-                                                                  : std::nullopt;
-    const std::optional<double> hi = record.contains("max_theta") ? Number(record["max_theta"])
-                                                                  : std::nullopt;
+    const std::optional<double> lo =
+        record.contains("min_theta") ? Number(record["min_theta"]) : std::nullopt;
+    const std::optional<double> hi =
+        record.contains("max_theta") ? Number(record["max_theta"]) : std::nullopt;
     if (!lo || !hi || !std::isfinite(*lo) || !std::isfinite(*hi)) {
-      return Status::InvalidInput(where + ": no beam angles (\"theta\", or \"min_theta\" and "
+      return Status::InvalidInput(where +
+                                  ": no beam angles (\"theta\", or \"min_theta\" and "
                                   "\"max_theta\")");
     }
     scan->angle_min_rad = *lo;
@@ -226,7 +234,8 @@ class CsmParser {
     scan.ranges_m.resize(n);
     for (size_t i = 0; i < n; ++i) {
       const std::optional<double> r = Number((*readings)[i]);
-      const bool ok = r && *r > 0.0 && (!has_valid || Number((*valid)[i]).value_or(0.0) != 0.0);
+      const bool ok =
+          r && *r >= kMinReadingM && (!has_valid || Number((*valid)[i]).value_or(0.0) != 0.0);
       scan.ranges_m[i] = ok ? static_cast<float>(*r) : std::numeric_limits<float>::quiet_NaN();
     }
     scans_.push_back(std::move(scan));
@@ -314,7 +323,8 @@ class CsmParser {
     if (scans_.empty()) return Status::InvalidInput(source_ + ": no scan records (empty log)");
     RobotMessages out;
     out.source = source_;
-    out.topics.push_back({kScanTopic, "sensor_msgs/LaserScan", static_cast<int64_t>(scans_.size())});
+    out.topics.push_back(
+        {kScanTopic, "sensor_msgs/LaserScan", static_cast<int64_t>(scans_.size())});
     out.scans[kScanTopic] = std::move(scans_);
     std::vector<JointState> joints = Joints();
     if (!joints.empty()) {
@@ -374,8 +384,8 @@ bool LooksLikeCsmLog(const std::string& path) {
   if (first == std::string_view::npos || head[first] != '{') return false;
   // The first object's keys: a tuple file's are T, phi_l, ...
   const size_t next = head.find("}{", first);
-  const std::string_view object = head.substr(first, next == std::string_view::npos ? head.size()
-                                                                                    : next - first);
+  const std::string_view object =
+      head.substr(first, next == std::string_view::npos ? head.size() : next - first);
   return object.find("\"readings\"") != std::string_view::npos;
 }
 
@@ -397,7 +407,8 @@ namespace {
 std::string TimeVal(double t) {
   const double s = std::floor(t);
   char text[48];
-  std::snprintf(text, sizeof(text), "[%.0f, %.0f]", s, std::min(999999.0, std::round(1e6 * (t - s))));
+  std::snprintf(text, sizeof(text), "[%.0f, %.0f]", s,
+                std::min(999999.0, std::round(1e6 * (t - s))));
   return text;
 }
 
@@ -428,8 +439,8 @@ std::string CsmLogText(const std::vector<LaserScan>& scans,
       const EncoderSample& s = encoders[e];
       const std::string at = TimeVal(epoch_s + s.t_s);
       out += ", \"left\": " + Num(std::round(per_rad * s.left_rad)) +
-             ", \"right\": " + Num(std::round(per_rad * s.right_rad)) + ", \"leftTimestamp\": " +
-             at + ", \"rightTimestamp\": " + at;
+             ", \"right\": " + Num(std::round(per_rad * s.right_rad)) +
+             ", \"leftTimestamp\": " + at + ", \"rightTimestamp\": " + at;
     }
     out += "}\n";
   }
@@ -449,7 +460,8 @@ void Shift(double dt_s, const std::vector<double>& counts, int64_t records, Robo
   for (auto& [topic, joints] : bag->joint_states) {
     for (JointState& j : joints) {
       j.stamp_s += dt_s, j.log_time_s += dt_s, j.record += records;
-      for (size_t k = 0; k < j.position.size() && k < counts.size(); ++k) j.position[k] += counts[k];
+      for (size_t k = 0; k < j.position.size() && k < counts.size(); ++k)
+        j.position[k] += counts[k];
     }
   }
   for (auto& [topic, odometry] : bag->odometry) {
@@ -458,7 +470,8 @@ void Shift(double dt_s, const std::vector<double>& counts, int64_t records, Robo
 }
 
 template <typename T>
-void Append(std::map<std::string, std::vector<T>>&& from, std::map<std::string, std::vector<T>>* to) {
+void Append(std::map<std::string, std::vector<T>>&& from,
+            std::map<std::string, std::vector<T>>* to) {
   for (auto& [topic, messages] : from) {
     std::vector<T>& into = (*to)[topic];
     into.insert(into.end(), std::make_move_iterator(messages.begin()),
@@ -513,8 +526,8 @@ StatusOr<RobotMessages> JoinCsmLogs(std::vector<RobotMessages> logs, const std::
     if (out.joint_states.count(kEncoderTopic) != log.joint_states.count(kEncoderTopic)) {
       return Status::InvalidInput(log.source + ": its records " +
                                   (log.joint_states.count(kEncoderTopic) ? "have" : "lack") +
-                                  " the wheels' counts, and " + out.source + "'s do not: " +
-                                  "are they one robot's?");
+                                  " the wheels' counts, and " + out.source +
+                                  "'s do not: " + "are they one robot's?");
     }
     const double end_s = out.scans.at(kScanTopic).back().stamp_s;
     const double dt_s = first_stamp(log) > end_s ? 0.0 : end_s + kJoinGapS - first_stamp(log);
@@ -526,7 +539,8 @@ StatusOr<RobotMessages> JoinCsmLogs(std::vector<RobotMessages> logs, const std::
       counts = {last[0] - first[0], last[1] - first[1]};
     }
     int64_t records = 0;
-    for (const auto& [topic, scans] : out.scans) records = std::max(records, scans.back().record + 1);
+    for (const auto& [topic, scans] : out.scans)
+      records = std::max(records, scans.back().record + 1);
     Shift(dt_s, counts, records, &log);
     out.restarts_s.push_back(first_stamp(log));
     Append(std::move(log.scans), &out.scans);

@@ -13,7 +13,8 @@
 // A laser log in the JSON format of Censi's Canonical Scan Matcher (CSM), as the raw logs of
 // Censi et al. (2013) hold it: a stream of JSON objects, one per scan, optionally bzip2-compressed
 // (log.log.bz2). Each object holds
-//   "readings": ranges in m (null, NaN or ≤ 0: no return), "valid": 0/1 per beam (optional),
+//   "readings": ranges in m (null, NaN or under 2 cm, where a Hokuyo's error codes sit: no
+//   return), "valid": 0/1 per beam (optional),
 //   "theta": each beam's angle in rad, or "min_theta", "max_theta" and "nrays",
 //   "timestamp": [s, µs] (the scan's time),
 // and from the robot either

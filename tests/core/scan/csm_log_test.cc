@@ -22,7 +22,8 @@ std::string Record(double t_s, int left, int right, double left_t_s, double righ
   };
   return "{\"nrays\": 2, \"min_theta\": -0.1, \"max_theta\": 0.1, \"theta\": [-0.1, 0.1], "
          "\"readings\": [1.5, null], \"valid\": [1, 0], \"odometry\": [0, 0, 0], "
-         "\"timestamp\": " + stamp(t_s) + ", \"left\": " + std::to_string(left) +
+         "\"timestamp\": " +
+         stamp(t_s) + ", \"left\": " + std::to_string(left) +
          ", \"right\": " + std::to_string(right) + ", \"leftTimestamp\": " + stamp(left_t_s) +
          ", \"rightTimestamp\": " + stamp(right_t_s) + "}\n";
 }
@@ -60,7 +61,7 @@ TEST(CsmLog, ScansAndEncoderCountsAsABagHoldsThem) {
 TEST(CsmLog, NonFiniteLiteralsAndStreamsOfObjectsAreRead) {
   // Python's json writes NaN; records may share a line.
   std::string text =
-      "{\"readings\": [NaN, 2.0, Infinity], \"min_theta\": -1, \"max_theta\": 1, "
+      "{\"readings\": [NaN, 2.0, Infinity, 0.004], \"min_theta\": -1, \"max_theta\": 2, "
       "\"timestamp\": [5, 0], \"odometry\": [0.1, 0, 0]}{\"readings\": [1, 2, 3], "
       "\"min_theta\": -1, \"max_theta\": 1, \"timestamp\": [5, 200000], \"odometry\": [0.2, 0, "
       "0.1]}";
@@ -70,6 +71,7 @@ TEST(CsmLog, NonFiniteLiteralsAndStreamsOfObjectsAreRead) {
   EXPECT_FALSE(scan.IsReturn(0));
   EXPECT_TRUE(scan.IsReturn(1));
   EXPECT_FALSE(scan.IsReturn(2));
+  EXPECT_FALSE(scan.IsReturn(3));  // A Hokuyo's error code 4.
   EXPECT_DOUBLE_EQ(scan.angle_increment_rad, 1.0);
   EXPECT_TRUE(bag->joint_states.empty());
   ASSERT_EQ(bag->odometry.at("odometry").size(), 2u);
@@ -82,12 +84,14 @@ TEST(CsmLog, BadRecordsAreNamed) {
     const StatusOr<RobotMessages> bag = ReadCsmLogText(text, "bad.log");
     return bag.ok() ? std::string("ok") : bag.message();
   };
-  EXPECT_NE(error(good + good.substr(0, 60)).find("bad.log record 1 (line 2): the file ends "
-                                                  "inside the record (truncated)"),
+  EXPECT_NE(error(good + good.substr(0, 60))
+                .find("bad.log record 1 (line 2): the file ends "
+                      "inside the record (truncated)"),
             std::string::npos)
       << error(good + good.substr(0, 60));
-  EXPECT_NE(error(good + "{\"readings\": [1], \"theta\": [0]}").find("record 1 (line 2): no "
-                                                                     "\"timestamp\""),
+  EXPECT_NE(error(good + "{\"readings\": [1], \"theta\": [0]}")
+                .find("record 1 (line 2): no "
+                      "\"timestamp\""),
             std::string::npos);
   EXPECT_NE(error("{\"readings\": [1, 2, 3], \"theta\": [0, 0.1, 0.3], \"timestamp\": [1, 0]}")
                 .find("theta[1] = 0.1 is off the scan's even grid"),
@@ -119,11 +123,12 @@ TEST(CsmLog, Bz2FilesAreReadAndToldApart) {
   const testing::ScratchDir dir("csm_log_test");
   const auto file = [&](const char* name) { return (dir.path() / name).string(); };
   std::string text;
-  for (int k = 0; k < 50; ++k) text += Record(1.0 + 0.2 * k, 10 * k, 10 * k, 1.0 + 0.2 * k, 1.0 + 0.2 * k);
+  for (int k = 0; k < 50; ++k)
+    text += Record(1.0 + 0.2 * k, 10 * k, 10 * k, 1.0 + 0.2 * k, 1.0 + 0.2 * k);
   const std::string path = file("log.log.bz2");
-  ASSERT_TRUE(WriteWholeFile(path, Bz2(text.substr(0, text.size() / 2)) +
-                                       Bz2(text.substr(text.size() / 2)))
-                  .ok());
+  ASSERT_TRUE(
+      WriteWholeFile(path, Bz2(text.substr(0, text.size() / 2)) + Bz2(text.substr(text.size() / 2)))
+          .ok());
   EXPECT_TRUE(LooksLikeCsmLog(path));
   const StatusOr<RobotMessages> bag = ReadCsmLog(path);
   ASSERT_TRUE(bag.ok()) << bag.message();
@@ -134,7 +139,8 @@ TEST(CsmLog, Bz2FilesAreReadAndToldApart) {
   ASSERT_TRUE(WriteWholeFile(plain, text).ok());
   EXPECT_TRUE(LooksLikeCsmLog(plain));
   const std::string tuples = file("l90.tuple");
-  ASSERT_TRUE(WriteWholeFile(tuples, "{ \"T\": 1, \"phi_l\": 1, \"phi_r\": 1, \"sm\": [0, 0, 0] }").ok());
+  ASSERT_TRUE(
+      WriteWholeFile(tuples, "{ \"T\": 1, \"phi_l\": 1, \"phi_r\": 1, \"sm\": [0, 0, 0] }").ok());
   EXPECT_FALSE(LooksLikeCsmLog(tuples));
   EXPECT_FALSE(LooksLikeCsmLog(dir.path().string()));
 
