@@ -176,14 +176,17 @@ LaserFitReport MakeReport(const Context& context, const LaserEffectFit& fit,
 }
 
 // The wheel speeds that place interval k among the others: over it and its two neighbours where
-// the three follow one another. Their errors are then those of the wheel angles at the window's
-// ends, not at the interval's own: binned by its own speeds, an interval's residual follows the
-// speeds' noise (errors in the regressor), and a long log of integer encoder counts had shown a
-// dependence on the angular rate at p < 1e-8 that was the counts' rounding alone.
-Eigen::Vector2d WindowSpeeds(const std::vector<LaserInterval>& intervals, size_t k) {
+// the three follow one another between a log's sample times (raw streams, bags; a tuple file's
+// intervals follow one another only as their T are summed). Their errors are then those of the
+// wheel angles at the window's ends, not at the interval's own: binned by its own speeds, an
+// interval's residual follows the speeds' noise (errors in the regressor), and a long log of
+// integer encoder counts had shown a dependence on the angular rate at p < 1e-8 that was the
+// counts' rounding alone.
+Eigen::Vector2d WindowSpeeds(const std::vector<LaserInterval>& intervals, size_t k,
+                             bool sample_times) {
   const LaserInterval& in = intervals[k];
   const Eigen::Vector2d own(in.left_speed, in.right_speed);
-  if (k == 0 || k + 1 >= intervals.size()) return own;
+  if (!sample_times || k == 0 || k + 1 >= intervals.size()) return own;
   const auto follows = [&](size_t j) {
     const LaserInterval& a = intervals[j - 1];
     const LaserInterval& b = intervals[j];
@@ -213,7 +216,7 @@ std::vector<std::vector<double>> Covariates(const Context& context,
   std::vector<std::vector<double>> covariates(6, std::vector<double>(intervals.size()));
   for (size_t k = 0; k < intervals.size(); ++k) {
     const LaserInterval& in = intervals[k];
-    const Eigen::Vector2d phi = WindowSpeeds(intervals, k);
+    const Eigen::Vector2d phi = WindowSpeeds(intervals, k, context.options.sample_times_estimated);
     const double v = v_of(phi), w = w_of(phi);
     const LaserEffectContext& c = contexts[k];
     covariates[0][k] = in.start_s + 0.5 * in.duration_s - context.log_start_s;
