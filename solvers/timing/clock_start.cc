@@ -73,13 +73,35 @@ std::vector<bool> Steady(const std::vector<bool>& trusted,
   return steady;
 }
 
+// Where whole numbers hold most counts, the logger may still pick up every m-th sample of a sensor
+// m times as fast (a 100 ms lidar read every 200 ms): its jitter then crosses a sample now and
+// then, and those steps count m ± 1 of its periods, 0.5 and 1.5 stamp steps for m = 2 (a fifth
+// of the steps on a simulated log, whose sample times the stamp model had put 37 ms off). The
+// unit is 1/m when the counts clearly off whole numbers (a quarter or more) are at least 5 and
+// 3 %, and 80 % of them sit on multiples of 1/m; else 1.
+template <typename Refine>
+double WholeOrFraction(const std::vector<double>& counted, const Refine& refined) {
+  std::vector<double> off;
+  for (const double c : counted) {
+    if (std::abs(c - std::round(c)) >= 0.25) off.push_back(c);
+  }
+  if (off.size() < 5 || off.size() < 0.03 * counted.size()) return 1.0;
+  for (const int m : {2, 3, 4}) {
+    const auto on = std::count_if(off.begin(), off.end(), [&](double c) {
+      return std::abs(c * m - std::round(c * m)) < 0.1;
+    });
+    if (on >= 0.8 * off.size()) return refined(1.0 / m);
+  }
+  return 1.0;
+}
+
 // The sensor's period in stamp steps as the motion counts it (stamp step × measured over wheel
 // motion, `steady` intervals): 1 where the counts sit near whole numbers. A logger slower than its
 // free-running sensor holds one or two periods per stamp step, so its counts sit near multiples of
 // P/step instead (0.77 and 1.54 for a 100 ms sensor picked up every 130 ms) and its stamps' median
 // step is not the period: the largest unit in [0.5, 0.9] whose multiples hold 90 % of the counts
 // (within a tenth of the unit), refined as their median per multiple, where whole numbers hold
-// under half of them.
+// under half of them; where they hold more, WholeOrFraction.
 double MotionUnit(const std::vector<double>& stamp_ratio, const std::vector<double>& motion_ratio,
                   const std::vector<bool>& steady) {
   std::vector<double> counted;
@@ -95,9 +117,7 @@ double MotionUnit(const std::vector<double>& stamp_ratio, const std::vector<doub
     }
     return static_cast<double>(near) / counted.size();
   };
-  if (held(1.0) >= 0.5) return 1.0;
-  for (double unit = 0.9; unit >= 0.5; unit -= 0.001) {
-    if (held(unit) < 0.9) continue;
+  const auto refined = [&](double unit) {
     std::vector<double> units;
     for (const double c : counted) {
       const double m = std::round(c / unit);
@@ -105,6 +125,10 @@ double MotionUnit(const std::vector<double>& stamp_ratio, const std::vector<doub
     }
     std::nth_element(units.begin(), units.begin() + units.size() / 2, units.end());
     return units[units.size() / 2];
+  };
+  if (held(1.0) >= 0.5) return WholeOrFraction(counted, refined);
+  for (double unit = 0.9; unit >= 0.5; unit -= 0.001) {
+    if (held(unit) >= 0.9) return refined(unit);
   }
   return 1.0;
 }
