@@ -163,6 +163,10 @@ class CsmParser {
     if (record.is_discarded() || !record.is_object()) {
       return Status::InvalidInput(where + ": not a JSON object");
     }
+    if (!record.contains("readings")) {
+      return Status::InvalidInput(where + ": no \"readings\" (the ranges of a scan)" +
+                                  (record_ == 0 ? ": is it a CSM laser log?" : ""));
+    }
     const std::optional<double> t = Stamp(record, "timestamp");
     if (!t) {
       return Status::InvalidInput(where + ": no \"timestamp\" ([seconds, microseconds])");
@@ -216,7 +220,7 @@ class CsmParser {
   Status Scan(const json& record, double t, const std::string& where) {
     const auto readings = record.find("readings");
     if (readings == record.end() || !readings->is_array() || readings->empty()) {
-      return Status::InvalidInput(where + ": no \"readings\" (the ranges of a scan)");
+      return Status::InvalidInput(where + ": \"readings\" must be a non-empty array of ranges");
     }
     const size_t n = readings->size();
     if (record.contains("nrays") && Number(record["nrays"]) != static_cast<double>(n)) {
@@ -367,6 +371,13 @@ StatusOr<std::string> Decompressed(std::string_view bytes, const std::string& pa
 }
 
 }  // namespace
+
+bool IsBz2File(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return false;
+  const StatusOr<MappedFile> file = MappedFile::Open(path);
+  return file.ok() && IsBz2(file->text());
+}
 
 bool LooksLikeCsmLog(const std::string& path) {
   std::error_code ec;

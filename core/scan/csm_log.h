@@ -36,6 +36,8 @@ constexpr double kCensiKheperaCountsPerTurn = 691.2 * 4.0;
 
 // Whether `path` is a regular file (plain or .bz2) whose first JSON object has "readings".
 bool LooksLikeCsmLog(const std::string& path);
+// Whether `path` is a regular file that starts as bzip2 data do ("BZh").
+bool IsBz2File(const std::string& path);
 
 StatusOr<RobotMessages> ReadCsmLog(const std::string& path);
 

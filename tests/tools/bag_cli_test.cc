@@ -231,6 +231,11 @@ TEST_F(BagCliTest, CsmLogsOfExperimentsCalibrateWithinThreeSigma) {
   const std::string text = ReadFile(archive / "exp21" / "log.log");
   std::ofstream(cut) << text.substr(0, text.find('\n', text.find('\n') + 1) + 200);
   ExpectFailure(cut, "", {"cut.log record 2 (line 3): the file ends inside the record"});
+  // A corrupt bzip2 file, and a log named beside one that is not there.
+  std::ofstream(dir_ / "bad.log.bz2") << "BZh91AY&SYgarbage";
+  ExpectFailure(dir_ / "bad.log.bz2", "", {"bad.log.bz2: bz2 data end before their stream does"});
+  ExpectFailure(archive / "exp21" / "log.log," + (dir_ / "gone.log").string(), "",
+                {"gone.log: no such file"});
 }
 
 // A driver that leaves time_increment 0 on a lidar that sweeps. Trusted (--lidar_beam_timing

@@ -18,17 +18,19 @@ namespace {
 constexpr double kLongestRotationPeriodS = 10.0;
 
 // The CSM laser logs `input` names: one, several separated by commas, or a directory of them
-// (the experiments of one configuration); empty when it names none.
+// (the experiments of one configuration); empty when it names none. A bzip2 file is taken for
+// one (no other input is compressed so), so that a corrupt one is named as such.
 std::vector<std::string> CsmLogsOf(const std::string& input) {
   std::error_code ec;
   if (std::filesystem::is_directory(input, ec)) {
     return LooksLikeRobotBag(input) ? std::vector<std::string>() : CsmLogsIn(input);
   }
+  // One that is names them all: the others' errors then say what is wrong with them.
   const std::vector<std::string> paths = SplitCommas(input);
   for (const std::string& path : paths) {
-    if (!LooksLikeCsmLog(path)) return {};
+    if (LooksLikeCsmLog(path) || IsBz2File(path)) return paths;
   }
-  return paths;
+  return {};
 }
 
 }  // namespace

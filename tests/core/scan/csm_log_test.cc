@@ -104,6 +104,13 @@ TEST(CsmLog, BadRecordsAreNamed) {
                 .find("nrays is not the number of readings (2)"),
             std::string::npos);
   EXPECT_NE(error("[1, 2]").find("record 0 (line 1): expected a JSON object"), std::string::npos);
+  EXPECT_NE(error("{\"T\": 1, \"phi_l\": 1}")
+                .find("no \"readings\" (the ranges of a scan): is "
+                      "it a CSM laser log?"),
+            std::string::npos);
+  EXPECT_NE(error(good + "{\"readings\": [], \"timestamp\": [2, 0]}")
+                .find("record 1 (line 2): \"readings\" must be a non-empty array"),
+            std::string::npos);
   EXPECT_NE(error("  \n").find("bad.log: no scan records (empty log)"), std::string::npos);
 }
 
@@ -143,6 +150,9 @@ TEST(CsmLog, Bz2FilesAreReadAndToldApart) {
       WriteWholeFile(tuples, "{ \"T\": 1, \"phi_l\": 1, \"phi_r\": 1, \"sm\": [0, 0, 0] }").ok());
   EXPECT_FALSE(LooksLikeCsmLog(tuples));
   EXPECT_FALSE(LooksLikeCsmLog(dir.path().string()));
+
+  EXPECT_TRUE(IsBz2File(path));
+  EXPECT_FALSE(IsBz2File(plain));
 
   const std::string cut = file("cut.log.bz2");
   const std::string packed = Bz2(text);
