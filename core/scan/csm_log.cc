@@ -17,9 +17,6 @@ namespace {
 
 using nlohmann::json;
 
-constexpr const char* kScanTopic = "scans";
-constexpr const char* kEncoderTopic = "encoders";
-constexpr const char* kOdometryTopic = "odometry";
 // How far a beam's "theta" may lie off its scan's even grid (rad): Hokuyo and SICK angles are
 // exact steps; more says the beams are not one scan's.
 constexpr double kGridToleranceRad = 1e-4;
@@ -328,22 +325,22 @@ class CsmParser {
     RobotMessages out;
     out.source = source_;
     out.topics.push_back(
-        {kScanTopic, "sensor_msgs/LaserScan", static_cast<int64_t>(scans_.size())});
-    out.scans[kScanTopic] = std::move(scans_);
+        {kCsmScanTopic, "sensor_msgs/LaserScan", static_cast<int64_t>(scans_.size())});
+    out.scans[kCsmScanTopic] = std::move(scans_);
     std::vector<JointState> joints = Joints();
     if (!joints.empty()) {
       out.topics.push_back(
-          {kEncoderTopic, "sensor_msgs/JointState", static_cast<int64_t>(joints.size())});
-      out.joint_states[kEncoderTopic] = std::move(joints);
-      out.joint_counts_per_turn[kEncoderTopic] = own_stamps_ ? kCensiKheperaCountsPerTurn : 0.0;
+          {kCsmEncoderTopic, "sensor_msgs/JointState", static_cast<int64_t>(joints.size())});
+      out.joint_states[kCsmEncoderTopic] = std::move(joints);
+      out.joint_counts_per_turn[kCsmEncoderTopic] = own_stamps_ ? kCensiKheperaCountsPerTurn : 0.0;
       if (own_stamps_) {
         out.counts_per_turn_source = "the Khepera III of Censi et al.'s logs (their 691.2 × 4)";
       }
     }
     if (moved_) {
       out.topics.push_back(
-          {kOdometryTopic, "nav_msgs/Odometry", static_cast<int64_t>(odometry_.size())});
-      out.odometry[kOdometryTopic] = std::move(odometry_);
+          {kCsmOdometryTopic, "nav_msgs/Odometry", static_cast<int64_t>(odometry_.size())});
+      out.odometry[kCsmOdometryTopic] = std::move(odometry_);
     }
     return out;
   }
@@ -411,162 +408,6 @@ StatusOr<RobotMessages> ReadCsmLog(const std::string& path) {
     CALIB_ASSIGN_OR_RETURN(const std::string text, Decompressed(file.text(), path, kMaxTextBytes));
     return ReadCsmLogText(text, path);
   });
-}
-
-namespace {
-
-std::string TimeVal(double t) {
-  const double s = std::floor(t);
-  char text[48];
-  std::snprintf(text, sizeof(text), "[%.0f, %.0f]", s,
-                std::min(999999.0, std::round(1e6 * (t - s))));
-  return text;
-}
-
-}  // namespace
-
-std::string CsmLogText(const std::vector<LaserScan>& scans,
-                       const std::vector<EncoderSample>& encoders, double counts_per_turn,
-                       double epoch_s) {
-  std::string out;
-  const double per_rad = counts_per_turn / (2.0 * M_PI);
-  size_t e = 0;
-  char number[32];
-  for (const LaserScan& scan : scans) {
-    while (e + 1 < encoders.size() && encoders[e + 1].t_s <= scan.stamp_s) ++e;
-    const int n = static_cast<int>(scan.ranges_m.size());
-    out += "{\"nrays\": " + std::to_string(n) + ", \"min_theta\": " + Num(scan.BeamAngle(0)) +
-           ", \"max_theta\": " + Num(scan.BeamAngle(n - 1)) + ", \"theta\": [";
-    for (int i = 0; i < n; ++i) out += (i ? ", " : "") + Num(scan.BeamAngle(i));
-    out += "], \"readings\": [";
-    for (int i = 0; i < n; ++i) {
-      std::snprintf(number, sizeof(number), "%.6f", scan.ranges_m[i]);
-      out += (i ? ", " : "") + std::string(scan.IsReturn(i) ? number : "null");
-    }
-    out += "], \"valid\": [";
-    for (int i = 0; i < n; ++i) out += (i ? ", " : "") + std::string(scan.IsReturn(i) ? "1" : "0");
-    out += "], \"timestamp\": " + TimeVal(epoch_s + scan.stamp_s);
-    if (!encoders.empty()) {
-      const EncoderSample& s = encoders[e];
-      const std::string at = TimeVal(epoch_s + s.t_s);
-      out += ", \"left\": " + Num(std::round(per_rad * s.left_rad)) +
-             ", \"right\": " + Num(std::round(per_rad * s.right_rad)) +
-             ", \"leftTimestamp\": " + at + ", \"rightTimestamp\": " + at;
-    }
-    out += "}\n";
-  }
-  return out;
-}
-
-}  // namespace calib
-
-namespace calib {
-namespace {
-
-// A log's recording moved by dt_s in time, its counts by `counts`, its records by `records`.
-void Shift(double dt_s, const std::vector<double>& counts, int64_t records, RobotMessages* bag) {
-  for (auto& [topic, scans] : bag->scans) {
-    for (LaserScan& s : scans) s.stamp_s += dt_s, s.log_time_s += dt_s, s.record += records;
-  }
-  for (auto& [topic, joints] : bag->joint_states) {
-    for (JointState& j : joints) {
-      j.stamp_s += dt_s, j.log_time_s += dt_s, j.record += records;
-      for (size_t k = 0; k < j.position.size() && k < counts.size(); ++k)
-        j.position[k] += counts[k];
-    }
-  }
-  for (auto& [topic, odometry] : bag->odometry) {
-    for (Odometry& o : odometry) o.stamp_s += dt_s, o.log_time_s += dt_s, o.record += records;
-  }
-}
-
-template <typename T>
-void Append(std::map<std::string, std::vector<T>>&& from,
-            std::map<std::string, std::vector<T>>* to) {
-  for (auto& [topic, messages] : from) {
-    std::vector<T>& into = (*to)[topic];
-    into.insert(into.end(), std::make_move_iterator(messages.begin()),
-                std::make_move_iterator(messages.end()));
-  }
-}
-
-// Gap put between a log and the next when their clocks overlap.
-constexpr double kJoinGapS = 10.0;
-
-}  // namespace
-
-bool IsCsmLogDirectory(const std::string& path) {
-  std::error_code ec;
-  return std::filesystem::is_directory(path, ec) && !CsmLogsIn(path).empty();
-}
-
-std::vector<std::string> CsmLogsIn(const std::string& directory) {
-  std::vector<std::string> logs;
-  std::error_code ec;
-  for (auto it = std::filesystem::recursive_directory_iterator(directory, ec);
-       !ec && it != std::filesystem::recursive_directory_iterator(); it.increment(ec)) {
-    if (it->is_regular_file(ec) && LooksLikeCsmLog(it->path().string())) {
-      logs.push_back(it->path().string());
-    }
-  }
-  std::sort(logs.begin(), logs.end());
-  return logs;
-}
-
-StatusOr<RobotMessages> ReadCsmLogs(const std::vector<std::string>& paths,
-                                    const std::string& source) {
-  std::vector<RobotMessages> logs;
-  for (const std::string& path : paths) {
-    CALIB_ASSIGN_OR_RETURN(RobotMessages log, ReadCsmLog(path));
-    logs.push_back(std::move(log));
-  }
-  return JoinCsmLogs(std::move(logs), source);
-}
-
-StatusOr<RobotMessages> JoinCsmLogs(std::vector<RobotMessages> logs, const std::string& source) {
-  if (logs.empty()) return Status::InvalidInput(source + ": no CSM laser logs");
-  const auto first_stamp = [](const RobotMessages& m) {
-    return m.scans.at(kScanTopic).front().stamp_s;
-  };
-  std::stable_sort(logs.begin(), logs.end(), [&](const RobotMessages& a, const RobotMessages& b) {
-    return first_stamp(a) < first_stamp(b);
-  });
-  RobotMessages out = std::move(logs.front());
-  for (size_t k = 1; k < logs.size(); ++k) {
-    RobotMessages& log = logs[k];
-    if (out.joint_states.count(kEncoderTopic) != log.joint_states.count(kEncoderTopic)) {
-      return Status::InvalidInput(log.source + ": its records " +
-                                  (log.joint_states.count(kEncoderTopic) ? "have" : "lack") +
-                                  " the wheels' counts, and " + out.source +
-                                  "'s do not: " + "are they one robot's?");
-    }
-    const double end_s = out.scans.at(kScanTopic).back().stamp_s;
-    const double dt_s = first_stamp(log) > end_s ? 0.0 : end_s + kJoinGapS - first_stamp(log);
-    std::vector<double> counts;
-    const auto joints = out.joint_states.find(kEncoderTopic);
-    if (joints != out.joint_states.end()) {
-      const std::vector<double>& last = joints->second.back().position;
-      const std::vector<double>& first = log.joint_states.at(kEncoderTopic).front().position;
-      counts = {last[0] - first[0], last[1] - first[1]};
-    }
-    int64_t records = 0;
-    for (const auto& [topic, scans] : out.scans)
-      records = std::max(records, scans.back().record + 1);
-    Shift(dt_s, counts, records, &log);
-    out.restarts_s.push_back(first_stamp(log));
-    Append(std::move(log.scans), &out.scans);
-    Append(std::move(log.joint_states), &out.joint_states);
-    Append(std::move(log.odometry), &out.odometry);
-  }
-  for (TopicInfo& topic : out.topics) {
-    if (topic.type == "sensor_msgs/LaserScan") topic.message_count = out.scans[topic.name].size();
-    if (topic.type == "sensor_msgs/JointState") {
-      topic.message_count = out.joint_states[topic.name].size();
-    }
-    if (topic.type == "nav_msgs/Odometry") topic.message_count = out.odometry[topic.name].size();
-  }
-  out.source = source;
-  return out;
 }
 
 }  // namespace calib

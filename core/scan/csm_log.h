@@ -29,6 +29,11 @@
 // scan again) is one sample.
 namespace calib {
 
+// The topics a CSM log is read onto.
+inline constexpr const char* kCsmScanTopic = "scans";
+inline constexpr const char* kCsmEncoderTopic = "encoders";
+inline constexpr const char* kCsmOdometryTopic = "odometry";
+
 // The counts per wheel turn of the Khepera III in Censi et al.'s logs (their synchronizer's
 // ticks_to_rad = 2π / (691.2 · 4): 691.2 lines a turn, ×4 for the quadrature). A log whose
 // encoders carry their own stamps (leftTimestamp) is theirs.
