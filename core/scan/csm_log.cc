@@ -354,13 +354,12 @@ class CsmParser {
   bool own_stamps_ = false, moved_ = false;
 };
 
-StatusOr<std::string> Decompressed(std::string_view bytes, const std::string& path,
-                                   size_t max_bytes) {
+StatusOr<std::string> Decompressed(std::string_view bytes, const std::string& path) {
   std::string text;
   bool ended = false;
-  const Status s = Bz2Decompress(bytes, {max_bytes, true}, &text, &ended);
+  const Status s = Bz2Decompress(bytes, {kMaxTextBytes, true}, &text, &ended);
   if (!s.ok()) return Status::InvalidInput(path + ": " + s.message());
-  if (!ended && text.size() >= max_bytes && max_bytes == kMaxTextBytes) {
+  if (!ended && text.size() >= kMaxTextBytes) {
     return Status::InvalidInput(path + ": decompresses to more than " +
                                 std::to_string(kMaxTextBytes >> 30) + " GiB");
   }
@@ -405,7 +404,7 @@ StatusOr<RobotMessages> ReadCsmLog(const std::string& path) {
   CALIB_ASSIGN_OR_RETURN(const MappedFile file, MappedFile::Open(path));
   if (!IsBz2(file.text())) return ReadCsmLogText(file.text(), path);
   return GuardAllocation(path, [&]() -> StatusOr<RobotMessages> {
-    CALIB_ASSIGN_OR_RETURN(const std::string text, Decompressed(file.text(), path, kMaxTextBytes));
+    CALIB_ASSIGN_OR_RETURN(const std::string text, Decompressed(file.text(), path));
     return ReadCsmLogText(text, path);
   });
 }

@@ -46,8 +46,9 @@ bool IsBz2File(const std::string& path);
 
 StatusOr<RobotMessages> ReadCsmLog(const std::string& path);
 
-// Whether `path` is a directory holding CSM logs (in it or its subdirectories: an archive of
-// experiments such as the authors' exp*/log.log.bz2), and those logs, sorted by path.
+// Whether `path` is a directory holding CSM logs (in it or its subdirectories, three levels at
+// most: an archive of experiments such as the authors' exp*/log.log.bz2), and those logs,
+// sorted by path.
 bool IsCsmLogDirectory(const std::string& path);
 std::vector<std::string> CsmLogsIn(const std::string& directory);
 

@@ -40,6 +40,10 @@ void Append(std::map<std::string, std::vector<T>>&& from,
 
 // Gap put between a log and the next when their clocks overlap.
 constexpr double kJoinGapS = 10.0;
+// How deep and how far a directory is searched for logs (an archive of experiments is one or two
+// levels deep; a directory given by mistake, such as a home, is not walked whole).
+constexpr int kMaxDepth = 3;
+constexpr int kMaxEntries = 10000;
 
 }  // namespace
 
@@ -51,8 +55,11 @@ bool IsCsmLogDirectory(const std::string& path) {
 std::vector<std::string> CsmLogsIn(const std::string& directory) {
   std::vector<std::string> logs;
   std::error_code ec;
+  int entries = 0;
   for (auto it = std::filesystem::recursive_directory_iterator(directory, ec);
-       !ec && it != std::filesystem::recursive_directory_iterator(); it.increment(ec)) {
+       !ec && it != std::filesystem::recursive_directory_iterator() && ++entries <= kMaxEntries;
+       it.increment(ec)) {
+    if (it.depth() >= kMaxDepth) it.disable_recursion_pending();
     if (it->is_regular_file(ec) && LooksLikeCsmLog(it->path().string())) {
       logs.push_back(it->path().string());
     }
@@ -85,8 +92,8 @@ StatusOr<RobotMessages> JoinCsmLogs(std::vector<RobotMessages> logs, const std::
     if (out.joint_states.count(kCsmEncoderTopic) != log.joint_states.count(kCsmEncoderTopic)) {
       return Status::InvalidInput(log.source + ": its records " +
                                   (log.joint_states.count(kCsmEncoderTopic) ? "have" : "lack") +
-                                  " the wheels' counts, and " + out.source +
-                                  "'s do not: " + "are they one robot's?");
+                                  " the wheels' encoder counts, unlike " + out.source +
+                                  "'s: are they one robot's logs?");
     }
     const double end_s = out.scans.at(kCsmScanTopic).back().stamp_s;
     const double dt_s = first_stamp(log) > end_s ? 0.0 : end_s + kJoinGapS - first_stamp(log);
