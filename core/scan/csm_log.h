@@ -52,11 +52,9 @@ StatusOr<RobotMessages> ReadCsmLog(const std::string& path);
 bool IsCsmLogDirectory(const std::string& path);
 std::vector<std::string> CsmLogsIn(const std::string& directory);
 
-// Several logs of one robot (the experiments of one configuration) as one recording, in the
-// order of their first stamps, named `source`. Each log after the first goes on after the one
-// before it: a log whose clock starts before the previous log ends (restarted) is shifted to
-// start 10 s after it, and its counts go on from the previous log's last counts (a logger that
-// restarts its counters). The scan matching never spans two logs: their gap breaks the track.
+// Several logs of one robot (the experiments of one configuration) as one recording, named
+// `source` (JoinRecordings: a log that does not continue the one before starts again, moved
+// after it where its clock overlaps, its counts going on from the previous log's).
 StatusOr<RobotMessages> ReadCsmLogs(const std::vector<std::string>& paths,
                                     const std::string& source);
 // The same over logs read (ReadCsmLog, ReadCsmLogText).

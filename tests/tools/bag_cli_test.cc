@@ -333,6 +333,10 @@ TEST_F(BagCliTest, BadBagsAndTopicsAreNamed) {
   ExpectFailure(bag, "--ticks_per_rev 4096 --wheel_angle_unit deg",
                 {"--ticks_per_rev and --wheel_angle_unit deg", "give one"});
   ExpectFailure(bag, "--ticks_per_rev -2", {"--ticks_per_rev must be positive"});
+  // Bags separated by commas are one robot's recording (a bag split in parts, a session's runs);
+  // the same run given twice, here in two formats, is refused.
+  ExpectFailure(bag.string() + "," + (kBags / "sim_robot_zstd.mcap").string(), "",
+                {"hold the same scans: one recording given twice?"});
   std::ofstream(dir_ / "empty.mcap").flush();
   ExpectFailure(dir_ / "empty.mcap", "", {"empty.mcap: not a bag: the file is empty"});
   for (const fs::path& source : {bag, kBags / "sim_robot_zstd.mcap"}) {

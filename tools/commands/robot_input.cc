@@ -1,4 +1,5 @@
 #include <calib/core/bag/robot_bag.h>
+#include <calib/core/bag/robot_messages_join.h>
 #include <calib/core/scan/csm_log.h>
 #include <calib/core/scan/laser_scan.h>
 #include <calib/core/scan/scan_directory.h>
@@ -33,10 +34,32 @@ std::vector<std::string> CsmLogsOf(const std::string& input) {
   return {};
 }
 
+// Several bags of one robot separated by commas (a bag split in parts, the runs of a session);
+// empty unless every part is a bag.
+std::vector<std::string> BagsOf(const std::string& input) {
+  const std::vector<std::string> paths = SplitCommas(input);
+  if (paths.size() < 2) return {};
+  for (const std::string& path : paths) {
+    if (!LooksLikeRobotBag(path)) return {};
+  }
+  return paths;
+}
+
+StatusOr<RobotMessages> ReadBags(const std::vector<std::string>& paths, const std::string& input,
+                                 const BagReadOptions& read) {
+  std::vector<RobotMessages> parts;
+  for (const std::string& path : paths) {
+    CALIB_ASSIGN_OR_RETURN(RobotMessages part, ReadRobotBag(path, read));
+    parts.push_back(std::move(part));
+  }
+  return JoinRecordings(std::move(parts), input);
+}
+
 }  // namespace
 
 bool IsRobotInput(const std::string& input) {
-  return LooksLikeRobotBag(input) || IsScanDirectory(input) || !CsmLogsOf(input).empty();
+  return LooksLikeRobotBag(input) || IsScanDirectory(input) || !CsmLogsOf(input).empty() ||
+         !BagsOf(input).empty();
 }
 
 StatusOr<RobotInput> ReadRobotInput(const CalibrateOptions& flags) {
@@ -90,6 +113,8 @@ StatusOr<RobotInput> ReadRobotInput(const CalibrateOptions& flags) {
     CALIB_ASSIGN_OR_RETURN(out.bag, logs.size() == 1 && logs.front() == flags.input
                                         ? ReadCsmLog(flags.input)
                                         : ReadCsmLogs(logs, flags.input));
+  } else if (const std::vector<std::string> bags = BagsOf(flags.input); !bags.empty()) {
+    CALIB_ASSIGN_OR_RETURN(out.bag, ReadBags(bags, flags.input, read));
   } else {
     CALIB_ASSIGN_OR_RETURN(out.bag, ReadRobotBag(flags.input, read));
   }
