@@ -3,10 +3,7 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <iterator>
-#include <map>
 #include <string>
-#include <utility>
 #include <vector>
 
 namespace calib {

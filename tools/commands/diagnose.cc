@@ -183,7 +183,8 @@ int RunDiagnose(const DiagnoseOptions& options) {
   if (options.time_offset_s && !std::isfinite(*options.time_offset_s)) {
     return Fail("--time_offset must be a finite number of seconds");
   }
-  if (options.input.find(',') != std::string::npos) {
+  // Bags or CSM logs given with commas are one recording; interval logs are diagnosed one by one.
+  if (options.input.find(',') != std::string::npos && !IsRobotInput(options.input)) {
     return Fail("diagnose takes one log (--input names several)");
   }
   if (!(options.family_alpha > 0.0 && options.family_alpha < 1.0)) {
