@@ -234,7 +234,7 @@ TEST_F(BagCliTest, CsmLogsOfExperimentsCalibrateWithinThreeSigma) {
   // A corrupt bzip2 file, and a log named beside one that is not there.
   std::ofstream(dir_ / "bad.log.bz2") << "BZh91AY&SYgarbage";
   ExpectFailure(dir_ / "bad.log.bz2", "", {"bad.log.bz2: bz2 data end before their stream does"});
-  ExpectFailure(archive / "exp21" / "log.log," + (dir_ / "gone.log").string(), "",
+  ExpectFailure((archive / "exp21" / "log.log").string() + "," + (dir_ / "gone.log").string(), "",
                 {"gone.log: no such file"});
 }
 
