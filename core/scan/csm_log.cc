@@ -23,6 +23,8 @@ constexpr double kGridToleranceRad = 1e-4;
 // Nearer readings are no return: below every lidar's range, where a Hokuyo's error codes sit
 // (1–19 mm: no echo, too bright, ...).
 constexpr double kMinReadingM = 0.02;
+// No lidar's median return is this far (m): beyond, the readings are in another unit.
+constexpr double kMaxMedianRangeM = 100.0;
 // The bytes read to tell the format (after decompression).
 constexpr size_t kSniffBytes = 64 * 1024;
 // A whole log decompresses to at most this much.
@@ -230,6 +232,12 @@ class CsmParser {
     scan.frame_id = "laser";
     scan.range_max_m = std::numeric_limits<double>::infinity();
     CALIB_RETURN_IF_ERROR(Angles(record, n, where, &scan));
+    const double span_rad = std::abs(scan.angle_increment_rad) * (n - 1);
+    if (span_rad > 2.0 * M_PI + 1e-6) {
+      return Status::InvalidInput(where + ": the beams span " + Num(span_rad) +
+                                  " rad, more than a circle: are the angles in degrees? (CSM "
+                                  "logs hold radians)");
+    }
     const auto valid = record.find("valid");
     const bool has_valid = valid != record.end() && valid->is_array() && valid->size() == n;
     scan.ranges_m.resize(n);
@@ -320,8 +328,27 @@ class CsmParser {
     return joints;
   }
 
+  // The median return of the first scans: a lidar's ranges in mm (a median of thousands of
+  // "metres") would be matched as walls kilometres away.
+  Status CheckRangeUnit() const {
+    std::vector<float> returns;
+    for (size_t k = 0; k < scans_.size() && k < 20; ++k) {
+      for (size_t i = 0; i < scans_[k].ranges_m.size(); ++i) {
+        if (scans_[k].IsReturn(static_cast<int>(i))) returns.push_back(scans_[k].ranges_m[i]);
+      }
+    }
+    if (returns.empty()) return Status::Ok();
+    std::nth_element(returns.begin(), returns.begin() + returns.size() / 2, returns.end());
+    const double median_m = returns[returns.size() / 2];
+    if (median_m <= kMaxMedianRangeM) return Status::Ok();
+    return Status::InvalidInput(source_ + ": the first scans' median reading is " + Num(median_m) +
+                                ": are the readings in millimetres? (CSM logs "
+                                "hold metres)");
+  }
+
   StatusOr<RobotMessages> Finish() {
     if (scans_.empty()) return Status::InvalidInput(source_ + ": no scan records (empty log)");
+    CALIB_RETURN_IF_ERROR(CheckRangeUnit());
     RobotMessages out;
     out.source = source_;
     out.topics.push_back(

@@ -104,6 +104,16 @@ TEST(CsmLog, BadRecordsAreNamed) {
                 .find("nrays is not the number of readings (2)"),
             std::string::npos);
   EXPECT_NE(error("[1, 2]").find("record 0 (line 1): expected a JSON object"), std::string::npos);
+  // Units mixed up: angles in degrees, ranges in millimetres.
+  EXPECT_NE(error("{\"readings\": [1, 2], \"min_theta\": -120, \"max_theta\": 120, "
+                  "\"timestamp\": [1, 0]}")
+                .find("the beams span 240 rad, more than a circle: are the angles in degrees?"),
+            std::string::npos);
+  EXPECT_NE(error("{\"readings\": [1500, 2400, 3100], \"min_theta\": -1, \"max_theta\": 1, "
+                  "\"timestamp\": [1, 0]}")
+                .find("bad.log: the first scans' median reading is 2400: are the readings in "
+                      "millimetres?"),
+            std::string::npos);
   EXPECT_NE(error("{\"T\": 1, \"phi_l\": 1}")
                 .find("no \"readings\" (the ranges of a scan): is "
                       "it a CSM laser log?"),
