@@ -110,9 +110,7 @@ StatusOr<RobotInput> ReadRobotInput(const CalibrateOptions& flags) {
   if (IsScanDirectory(flags.input)) {
     CALIB_ASSIGN_OR_RETURN(out.bag, ReadScanDirectory(flags.input));
   } else if (const std::vector<std::string> logs = CsmLogsOf(flags.input); !logs.empty()) {
-    CALIB_ASSIGN_OR_RETURN(out.bag, logs.size() == 1 && logs.front() == flags.input
-                                        ? ReadCsmLog(flags.input)
-                                        : ReadCsmLogs(logs, flags.input));
+    CALIB_ASSIGN_OR_RETURN(out.bag, ReadCsmLogs(logs, flags.input));
   } else if (const std::vector<std::string> bags = BagsOf(flags.input); !bags.empty()) {
     CALIB_ASSIGN_OR_RETURN(out.bag, ReadBags(bags, flags.input, read));
   } else {

@@ -9,8 +9,9 @@
 #include <string>
 
 // A robot's recording on the command line (a ROS bag, a bag directory, a directory of
-// scans.csv and odometry.csv, or a CSM laser log with the wheels' counts: csm_log.h), read with the options its flags give; shared by calibrate and
-// diagnose.
+// scans.csv and odometry.csv, or a CSM laser log with the wheels' counts: csm_log.h; several
+// bags or CSM logs separated by commas as one), read with the options its flags give; shared by
+// calibrate and diagnose.
 namespace calib::cli {
 
 bool IsRobotInput(const std::string& input);
