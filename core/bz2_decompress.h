@@ -4,6 +4,8 @@
 #include <calib/core/status.h>
 
 #include <cstddef>
+#include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 
@@ -22,6 +24,34 @@ struct Bz2Options {
 // stream does (truncated).
 Status Bz2Decompress(std::string_view data, const Bz2Options& options, std::string* out,
                      bool* ended = nullptr);
+
+// The same piece by piece, so that a long log is never held whole. `data` must outlive it.
+class Bz2Stream {
+ public:
+  Bz2Stream(std::string_view data, bool concatenated);
+  ~Bz2Stream();
+  Bz2Stream(const Bz2Stream&) = delete;
+  Bz2Stream& operator=(const Bz2Stream&) = delete;
+
+  // Appends up to max_bytes more of the output to *out; none once the data are used up.
+  Status Append(size_t max_bytes, std::string* out);
+  // Whether the (last) stream has ended.
+  bool ended() const { return ended_; }
+
+ private:
+  struct Decoder;  // libbz2's state for the stream under way.
+
+  std::string_view data_;
+  bool concatenated_;
+  std::unique_ptr<Decoder> decoder_;
+  bool ended_ = false;
+};
+
+// Decompresses a bzip2 file's `data` (streams one after another) in pieces of piece_bytes on a
+// second thread, while `consume` reads the pieces in order on the calling thread. Stops at the
+// first error, the consumer's or the data's (corrupt, truncated), and returns it.
+Status ForEachBz2Piece(std::string_view data, size_t piece_bytes,
+                       const std::function<Status(std::string_view piece)>& consume);
 
 }  // namespace calib
 

@@ -1,5 +1,6 @@
 #include <calib/core/bz2_decompress.h>
 #include <calib/core/scan/csm_log.h>
+#include <calib/core/scan/csm_record.h>
 #include <calib/core/text_file.h>
 #include <calib/core/text_number.h>
 
@@ -8,14 +9,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <utility>
 
 namespace calib {
 namespace {
-
-using nlohmann::json;
 
 // How far a beam's "theta" may lie off its scan's even grid (rad): Hokuyo and SICK angles are
 // exact steps; more says the beams are not one scan's.
@@ -29,6 +27,11 @@ constexpr double kMaxMedianRangeM = 100.0;
 constexpr size_t kSniffBytes = 64 * 1024;
 // A whole log decompresses to at most this much.
 constexpr size_t kMaxTextBytes = size_t{8} << 30;
+// The log is read in pieces of this much text.
+constexpr size_t kPieceBytes = size_t{4} << 20;
+// A record cut by a piece's end is completed from the next piece's first bytes, at least this many
+// at a time.
+constexpr size_t kCarryStepBytes = size_t{64} << 10;
 
 bool IsSpace(char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; }
 
@@ -39,47 +42,13 @@ std::string Where(const std::string& source, int64_t record, int64_t line) {
   return source + " record " + std::to_string(record) + " (line " + std::to_string(line) + ")";
 }
 
-// Python's json writes NaN and Infinity, which JSON has not: read as null.
-std::string NullForNonFinite(std::string_view text) {
-  std::string out;
-  bool in_string = false;
-  for (size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    if (in_string) {
-      out += c;
-      if (c == '\\' && i + 1 < text.size()) out += text[++i];
-      if (c == '"') in_string = false;
-      continue;
-    }
-    if (c == '"') in_string = true;
-    bool replaced = false;
-    for (std::string_view word : {"-Infinity", "Infinity", "NaN", "-inf", "inf", "nan"}) {
-      if (text.substr(i, word.size()) == word) {
-        out += "null";
-        i += word.size() - 1;
-        replaced = true;
-        break;
-      }
-    }
-    if (!replaced) out += c;
-  }
-  return out;
-}
-
-std::optional<double> Number(const json& j) {
-  if (j.is_number()) return j.get<double>();
-  return std::nullopt;
-}
-
 // [s, µs] (CSM's struct timeval), or seconds as one number; nullopt when absent or unset (−1).
-std::optional<double> Stamp(const json& record, const char* key) {
-  const auto it = record.find(key);
-  if (it == record.end()) return std::nullopt;
-  if (it->is_number()) return it->get<double>();
-  if (!it->is_array() || it->size() != 2) return std::nullopt;
-  const std::optional<double> s = Number((*it)[0]), us = Number((*it)[1]);
-  if (!s || !us || *s < 0.0 || *us < 0.0) return std::nullopt;
-  return *s + 1e-6 * *us;
+std::optional<double> Stamp(const CsmValue& v) {
+  if (v.IsNumber()) return v.number;
+  if (!v.IsArray(2)) return std::nullopt;
+  const double s = v.array[0], us = v.array[1];
+  if (!(s >= 0.0) || !(us >= 0.0)) return std::nullopt;
+  return s + 1e-6 * us;
 }
 
 struct EncoderReading {
@@ -87,50 +56,82 @@ struct EncoderReading {
   int64_t record;
 };
 
-class CsmParser {
- public:
-  CsmParser(std::string_view text, const std::string& source) : text_(text), source_(source) {}
+}  // namespace
 
-  StatusOr<RobotMessages> Parse() {
-    size_t p = 0;
-    while (true) {
-      p = SkipSpace(p);
-      if (p >= text_.size()) break;
-      const int64_t line = line_;
-      CALIB_ASSIGN_OR_RETURN(const size_t end, RecordEnd(p, line));
-      CALIB_RETURN_IF_ERROR(Record(text_.substr(p, end - p), line));
-      CountLines(p, end);
-      p = end;
-      ++record_;
+class CsmLogReader::Parser {
+ public:
+  explicit Parser(const std::string& source) : source_(source) {}
+
+  Status Feed(std::string_view piece) {
+    // A record the last piece ended inside is completed from this one's first bytes (a growing
+    // prefix, so that a long piece is not copied whole behind it).
+    while (!carry_.empty() && !piece.empty()) {
+      const size_t take = std::min(piece.size(), std::max(carry_.size(), kCarryStepBytes));
+      carry_.append(piece.substr(0, take));
+      piece.remove_prefix(take);
+      size_t used = 0;
+      CALIB_RETURN_IF_ERROR(Records(carry_, false, &used));
+      carry_.erase(0, used);
     }
-    return Finish();
+    if (!carry_.empty()) return Status::Ok();
+    size_t used = 0;
+    CALIB_RETURN_IF_ERROR(Records(piece, false, &used));
+    carry_.assign(piece.substr(used));
+    return Status::Ok();
+  }
+
+  StatusOr<RobotMessages> Finish() {
+    size_t used = 0;
+    CALIB_RETURN_IF_ERROR(Records(carry_, true, &used));
+    return Messages();
   }
 
  private:
-  size_t SkipSpace(size_t p) {
-    while (p < text_.size() && IsSpace(text_[p])) {
-      if (text_[p] == '\n') ++line_;
+  // The whole records in `text`; *used: how many bytes they (and the space around them) take.
+  Status Records(std::string_view text, bool last, size_t* used) {
+    size_t p = 0;
+    while (true) {
+      const size_t begin = p;
+      const int64_t begin_line = line_;
+      p = SkipSpace(text, p);
+      *used = p;
+      if (p >= text.size()) return Status::Ok();
+      const int64_t line = line_;
+      CALIB_ASSIGN_OR_RETURN(const size_t end, RecordEnd(text, p, line, last));
+      if (end == std::string_view::npos) {
+        line_ = begin_line;  // Read again with the next piece.
+        *used = begin;
+        return Status::Ok();
+      }
+      CALIB_RETURN_IF_ERROR(Record(text.substr(p, end - p), line));
+      line_ += std::count(text.begin() + p, text.begin() + end, '\n');
+      p = end;
+      ++record_;
+    }
+  }
+
+  size_t SkipSpace(std::string_view text, size_t p) {
+    while (p < text.size() && IsSpace(text[p])) {
+      if (text[p] == '\n') ++line_;
       ++p;
     }
     return p;
   }
-  void CountLines(size_t begin, size_t end) {
-    line_ += std::count(text_.begin() + begin, text_.begin() + end, '\n');
-  }
 
-  // One past the '}' that closes the object at p.
-  StatusOr<size_t> RecordEnd(size_t p, int64_t line) const {
-    if (text_[p] != '{') {
+  // One past the '}' that closes the object at p; npos when the text ends first and more may
+  // follow (not `last`).
+  StatusOr<size_t> RecordEnd(std::string_view text, size_t p, int64_t line, bool last) const {
+    if (text[p] != '{') {
       return Status::InvalidInput(Where(source_, record_, line) +
                                   ": expected a JSON object ('{'), "
                                   "found '" +
-                                  std::string(text_.substr(p, 20)) + "'");
+                                  std::string(text.substr(p, 20)) + "'");
     }
     int depth = 0;
     bool in_string = false;
-    const size_t limit = std::min(text_.size(), p + kMaxLineBytes);
+    const size_t limit = std::min(text.size(), p + kMaxLineBytes);
     for (size_t i = p; i < limit; ++i) {
-      const char c = text_[i];
+      const char c = text[i];
       if (in_string) {
         if (c == '\\')
           ++i;
@@ -144,49 +145,42 @@ class CsmParser {
         return i + 1;
       }
     }
-    if (limit < text_.size()) {
+    if (limit < text.size()) {
       return Status::InvalidInput(Where(source_, record_, line) + ": longer than " +
                                   std::to_string(kMaxLineBytes >> 20) + " MB (not a scan record?)");
     }
+    if (!last) return std::string_view::npos;
     return Status::InvalidInput(Where(source_, record_, line) +
                                 ": the file ends inside the record (truncated)");
   }
 
   Status Record(std::string_view bytes, int64_t line) {
-    json record = json::parse(bytes.begin(), bytes.end(), nullptr, false);
-    if (record.is_discarded()) {
-      const std::string nulled = NullForNonFinite(bytes);
-      record = json::parse(nulled, nullptr, false);
-    }
     const std::string where = Where(source_, record_, line);
-    if (record.is_discarded() || !record.is_object()) {
+    if (!ParseCsmRecord(bytes, &record_fields_))
       return Status::InvalidInput(where + ": not a JSON object");
-    }
-    if (!record.contains("readings")) {
+    const CsmRecord& r = record_fields_;
+    if (!r.readings.present()) {
       return Status::InvalidInput(where + ": no \"readings\" (the ranges of a scan)" +
                                   (record_ == 0 ? ": is it a CSM laser log?" : ""));
     }
-    const std::optional<double> t = Stamp(record, "timestamp");
+    const std::optional<double> t = Stamp(r.timestamp);
     if (!t) {
       return Status::InvalidInput(where + ": no \"timestamp\" ([seconds, microseconds])");
     }
-    CALIB_RETURN_IF_ERROR(Scan(record, *t, where));
-    CALIB_RETURN_IF_ERROR(Encoders(record, *t, where));
-    ReadOdometry(record, *t);
+    CALIB_RETURN_IF_ERROR(Scan(r, *t, where));
+    CALIB_RETURN_IF_ERROR(Encoders(r, *t, where));
+    ReadOdometry(r, *t);
     return Status::Ok();
   }
 
   // The beams' angles: "theta", or min_theta..max_theta over nrays.
-  Status Angles(const json& record, size_t n, const std::string& where, LaserScan* scan) const {
-    const auto theta = record.find("theta");
-    if (theta != record.end() && theta->is_array() && theta->size() == n) {
-      std::vector<double> a(n);
+  Status Angles(const CsmRecord& r, size_t n, const std::string& where, LaserScan* scan) const {
+    if (r.theta.IsArray(n)) {
+      const std::vector<double>& a = r.theta.array;
       for (size_t i = 0; i < n; ++i) {
-        const std::optional<double> v = Number((*theta)[i]);
-        if (!v || !std::isfinite(*v)) {
+        if (!std::isfinite(a[i])) {
           return Status::InvalidInput(where + ": theta[" + std::to_string(i) + "] is no number");
         }
-        a[i] = *v;
       }
       scan->angle_min_rad = a[0];
       scan->angle_increment_rad = n > 1 ? (a[n - 1] - a[0]) / (n - 1) : 0.0;
@@ -198,31 +192,26 @@ class CsmParser {
       }
       return Status::Ok();
     }
-    if (theta != record.end()) {
+    if (r.theta.present()) {
       return Status::InvalidInput(where + ": \"theta\" must hold one angle per reading (" +
                                   std::to_string(n) + ")");
     }
-    const std::optional<double> lo =
-        record.contains("min_theta") ? Number(record["min_theta"]) : std::nullopt;
-    const std::optional<double> hi =
-        record.contains("max_theta") ? Number(record["max_theta"]) : std::nullopt;
-    if (!lo || !hi || !std::isfinite(*lo) || !std::isfinite(*hi)) {
+    if (!r.min_theta.IsNumber() || !r.max_theta.IsNumber()) {
       return Status::InvalidInput(where +
                                   ": no beam angles (\"theta\", or \"min_theta\" and "
                                   "\"max_theta\")");
     }
-    scan->angle_min_rad = *lo;
-    scan->angle_increment_rad = n > 1 ? (*hi - *lo) / (n - 1) : 0.0;
+    scan->angle_min_rad = r.min_theta.number;
+    scan->angle_increment_rad = n > 1 ? (r.max_theta.number - r.min_theta.number) / (n - 1) : 0.0;
     return Status::Ok();
   }
 
-  Status Scan(const json& record, double t, const std::string& where) {
-    const auto readings = record.find("readings");
-    if (readings == record.end() || !readings->is_array() || readings->empty()) {
+  Status Scan(const CsmRecord& r, double t, const std::string& where) {
+    const size_t n = r.readings.array.size();
+    if (r.readings.kind != CsmValue::Kind::kArray || n == 0) {
       return Status::InvalidInput(where + ": \"readings\" must be a non-empty array of ranges");
     }
-    const size_t n = readings->size();
-    if (record.contains("nrays") && Number(record["nrays"]) != static_cast<double>(n)) {
+    if (r.nrays.present() && !(r.nrays.IsNumber() && r.nrays.number == static_cast<double>(n))) {
       return Status::InvalidInput(where + ": nrays is not the number of readings (" +
                                   std::to_string(n) + ")");
     }
@@ -231,50 +220,42 @@ class CsmParser {
     scan.record = record_;
     scan.frame_id = "laser";
     scan.range_max_m = std::numeric_limits<double>::infinity();
-    CALIB_RETURN_IF_ERROR(Angles(record, n, where, &scan));
+    CALIB_RETURN_IF_ERROR(Angles(r, n, where, &scan));
     const double span_rad = std::abs(scan.angle_increment_rad) * (n - 1);
     if (span_rad > 2.0 * M_PI + 1e-6) {
       return Status::InvalidInput(where + ": the beams span " + Num(span_rad) +
                                   " rad, more than a circle: are the angles in degrees? (CSM "
                                   "logs hold radians)");
     }
-    const auto valid = record.find("valid");
-    const bool has_valid = valid != record.end() && valid->is_array() && valid->size() == n;
+    const bool has_valid = r.valid.IsArray(n);
     scan.ranges_m.resize(n);
     for (size_t i = 0; i < n; ++i) {
-      const std::optional<double> r = Number((*readings)[i]);
+      const double range = r.readings.array[i];
+      // NaN (null) is no return, and so is a beam marked invalid (0 or null).
       const bool ok =
-          r && *r >= kMinReadingM && (!has_valid || Number((*valid)[i]).value_or(0.0) != 0.0);
-      scan.ranges_m[i] = ok ? static_cast<float>(*r) : std::numeric_limits<float>::quiet_NaN();
+          range >= kMinReadingM && (!has_valid || r.valid.array[i] > 0.0 || r.valid.array[i] < 0.0);
+      scan.ranges_m[i] = ok ? static_cast<float>(range) : std::numeric_limits<float>::quiet_NaN();
     }
     scans_.push_back(std::move(scan));
     return Status::Ok();
   }
 
-  Status Encoders(const json& record, double t, const std::string& where) {
-    const bool left = record.contains("left"), right = record.contains("right");
-    if (!left && !right) return Status::Ok();
-    const std::optional<double> l = left ? Number(record["left"]) : std::nullopt;
-    const std::optional<double> r = right ? Number(record["right"]) : std::nullopt;
-    if (!l || !r || !std::isfinite(*l) || !std::isfinite(*r)) {
+  Status Encoders(const CsmRecord& r, double t, const std::string& where) {
+    if (!r.left.present() && !r.right.present()) return Status::Ok();
+    if (!r.left.IsNumber() || !r.right.IsNumber()) {
       return Status::InvalidInput(where + ": \"left\" and \"right\" must both be encoder counts");
     }
-    const std::optional<double> lt = Stamp(record, "leftTimestamp");
-    const std::optional<double> rt = Stamp(record, "rightTimestamp");
+    const std::optional<double> lt = Stamp(r.left_timestamp);
+    const std::optional<double> rt = Stamp(r.right_timestamp);
     own_stamps_ = own_stamps_ || (lt && rt);
-    encoders_.push_back({lt.value_or(t), *l, rt.value_or(t), *r, record_});
+    encoders_.push_back({lt.value_or(t), r.left.number, rt.value_or(t), r.right.number, record_});
     return Status::Ok();
   }
 
-  void ReadOdometry(const json& record, double t) {
-    const auto odometry = record.find("odometry");
-    if (odometry == record.end() || !odometry->is_array() || odometry->size() != 3) return;
-    double v[3];
-    for (int k = 0; k < 3; ++k) {
-      const std::optional<double> x = Number((*odometry)[k]);
-      if (!x || !std::isfinite(*x)) return;
-      v[k] = *x;
-    }
+  void ReadOdometry(const CsmRecord& r, double t) {
+    if (!r.odometry.IsArray(3)) return;
+    const std::vector<double>& v = r.odometry.array;
+    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) return;
     Odometry o;
     o.stamp_s = o.log_time_s = t;
     o.record = record_;
@@ -346,7 +327,7 @@ class CsmParser {
                                 "hold metres)");
   }
 
-  StatusOr<RobotMessages> Finish() {
+  StatusOr<RobotMessages> Messages() {
     if (scans_.empty()) return Status::InvalidInput(source_ + ": no scan records (empty log)");
     CALIB_RETURN_IF_ERROR(CheckRangeUnit());
     RobotMessages out;
@@ -372,8 +353,9 @@ class CsmParser {
     return out;
   }
 
-  std::string_view text_;
   const std::string& source_;
+  std::string carry_;  // The start of a record the last piece ended inside.
+  CsmRecord record_fields_;
   int64_t record_ = 0, line_ = 1;
   std::vector<LaserScan> scans_;
   std::vector<EncoderReading> encoders_;
@@ -381,19 +363,20 @@ class CsmParser {
   bool own_stamps_ = false, moved_ = false;
 };
 
-StatusOr<std::string> Decompressed(std::string_view bytes, const std::string& path) {
-  std::string text;
-  bool ended = false;
-  const Status s = Bz2Decompress(bytes, {kMaxTextBytes, true}, &text, &ended);
-  if (!s.ok()) return Status::InvalidInput(path + ": " + s.message());
-  if (!ended && text.size() >= kMaxTextBytes) {
-    return Status::InvalidInput(path + ": decompresses to more than " +
-                                std::to_string(kMaxTextBytes >> 30) + " GiB");
-  }
-  return text;
+CsmLogReader::CsmLogReader(std::string source)
+    : source_(std::move(source)), parser_(std::make_unique<Parser>(source_)) {}
+CsmLogReader::~CsmLogReader() = default;
+
+Status CsmLogReader::Feed(std::string_view piece) {
+  if (!error_.ok()) return error_;
+  error_ = GuardAllocation(source_, [&] { return parser_->Feed(piece); });
+  return error_;
 }
 
-}  // namespace
+StatusOr<RobotMessages> CsmLogReader::Finish() {
+  if (!error_.ok()) return error_;
+  return GuardAllocation(source_, [&] { return parser_->Finish(); });
+}
 
 bool IsBz2File(const std::string& path) {
   std::error_code ec;
@@ -424,16 +407,41 @@ bool LooksLikeCsmLog(const std::string& path) {
 }
 
 StatusOr<RobotMessages> ReadCsmLogText(std::string_view text, const std::string& source) {
-  return GuardAllocation(source, [&] { return CsmParser(text, source).Parse(); });
+  CsmLogReader reader(source);
+  CALIB_RETURN_IF_ERROR(reader.Feed(text));
+  return reader.Finish();
 }
 
 StatusOr<RobotMessages> ReadCsmLog(const std::string& path) {
   CALIB_ASSIGN_OR_RETURN(const MappedFile file, MappedFile::Open(path));
-  if (!IsBz2(file.text())) return ReadCsmLogText(file.text(), path);
-  return GuardAllocation(path, [&]() -> StatusOr<RobotMessages> {
-    CALIB_ASSIGN_OR_RETURN(const std::string text, Decompressed(file.text(), path));
-    return ReadCsmLogText(text, path);
+  CsmLogReader reader(path);
+  std::string_view text = file.text();
+  if (!IsBz2(text)) {
+    // In pieces, each dropped from memory once read.
+    while (!text.empty()) {
+      const std::string_view piece = text.substr(0, kPieceBytes);
+      CALIB_RETURN_IF_ERROR(reader.Feed(piece));
+      file.Release(piece.data(), piece.data() + piece.size());
+      text.remove_prefix(piece.size());
+    }
+    return reader.Finish();
+  }
+  // Decompressed on a second thread while the pieces are parsed, never held whole.
+  size_t total = 0;
+  const Status read = ForEachBz2Piece(text, kPieceBytes, [&](std::string_view piece) {
+    total += piece.size();
+    if (total > kMaxTextBytes) {
+      return Status::InvalidInput(path + ": decompresses to more than " +
+                                  std::to_string(kMaxTextBytes >> 30) + " GiB");
+    }
+    return reader.Feed(piece);
   });
+  if (!read.ok()) {
+    // The reader's messages name the file; the decompressor's do not.
+    return read.message().rfind(path, 0) == 0 ? read
+                                              : Status::InvalidInput(path + ": " + read.message());
+  }
+  return reader.Finish();
 }
 
 }  // namespace calib

@@ -6,6 +6,7 @@
 #include <calib/core/scan/laser_scan.h>
 #include <calib/core/status.h>
 
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -62,6 +63,27 @@ StatusOr<RobotMessages> JoinCsmLogs(std::vector<RobotMessages> logs, const std::
 
 // The same over the (decompressed) text; `source` names it in messages.
 StatusOr<RobotMessages> ReadCsmLogText(std::string_view text, const std::string& source);
+
+// The same over text that arrives in pieces, cut anywhere (a record a piece ends inside waits for
+// the next): memory for the scans, not for the text.
+class CsmLogReader {
+ public:
+  explicit CsmLogReader(std::string source);
+  ~CsmLogReader();
+  CsmLogReader(const CsmLogReader&) = delete;
+  CsmLogReader& operator=(const CsmLogReader&) = delete;
+
+  // The first bad record's error, naming it; the reader is then done.
+  Status Feed(std::string_view piece);
+  // The log read: an error when it ends inside a record (truncated) or holds no scan.
+  StatusOr<RobotMessages> Finish();
+
+ private:
+  class Parser;
+  std::string source_;
+  std::unique_ptr<Parser> parser_;
+  Status error_ = Status::Ok();
+};
 
 // A simulated robot's scans and wheel angles as such a log: each scan with the counts (rounded,
 // `counts_per_turn` a wheel turn) and stamps of the latest encoder sample at or before it, every

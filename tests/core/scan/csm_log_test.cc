@@ -1,8 +1,10 @@
 #include <bzlib.h>
 #include <calib/core/scan/csm_log.h>
 #include <calib/core/text_file.h>
+#include <calib/core/text_number.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -122,6 +124,83 @@ TEST(CsmLog, BadRecordsAreNamed) {
                 .find("record 1 (line 2): \"readings\" must be a non-empty array"),
             std::string::npos);
   EXPECT_NE(error("  \n").find("bad.log: no scan records (empty log)"), std::string::npos);
+}
+
+// What a test compares of two reads of one log.
+std::string Summary(const StatusOr<RobotMessages>& bag) {
+  if (!bag.ok()) return bag.message();
+  std::string out;
+  for (const LaserScan& scan : bag->scans.at("scans")) {
+    out += Num(scan.stamp_s) + " " + Num(scan.angle_min_rad) + " " + Num(scan.angle_increment_rad);
+    for (float r : scan.ranges_m) out += " " + Num(r);
+    out += "\n";
+  }
+  for (const JointState& j : bag->joint_states.at("encoders")) {
+    out += Num(j.stamp_s) + " " + Num(j.position[0]) + " " + Num(j.position[1]) + "\n";
+  }
+  return out;
+}
+
+// A log read in pieces, cut anywhere (inside a number, a string, between records), reads as the
+// whole text does, and so do its errors.
+TEST(CsmLog, PiecesCutAnywhereReadAsTheWhole) {
+  std::string text;
+  for (int k = 0; k < 12; ++k) {
+    text += Record(1.0 + 0.2 * k, 7 * k, -5 * k, 0.999 + 0.2 * k, 1.0 + 0.2 * k);
+    if (k % 3 == 0) text += "\n\n";
+  }
+  const auto pieces = [](const std::string& all, size_t size) {
+    CsmLogReader reader("cut.log");
+    for (size_t p = 0; p < all.size(); p += size) {
+      const Status fed = reader.Feed(std::string_view(all).substr(p, size));
+      if (!fed.ok()) return StatusOr<RobotMessages>(fed);
+    }
+    return reader.Finish();
+  };
+  const std::string whole = Summary(ReadCsmLogText(text, "cut.log"));
+  ASSERT_EQ(std::count(whole.begin(), whole.end(), '\n'), 12 + 12) << whole;
+  for (size_t size : {1, 2, 3, 7, 64, 500, 100000}) {
+    EXPECT_EQ(Summary(pieces(text, size)), whole) << size;
+  }
+  const std::string cut = text.substr(0, text.size() - 30);
+  const std::string error = Summary(ReadCsmLogText(cut, "cut.log"));
+  EXPECT_NE(error.find("cut.log record 11 (line 20): the file ends inside the record"),
+            std::string::npos)
+      << error;
+  for (size_t size : {1, 5, 64}) EXPECT_EQ(Summary(pieces(cut, size)), error) << size;
+  // After an error the reader stays at it.
+  CsmLogReader reader("bad.log");
+  EXPECT_FALSE(reader.Feed("[1]").ok());
+  EXPECT_FALSE(reader.Feed(text).ok());
+  EXPECT_NE(reader.Finish().message().find("expected a JSON object"), std::string::npos);
+}
+
+// Fields the reader does not use may hold anything JSON allows (nested objects, escaped strings)
+// and are skipped; a reading that is no number (a nested array, a string) is no return.
+TEST(CsmLog, AnyJsonInOtherFieldsIsSkipped) {
+  const std::string text =
+      "{\"extra\": {\"a\": [1, {\"b\": \"x\\\"}\"}], \"c\": true}, \"note\": \"tab\\t\", "
+      "\"readings\": [1.5, [2], \"3\", 0, -Infinity, 2.5], \"min_theta\": -1, "
+      "\"max_theta\": 1, \"timestamp\": [3, 5e5], \"flag\": false, \"sensor\": null}\n"
+      "{ \"readings\" : [ 1.0 , 2.0 ] , \"theta\" : [ -0.5 , 0.5 ] , \"timestamp\" : 4.25 }";
+  const StatusOr<RobotMessages> bag = ReadCsmLogText(text, "any.log");
+  ASSERT_TRUE(bag.ok()) << bag.message();
+  const std::vector<LaserScan>& scans = bag->scans.at("scans");
+  ASSERT_EQ(scans.size(), 2u);
+  EXPECT_DOUBLE_EQ(scans[0].stamp_s, 3.5);
+  EXPECT_TRUE(scans[0].IsReturn(0));
+  EXPECT_FALSE(scans[0].IsReturn(1));
+  EXPECT_FALSE(scans[0].IsReturn(2));
+  EXPECT_FALSE(scans[0].IsReturn(4));
+  EXPECT_FLOAT_EQ(scans[0].ranges_m[5], 2.5f);
+  EXPECT_DOUBLE_EQ(scans[1].stamp_s, 4.25);
+  EXPECT_DOUBLE_EQ(scans[1].angle_increment_rad, 1.0);
+  // Not JSON at all, however it is cut.
+  const StatusOr<RobotMessages> bad =
+      ReadCsmLogText("{\"readings\": [1, 2], \"timestamp\": [1, 0] \"x\": 1}", "bad.log");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.message().find("bad.log record 0 (line 1): not a JSON object"), std::string::npos)
+      << bad.message();
 }
 
 std::string Bz2(const std::string& text) {
