@@ -300,6 +300,79 @@ Status CalibratePass(const RobotMessages& bag, const RobotBagOptions& options,
   return Status::Ok();
 }
 
+// The next pass de-skews through `calibration`.
+void DeskewThrough(const LaserCalibration& calibration, const std::vector<LaserScan>& scans,
+                   const RobotBagCalibration& last, RobotBagOptions* options) {
+  options->calibrated = calibration;
+  options->calibrated_sweep_starts = ScanSweepStarts(scans, last.result);
+}
+
+// The de-skewed passes; when they do not settle, their estimates' spread from pass to pass.
+struct DeskewedPasses {
+  int passes = 1;
+  bool settled = false;
+  double moved_sigmas = 0.0;  // The last pass's largest move.
+  std::vector<LaserParamVector> estimates;
+};
+
+// Passes after the first until one moves no parameter by kSettledSigmas. On a real log they may
+// not settle: which scans fail and which beams pair switch with the de-skewing, and the estimate
+// steps between a few states (a Mines rover's log: b by ±4 mm, 1–2 σ, pass after pass). Then the
+// last pass is de-skewed through the mean of the passes before it but the first de-skewed one.
+Status RunDeskewedPasses(const RobotMessages& probe, const std::vector<LaserScan>& scans,
+                         const LaserTimingOptions& timing, RobotBagOptions* deskewed,
+                         RobotBagCalibration* out, DeskewedPasses* run) {
+  const bool forced_timing = deskewed->beam_timing.has_value();
+  while (!run->settled && run->passes < kMaxPasses - 1) {
+    DeskewThrough(out->result.calibration.estimate, scans, *out, deskewed);
+    const LaserCalibrationResult before = out->result.calibration;
+    // The beams' timing is judged again while the calibration it goes through still moves by
+    // kRecheckSigmas between passes: the first pass matched skewed sweeps, and its calibration and
+    // timing can be far off (a slower logger's clock not yet found put the sweeps ~65 ms early,
+    // where a 30 % longer sweep closed them best). Then it is kept.
+    const bool recheck =
+        !forced_timing && (run->passes == 1 || !(run->moved_sigmas < kRecheckSigmas));
+    deskewed->beam_timing = recheck ? std::nullopt : out->log.beam_timing;
+    CALIB_RETURN_IF_ERROR(CalibratePass(probe, *deskewed, timing, out));
+    ++run->passes;
+    run->moved_sigmas = MovedSigmas(before, out->result.calibration);
+    run->settled = run->moved_sigmas < kSettledSigmas;
+    run->estimates.push_back(out->result.calibration.estimate.ToVector());
+  }
+  if (run->settled || run->estimates.size() < 3) return Status::Ok();
+  LaserParamVector mean = LaserParamVector::Zero();
+  for (size_t k = 1; k < run->estimates.size(); ++k) mean += run->estimates[k];
+  mean /= static_cast<double>(run->estimates.size() - 1);
+  DeskewThrough(LaserCalibration::FromVector(mean), scans, *out, deskewed);
+  deskewed->beam_timing = out->log.beam_timing;
+  CALIB_RETURN_IF_ERROR(CalibratePass(probe, *deskewed, timing, out));
+  ++run->passes;
+  return Status::Ok();
+}
+
+// The passes' spread (all de-skewed passes but the first, and the last) joins the covariance: the
+// result is one draw of the states they step between.
+std::string WidenByPassSpread(const DeskewedPasses& run, LaserCalibrationResult* result) {
+  std::vector<LaserParamVector> draws(run.estimates.begin() + 1, run.estimates.end());
+  draws.push_back(result->estimate.ToVector());
+  LaserParamVector mean = LaserParamVector::Zero();
+  for (const LaserParamVector& d : draws) mean += d;
+  mean /= static_cast<double>(draws.size());
+  LaserParamMatrix spread = LaserParamMatrix::Zero();
+  for (const LaserParamVector& d : draws) spread += (d - mean) * (d - mean).transpose();
+  spread /= static_cast<double>(draws.size() - 1);
+  const double largest = spread.diagonal().cwiseSqrt().cwiseQuotient(result->stddev).maxCoeff();
+  result->covariance += spread;
+  result->stddev = result->covariance.diagonal().cwiseSqrt();
+  char buffer[320];
+  std::snprintf(buffer, sizeof(buffer),
+                "the de-skewed matching passes had not settled after %d (the last moved a "
+                "parameter by %.2f σ; from pass to pass they scatter by up to %.2f σ): the last "
+                "pass was de-skewed through their mean, and the σ include their scatter",
+                run.passes, run.moved_sigmas, largest);
+  return buffer;
+}
+
 // The matching and the two-stage calibration (passes until settled where the scans sweep).
 StatusOr<RobotBagCalibration> CalibrateTwoStage(const RobotMessages& bag,
                                                 const RobotBagOptions& options,
@@ -325,37 +398,16 @@ StatusOr<RobotBagCalibration> CalibrateTwoStage(const RobotMessages& bag,
   CALIB_RETURN_IF_ERROR(CalibratePass(probe, options, timing, &out));
   if (!sweeps) return out;
   RobotBagOptions deskewed = options;
-  int passes = 1;
-  double moved = 0.0;
-  for (bool settled = false; !settled && passes < kMaxPasses;) {
-    deskewed.calibrated = out.result.calibration.estimate;
-    deskewed.calibrated_sweep_starts = ScanSweepStarts(scans, out.result);
-    const LaserCalibrationResult before = out.result.calibration;
-    // The beams' timing is judged again while the calibration it goes through still moves by
-    // kRecheckSigmas between passes: the first pass matched skewed sweeps, and its calibration and
-    // timing can be far off (a slower logger's clock not yet found put the sweeps ~65 ms early,
-    // where a 30 % longer sweep closed them best). Then it is kept.
-    const bool recheck = !options.beam_timing && (passes == 1 || !(moved < kRecheckSigmas));
-    deskewed.beam_timing = recheck ? std::nullopt : out.log.beam_timing;
-    CALIB_RETURN_IF_ERROR(CalibratePass(probe, deskewed, timing, &out));
-    ++passes;
-    moved = MovedSigmas(before, out.result.calibration);
-    settled = moved < kSettledSigmas;
-  }
+  DeskewedPasses run;
+  CALIB_RETURN_IF_ERROR(RunDeskewedPasses(probe, scans, timing, &deskewed, &out, &run));
   if (long_log) {
-    deskewed.calibrated = out.result.calibration.estimate;
-    deskewed.calibrated_sweep_starts = ScanSweepStarts(scans, out.result);
+    DeskewThrough(out.result.calibration.estimate, scans, out, &deskewed);
     CALIB_RETURN_IF_ERROR(CalibratePass(bag, deskewed, timing, &out));
-    ++passes;
+    ++run.passes;
   }
-  out.log.matching_passes = passes;
-  if (!(moved < kSettledSigmas)) {
-    char buffer[256];
-    std::snprintf(buffer, sizeof(buffer),
-                  "the de-skewed matching passes had not settled after %d (the last moved a "
-                  "parameter by %.2f σ): the sweeps' de-skewing may still bias the estimate",
-                  kMaxPasses, moved);
-    out.log.warnings.push_back(buffer);
+  out.log.matching_passes = run.passes;
+  if (!run.settled && run.estimates.size() >= 3) {
+    out.log.warnings.push_back(WidenByPassSpread(run, &out.result.calibration));
   }
   return out;
 }
