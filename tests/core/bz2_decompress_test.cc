@@ -1,21 +1,14 @@
-#include <bzlib.h>
 #include <calib/core/bz2_decompress.h>
 #include <gtest/gtest.h>
 
 #include <string>
 
+#include "tests/bz2_compress.h"
+
 namespace calib {
 namespace {
 
-std::string Bz2(const std::string& text) {
-  std::string out(text.size() + text.size() / 100 + 600, '\0');
-  unsigned size = static_cast<unsigned>(out.size());
-  EXPECT_EQ(BZ2_bzBuffToBuffCompress(out.data(), &size, const_cast<char*>(text.data()),
-                                     static_cast<unsigned>(text.size()), 1, 0, 0),
-            BZ_OK);
-  out.resize(size);
-  return out;
-}
+std::string Bz2(const std::string& text) { return testing::Bz2Compress(text, 1); }
 
 std::string Text(size_t bytes) {
   std::string text;

@@ -1,4 +1,3 @@
-#include <bzlib.h>
 #include <calib/core/scan/csm_log.h>
 #include <calib/core/text_file.h>
 #include <calib/core/text_number.h>
@@ -10,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/bz2_compress.h"
 #include "tests/scratch_dir.h"
 
 namespace calib {
@@ -203,15 +203,7 @@ TEST(CsmLog, AnyJsonInOtherFieldsIsSkipped) {
       << bad.message();
 }
 
-std::string Bz2(const std::string& text) {
-  std::string out(text.size() + text.size() / 100 + 600, '\0');
-  unsigned size = static_cast<unsigned>(out.size());
-  EXPECT_EQ(BZ2_bzBuffToBuffCompress(out.data(), &size, const_cast<char*>(text.data()),
-                                     static_cast<unsigned>(text.size()), 9, 0, 0),
-            BZ_OK);
-  out.resize(size);
-  return out;
-}
+std::string Bz2(const std::string& text) { return testing::Bz2Compress(text); }
 
 // The authors' archives hold log.log.bz2: read as it is, told from a tuple file by its content;
 // a file that pbzip2 wrote as several streams reads whole; a truncated one is an error.
