@@ -11,6 +11,7 @@ namespace fs = std::filesystem;
 
 constexpr char kMcapMagic[] = "\x89MCAP0\r\n";
 constexpr char kRos1Magic[] = "#ROSBAG V";
+constexpr char kOldRos1Magic[] = "#ROSRECORD V";  // Bags of format 1.x (before ROS 1.1).
 constexpr char kSqliteMagic[] = "SQLite format 3";
 
 std::string FirstBytes(const std::string& path, size_t count) {
@@ -23,6 +24,11 @@ std::string FirstBytes(const std::string& path, size_t count) {
 
 bool StartsWith(const std::string& bytes, const char* magic) {
   return bytes.compare(0, std::char_traits<char>::length(magic), magic) == 0;
+}
+
+// A ROS 1 bag of any version (the reader names the versions it does not read).
+bool Ros1Bag(const std::string& bytes) {
+  return StartsWith(bytes, kRos1Magic) || StartsWith(bytes, kOldRos1Magic);
 }
 
 bool BagDirectory(const std::string& path) {
@@ -54,8 +60,7 @@ bool LooksLikeRobotBag(const std::string& path) {
   // Read as one, or said not to be.
   if (extension == ".mcap" || extension == ".bag" || SqliteBagName(path)) return true;
   const std::string bytes = FirstBytes(path, 16);
-  return StartsWith(bytes, kMcapMagic) || StartsWith(bytes, kRos1Magic) ||
-         StartsWith(bytes, kSqliteMagic);
+  return StartsWith(bytes, kMcapMagic) || Ros1Bag(bytes) || StartsWith(bytes, kSqliteMagic);
 }
 
 StatusOr<RobotMessages> ReadRobotBag(const std::string& path, const BagReadOptions& options) {
@@ -65,7 +70,7 @@ StatusOr<RobotMessages> ReadRobotBag(const std::string& path, const BagReadOptio
   std::error_code ec;
   if (!fs::exists(path, ec)) return Status::Io(path + ": no such file or directory");
   const std::string bytes = FirstBytes(path, 16);
-  if (StartsWith(bytes, kRos1Magic)) return ReadRos1Bag(path, options);
+  if (Ros1Bag(bytes)) return ReadRos1Bag(path, options);
   if (StartsWith(bytes, kMcapMagic)) return ReadMcapBag(path, options);
   if (StartsWith(bytes, kSqliteMagic) || (SqliteBagName(path) && !bytes.empty())) {
     return ReadSqliteBag(path, options);

@@ -101,10 +101,13 @@ class Ros1BagReader {
     CALIB_RETURN_IF_ERROR(file_.ReadAt(0, magic.size(), &start));
     if (start != magic) {
       if (start.rfind("#ROSBAG V", 0) == 0 || start.rfind("#ROSRECORD V", 0) == 0) {
-        const std::string version = start.substr(start.find('V') + 1);
+        std::string line;  // "#ROSRECORD V1.2" is longer than the 2.0 magic.
+        CALIB_RETURN_IF_ERROR(file_.ReadAt(0, std::min<uint64_t>(file_.size(), 24), &line));
+        const std::string version = line.substr(line.find('V') + 1);
         return Status::InvalidInput("unsupported ROS bag version '" +
                                     version.substr(0, version.find('\n')) +
-                                    "': this reader reads version 2.0");
+                                    "': this reader reads version 2.0 (ROS's `rosbag fix` "
+                                    "rewrites an older bag as 2.0)");
       }
       return Status::InvalidInput("not a ROS bag: it does not start with '#ROSBAG V2.0'");
     }

@@ -1,3 +1,4 @@
+#include <calib/core/bag/robot_bag.h>
 #include <calib/core/bag/robot_messages.h>
 #include <calib/core/bag/ros1_decoder.h>
 #include <calib/core/text_file.h>
@@ -345,6 +346,13 @@ TEST(Ros1BagTest, BadMagicAndVersion) {
   bytes[1] = 'R';
   bytes.replace(9, 3, "1.2");
   ExpectError(WriteTemp("version", bytes), {"unsupported ROS bag version '1.2'"});
+  // A bag of ROS's first format (before 2010) is told apart as one, with the way to convert it.
+  const std::string old = WriteTemp("old", "#ROSRECORD V1.2\n" + bytes.substr(13));
+  const StatusOr<RobotMessages> read = ReadRobotBag(old);
+  ASSERT_FALSE(read.ok());
+  EXPECT_NE(read.message().find("unsupported ROS bag version '1.2'"), std::string::npos)
+      << read.message();
+  EXPECT_NE(read.message().find("rosbag fix"), std::string::npos) << read.message();
   const auto missing = ReadRos1Bag(kBags + "no_such.bag");
   EXPECT_EQ(missing.code(), StatusCode::kIo);
   EXPECT_NE(missing.message().find("no such file"), std::string::npos);
