@@ -280,6 +280,7 @@ constexpr size_t kFirstPassScans = 3000;
 // following the first pass's skewed scans. Passes run until no parameter moves by more than
 // kSettledSigmas of its σ, at most kMaxPasses.
 constexpr int kMaxPasses = 8;
+static_assert(kMaxPasses >= 5, "an unsettled run needs three de-skewed passes for its spread");
 constexpr double kSettledSigmas = 0.1;
 constexpr double kRecheckSigmas = 1.0;
 
@@ -339,7 +340,7 @@ Status RunDeskewedPasses(const RobotMessages& probe, const std::vector<LaserScan
     run->settled = run->moved_sigmas < kSettledSigmas;
     run->estimates.push_back(out->result.calibration.estimate.ToVector());
   }
-  if (run->settled || run->estimates.size() < 3) return Status::Ok();
+  if (run->settled) return Status::Ok();
   LaserParamVector mean = LaserParamVector::Zero();
   for (size_t k = 1; k < run->estimates.size(); ++k) mean += run->estimates[k];
   mean /= static_cast<double>(run->estimates.size() - 1);
@@ -406,9 +407,7 @@ StatusOr<RobotBagCalibration> CalibrateTwoStage(const RobotMessages& bag,
     ++run.passes;
   }
   out.log.matching_passes = run.passes;
-  if (!run.settled && run.estimates.size() >= 3) {
-    out.log.warnings.push_back(WidenByPassSpread(run, &out.result.calibration));
-  }
+  if (!run.settled) out.log.warnings.push_back(WidenByPassSpread(run, &out.result.calibration));
   return out;
 }
 
