@@ -473,6 +473,24 @@ std::optional<RobotMessages> WithoutSelfReturns(const RobotMessages& bag,
 
 }  // namespace
 
+// The reported calibration (the scan points' when refined) against the walls, and the nominal
+// wheels' when given.
+WallCheck WallsUnder(const RobotMessages& bag, const RobotBagOptions& options,
+                     const RobotBagCalibration& calibration) {
+  const OdometryParams& calibrated = calibration.scan_points
+                                         ? calibration.scan_points->estimate.odometry
+                                         : calibration.result.calibration.estimate.odometry;
+  std::optional<OdometryParams> nominal;
+  if (options.nominal_wheel_radius_m > 0.0 && options.nominal_wheelbase_m > 0.0) {
+    nominal = OdometryParams{options.nominal_wheel_radius_m, options.nominal_wheel_radius_m,
+                             options.nominal_wheelbase_m};
+  }
+  const RobotBagLog& log = calibration.log;
+  return CheckAgainstWalls(bag.scans.at(log.topics.scan_topic), log.mirrored,
+                           log.scans.log.streams.odometry, calibrated, nominal,
+                           calibration.result.time_offset_s);
+}
+
 StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& recording,
                                                      const RobotBagOptions& options,
                                                      const LaserTimingOptions& timing) {
@@ -483,6 +501,7 @@ StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& record
   if (calibrated.ok()) {
     std::vector<std::string>& out = calibrated->log.notes;
     out.insert(out.begin(), notes.begin(), notes.end());
+    calibrated->log.walls = WallsUnder(bag, options, *calibrated);
   }
   return calibrated;
 }

@@ -9,6 +9,7 @@
 #include <calib/solvers/scan_calibration/scan_point_calibration.h>
 #include <calib/solvers/scan_matching/beam_timing.h>
 #include <calib/solvers/scan_matching/scan_laser_log.h>
+#include <calib/solvers/scan_matching/wall_check.h>
 #include <calib/solvers/timing/laser_timing_calibration.h>
 
 #include <optional>
@@ -68,6 +69,8 @@ struct RobotBagLog {
   // What calib did to the recording that is no problem of it (beams on the robot's body left
   // out, logs joined): in the summary and the JSON, not in the verdict.
   std::vector<std::string> notes;
+  // The calibrated heading against the building's walls (wall_check.h), once calibrated.
+  std::optional<WallCheck> walls;
 };
 
 StatusOr<RobotBagLog> LaserLogFromRobotMessages(const RobotMessages& bag,

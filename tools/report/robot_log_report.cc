@@ -34,6 +34,39 @@ nlohmann::ordered_json BeamTimingJson(const BeamTimingCheck& check) {
           {"candidates", candidates}};
 }
 
+nlohmann::ordered_json WallHeadingJson(const WallHeading& h) {
+  return {{"drift", h.drift_rad}, {"drift_stddev", h.drift_stddev_rad}, {"scatter", h.scatter_rad}};
+}
+
+nlohmann::ordered_json WallCheckJson(const WallCheck& w) {
+  nlohmann::ordered_json out = {{"right_angled", w.right_angled},
+                                {"scans", w.scans},
+                                {"scans_with_walls", w.scans_with_walls},
+                                {"duration", w.duration_s},
+                                {"calibrated", WallHeadingJson(w.calibrated)}};
+  if (w.nominal) out["nominal"] = WallHeadingJson(*w.nominal);
+  return out;
+}
+
+std::string WallCheckSummary(const WallCheck& w) {
+  if (w.duration_s <= 0.0) return "";
+  const auto heading = [](const WallHeading& h) {
+    return Format("%+.1f ± %.1f° (scatter %.1f°)", kDegrees * h.drift_rad,
+                  kDegrees * h.drift_stddev_rad, kDegrees * h.scatter_rad);
+  };
+  const std::string scans =
+      std::to_string(w.scans_with_walls) + " of " + std::to_string(w.scans) + " scans";
+  if (!w.right_angled) {
+    return "  walls: no walls meeting at right angles throughout the log (" + scans +
+           " see walls; scatter " + Format("%.1f°", kDegrees * w.calibrated.scatter_rad) +
+           "): the heading is not checked against them\n";
+  }
+  std::string out = "  walls: under the calibrated heading their direction (mod 90°) moves " +
+                    heading(w.calibrated) + Format(" over %.0f s, ", w.duration_s) + scans;
+  if (w.nominal) out += "; under the nominal wheels " + heading(*w.nominal);
+  return out + ": a check of the heading that needs no scan matching\n";
+}
+
 }  // namespace
 
 nlohmann::ordered_json RobotLogJson(const RobotBagLog& log, const LaserCalibrationResult& result,
@@ -68,6 +101,7 @@ nlohmann::ordered_json RobotLogJson(const RobotBagLog& log, const LaserCalibrati
                           {"b", v(2) / nominal.wheelbase_m}};
   }
   if (log.beam_timing) out["beam_timing"] = BeamTimingJson(*log.beam_timing);
+  if (log.walls) out["walls"] = WallCheckJson(*log.walls);
   out["warnings"] = log.warnings;
   out["notes"] = log.notes;
   return out;
@@ -100,6 +134,7 @@ std::string RobotLogSummary(const RobotBagLog& log, const LaserCalibrationResult
                   v(0) / nominal.wheel_radius_m, v(1) / nominal.wheel_radius_m,
                   v(2) / nominal.wheelbase_m);
   }
+  if (log.walls) out += WallCheckSummary(*log.walls);
   for (const std::string& n : log.notes) out += "  note: " + n + "\n";
   for (const std::string& w : log.warnings) out += "  warning: " + w + "\n";
   return out;

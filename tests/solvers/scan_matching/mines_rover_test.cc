@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -131,75 +130,6 @@ StatusOr<RobotBagCalibration> CalibrateLog(const std::string& name) {
   return CalibrateRobotMessages(*bag, options, LaserTimingOptions());
 }
 
-// The direction of the walls in the scan (mod 90°: a building's walls meet at right angles),
-// from chords over 4 beams that run straight (the middle beam within 1 cm of the chord); nullopt
-// when the scan holds less than 1 m of such chords.
-std::optional<double> WallDirectionRad(const LaserScan& scan) {
-  const int n = static_cast<int>(scan.ranges_m.size());
-  const auto point = [&](int i) {
-    const double a = scan.BeamAngle(i), r = scan.ranges_m[i];
-    return Eigen::Vector2d(r * std::cos(a), r * std::sin(a));
-  };
-  double c = 0.0, s = 0.0;
-  for (int i = 0; i + 4 < n; ++i) {
-    if (!scan.IsReturn(i) || !scan.IsReturn(i + 2) || !scan.IsReturn(i + 4)) continue;
-    const Eigen::Vector2d p = point(i), m = point(i + 2), chord = point(i + 4) - p;
-    const double length = chord.norm();
-    if (length < 0.03 || length > 0.3) continue;
-    const Eigen::Vector2d off = m - p;
-    if (std::abs(off.x() * chord.y() - off.y() * chord.x()) / length > 0.01) continue;
-    const double a = std::atan2(chord.y(), chord.x());
-    c += length * std::cos(4.0 * a);
-    s += length * std::sin(4.0 * a);
-  }
-  if (std::hypot(c, s) < 1.0) return std::nullopt;
-  return std::atan2(s, c) / 4.0;
-}
-
-double Wrap90(double a) {
-  const double quarter = 0.5 * M_PI;
-  return a - quarter * std::floor((a + 0.25 * M_PI) / quarter);
-}
-
-struct Compass {
-  double drift_rad, scatter_rad;  // Over the log: the trend's change, the RMS about it.
-};
-
-// The walls as a compass: the heading the wheels give (through `odometry`, read at each scan's
-// time, its stamp plus `scan_offset_s`) plus the walls' direction in the scan is the walls'
-// direction in the building, the same all along the log where the heading is right.
-Compass WallCompass(const RobotMessages& bag, const OdometryParams& odometry,
-                    double scan_offset_s) {
-  const std::vector<JointState>& wheels = bag.joint_states.at(kCsmEncoderTopic);
-  const auto heading_at = [&](double t) {
-    size_t i = 0;
-    while (i + 2 < wheels.size() && wheels[i + 1].stamp_s <= t) ++i;
-    const JointState &a = wheels[i], &b = wheels[i + 1];
-    const double w = (t - a.stamp_s) / (b.stamp_s - a.stamp_s);
-    const double to_rad = 2.0 * M_PI / kCountsPerTurn;
-    const double left = to_rad * (a.position[0] + w * (b.position[0] - a.position[0]));
-    const double right = to_rad * (a.position[1] + w * (b.position[1] - a.position[1]));
-    return (odometry.right_radius_m * right - odometry.left_radius_m * left) / odometry.wheelbase_m;
-  };
-  std::vector<double> t, v;
-  for (const LaserScan& scan : bag.scans.at(kCsmScanTopic)) {
-    const std::optional<double> wall = WallDirectionRad(scan);
-    if (!wall) continue;
-    const double direction = Wrap90(heading_at(scan.stamp_s + scan_offset_s) + *wall);
-    t.push_back(scan.stamp_s);
-    v.push_back(v.empty() ? direction : v.front() + Wrap90(direction - v.front()));
-  }
-  double mt = 0.0, mv = 0.0;
-  for (size_t k = 0; k < t.size(); ++k) mt += t[k] / t.size(), mv += v[k] / v.size();
-  double stt = 0.0, stv = 0.0;
-  for (size_t k = 0; k < t.size(); ++k)
-    stt += (t[k] - mt) * (t[k] - mt), stv += (t[k] - mt) * (v[k] - mv);
-  const double slope = stv / stt;
-  double ssr = 0.0;
-  for (size_t k = 0; k < t.size(); ++k) ssr += std::pow(v[k] - mv - slope * (t[k] - mt), 2);
-  return {slope * (t.back() - t.front()), std::sqrt(ssr / t.size())};
-}
-
 class MinesRover : public testing::TestWithParam<const char*> {};
 
 // Both calibrations agree with the reference within 3σ (their σ and the reference's together) on
@@ -229,18 +159,24 @@ TEST_P(MinesRover, AgreesWithTheSlamTrajectoryAndTheWalls) {
 
   // The building's walls keep their direction under the calibrated wheels' heading (within 10°
   // over the log), and scatter less about it than under the nominal wheels'.
+  ASSERT_TRUE(r->log.walls.has_value());
+  const WallCheck& walls = *r->log.walls;
   const StatusOr<RobotMessages> bag = ReadCsmLog(DataPath(log + ".log.bz2"));
   ASSERT_TRUE(bag.ok()) << bag.message();
-  const Compass calibrated = WallCompass(*bag, o, r->result.time_offset_s);
-  const Compass nominal =
-      WallCompass(*bag, OdometryParams{0.077, 0.077, kNominalWheelbaseM}, r->result.time_offset_s);
+  const WallCheck nominal =
+      CheckAgainstWalls(bag->scans.at(kCsmScanTopic), false, r->log.scans.log.streams.odometry, o,
+                        OdometryParams{0.077, 0.077, kNominalWheelbaseM}, r->result.time_offset_s);
+  const double deg = 180.0 / M_PI;
   std::printf(
-      "walls' direction under the calibrated wheels: drift %.1f°, scatter %.1f°; nominal: "
-      "drift %.1f°, scatter %.1f°\n",
-      calibrated.drift_rad * 180 / M_PI, calibrated.scatter_rad * 180 / M_PI,
-      nominal.drift_rad * 180 / M_PI, nominal.scatter_rad * 180 / M_PI);
-  EXPECT_LT(std::abs(calibrated.drift_rad), 10.0 * M_PI / 180.0);
-  EXPECT_LT(calibrated.scatter_rad, nominal.scatter_rad);
+      "walls under the calibrated wheels: drift %.1f ± %.1f°, scatter %.1f° (%d of %d "
+      "scans); nominal: drift %.1f ± %.1f°, scatter %.1f°\n",
+      deg * walls.calibrated.drift_rad, deg * walls.calibrated.drift_stddev_rad,
+      deg * walls.calibrated.scatter_rad, walls.scans_with_walls, walls.scans,
+      deg * nominal.nominal->drift_rad, deg * nominal.nominal->drift_stddev_rad,
+      deg * nominal.nominal->scatter_rad);
+  EXPECT_TRUE(walls.right_angled);
+  EXPECT_LT(std::abs(walls.calibrated.drift_rad), 10.0 / deg);
+  EXPECT_LT(walls.calibrated.scatter_rad, nominal.nominal->scatter_rad);
 }
 
 INSTANTIATE_TEST_SUITE_P(Logs, MinesRover, testing::Values("exp1", "exp2"));
