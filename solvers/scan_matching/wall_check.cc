@@ -44,52 +44,72 @@ struct Bearing {
   double t_s, wall_rad;  // The scan's time on the wheels' clock, the walls' direction in it.
 };
 
-WallHeading Trend(const std::vector<Bearing>& bearings, const std::vector<EncoderSample>& wheels,
-                  const OdometryParams& odometry) {
+// The walls' direction in the building under `odometry`'s heading, scan by scan, unwrapped
+// against the median of the last scans' (one scan's odd direction must not turn all after it by
+// 90°).
+std::vector<double> Directions(const std::vector<Bearing>& bearings,
+                               const std::vector<EncoderSample>& wheels,
+                               const OdometryParams& odometry) {
   WheelHeading heading(wheels);
-  // The walls' direction in the building, unwrapped against the median of the last scans' (one
-  // scan's odd direction must not turn all after it by 90°).
-  std::vector<double> t, v, recent;
+  std::vector<double> v, recent;
   for (const Bearing& b : bearings) {
     const double direction = Wrap90(heading.At(b.t_s, odometry) + b.wall_rad);
     recent.assign(v.end() - std::min<size_t>(v.size(), kUnwrapScans), v.end());
     const double reference = recent.empty() ? direction : UpperMedian(&recent);
-    t.push_back(b.t_s);
     v.push_back(reference + Wrap90(direction - reference));
   }
+  return v;
+}
+
+// The line through the medians (time, direction) of kStretches equal stretches of the log.
+struct Line {
+  double t_mean = 0.0, v_mean = 0.0, slope = 0.0, slope_stddev = 0.0;
+};
+
+Line StretchTrend(const std::vector<double>& t, const std::vector<double>& v) {
   const double t0 = t.front(), span = t.back() - t.front();
-  std::vector<double> mid_t, mid_v;
-  for (int k = 0; k < kStretches; ++k) {
-    std::vector<double> in_t, in_v;
-    for (size_t i = 0; i < t.size(); ++i) {
-      const int stretch =
-          std::min(kStretches - 1, static_cast<int>(kStretches * (t[i] - t0) / span));
-      if (stretch == k) in_t.push_back(t[i]), in_v.push_back(v[i]);
-    }
-    if (in_t.empty()) continue;
-    mid_t.push_back(UpperMedian(&in_t));
-    mid_v.push_back(UpperMedian(&in_v));
+  std::vector<std::vector<double>> in_t(kStretches), in_v(kStretches);
+  for (size_t i = 0; i < t.size(); ++i) {
+    const int k = std::min(kStretches - 1, static_cast<int>(kStretches * (t[i] - t0) / span));
+    in_t[k].push_back(t[i]);
+    in_v[k].push_back(v[i]);
   }
-  const size_t n = mid_t.size();
-  double mt = 0.0, mv = 0.0;
-  for (size_t k = 0; k < n; ++k) mt += mid_t[k] / n, mv += mid_v[k] / n;
+  std::vector<double> mt, mv;
+  for (int k = 0; k < kStretches; ++k) {
+    if (in_t[k].empty()) continue;
+    mt.push_back(UpperMedian(&in_t[k]));
+    mv.push_back(UpperMedian(&in_v[k]));
+  }
+  const size_t n = mt.size();
+  Line line;
+  for (size_t k = 0; k < n; ++k) line.t_mean += mt[k] / n, line.v_mean += mv[k] / n;
   double stt = 0.0, stv = 0.0;
   for (size_t k = 0; k < n; ++k) {
-    stt += (mid_t[k] - mt) * (mid_t[k] - mt);
-    stv += (mid_t[k] - mt) * (mid_v[k] - mv);
+    stt += (mt[k] - line.t_mean) * (mt[k] - line.t_mean);
+    stv += (mt[k] - line.t_mean) * (mv[k] - line.v_mean);
   }
-  WallHeading out;
-  const double slope = stt > 0.0 ? stv / stt : 0.0;
-  out.drift_rad = slope * span;
+  if (n < 3 || !(stt > 0.0)) return line;
+  line.slope = stv / stt;
   double ssr = 0.0;
-  for (size_t k = 0; k < n; ++k) ssr += std::pow(mid_v[k] - mv - slope * (mid_t[k] - mt), 2);
-  out.drift_stddev_rad = n > 2 && stt > 0.0 ? std::sqrt(ssr / (n - 2) / stt) * span : HUGE_VAL;
+  for (size_t k = 0; k < n; ++k) {
+    ssr += std::pow(mv[k] - line.v_mean - line.slope * (mt[k] - line.t_mean), 2);
+  }
+  line.slope_stddev = std::sqrt(ssr / (n - 2) / stt);
+  return line;
+}
+
+WallHeading Trend(const std::vector<Bearing>& bearings, const std::vector<EncoderSample>& wheels,
+                  const OdometryParams& odometry) {
+  const std::vector<double> v = Directions(bearings, wheels, odometry);
+  std::vector<double> t;
+  for (const Bearing& b : bearings) t.push_back(b.t_s);
+  const Line line = StretchTrend(t, v);
+  const double span = t.back() - t.front();
   std::vector<double> deviation;
   for (size_t i = 0; i < t.size(); ++i) {
-    deviation.push_back(std::abs(v[i] - mv - slope * (t[i] - mt)));
+    deviation.push_back(std::abs(v[i] - line.v_mean - line.slope * (t[i] - line.t_mean)));
   }
-  out.scatter_rad = 1.4826 * UpperMedian(&deviation);
-  return out;
+  return {line.slope * span, line.slope_stddev * span, 1.4826 * UpperMedian(&deviation)};
 }
 
 }  // namespace
