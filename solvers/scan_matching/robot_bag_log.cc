@@ -480,6 +480,10 @@ WallCheck WallsUnder(const RobotMessages& bag, const RobotBagOptions& options,
   const OdometryParams& calibrated = calibration.scan_points
                                          ? calibration.scan_points->estimate.odometry
                                          : calibration.result.calibration.estimate.odometry;
+  const Eigen::Matrix3d covariance =
+      (calibration.scan_points ? calibration.scan_points->covariance
+                               : calibration.result.calibration.covariance)
+          .topLeftCorner<3, 3>();
   std::optional<OdometryParams> nominal;
   if (options.nominal_wheel_radius_m > 0.0 && options.nominal_wheelbase_m > 0.0) {
     nominal = OdometryParams{options.nominal_wheel_radius_m, options.nominal_wheel_radius_m,
@@ -488,7 +492,7 @@ WallCheck WallsUnder(const RobotMessages& bag, const RobotBagOptions& options,
   const RobotBagLog& log = calibration.log;
   return CheckAgainstWalls(bag.scans.at(log.topics.scan_topic), log.mirrored,
                            log.scans.log.streams.odometry, calibrated, nominal,
-                           calibration.result.time_offset_s);
+                           calibration.result.time_offset_s, covariance);
 }
 
 StatusOr<RobotBagCalibration> CalibrateRobotMessages(const RobotMessages& recording,

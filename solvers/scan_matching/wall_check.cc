@@ -112,6 +112,25 @@ WallHeading Trend(const std::vector<Bearing>& bearings, const std::vector<Encode
   return {line.slope * span, line.slope_stddev * span, 1.4826 * UpperMedian(&deviation)};
 }
 
+// The drift's σ through the wheels' covariance, by central differences of the drift in r_l, r_r
+// and b (steps of 10⁻⁴ of each).
+double CalibrationStddev(const std::vector<Bearing>& bearings,
+                         const std::vector<EncoderSample>& wheels, const OdometryParams& odometry,
+                         const Eigen::Matrix3d& covariance) {
+  const Eigen::Vector3d p(odometry.left_radius_m, odometry.right_radius_m, odometry.wheelbase_m);
+  Eigen::Vector3d gradient;
+  for (int i = 0; i < 3; ++i) {
+    const double step = 1e-4 * p(i);
+    Eigen::Vector3d lo = p, hi = p;
+    lo(i) -= step;
+    hi(i) += step;
+    const double up = Trend(bearings, wheels, {hi(0), hi(1), hi(2)}).drift_rad;
+    const double down = Trend(bearings, wheels, {lo(0), lo(1), lo(2)}).drift_rad;
+    gradient(i) = (up - down) / (2.0 * step);
+  }
+  return std::sqrt(std::max(0.0, gradient.dot(covariance * gradient)));
+}
+
 }  // namespace
 
 std::optional<double> WallDirectionRad(const LaserScan& scan) {
@@ -148,8 +167,8 @@ std::optional<double> WallDirectionRad(const LaserScan& scan) {
 WallCheck CheckAgainstWalls(const std::vector<LaserScan>& scans, bool mirrored,
                             const std::vector<EncoderSample>& wheels,
                             const OdometryParams& calibrated,
-                            const std::optional<OdometryParams>& nominal,
-                            double scan_time_offset_s) {
+                            const std::optional<OdometryParams>& nominal, double scan_time_offset_s,
+                            const std::optional<Eigen::Matrix3d>& covariance) {
   WallCheck out;
   out.scans = static_cast<int>(scans.size());
   if (scans.size() < 2 * kStretches || wheels.size() < 2) return out;
@@ -165,6 +184,10 @@ WallCheck CheckAgainstWalls(const std::vector<LaserScan>& scans, bool mirrored,
   if (bearings.size() < 2 * kStretches) return out;
   out.duration_s = bearings.back().t_s - bearings.front().t_s;
   out.calibrated = Trend(bearings, wheels, calibrated);
+  if (covariance) {
+    out.calibrated.calibration_stddev_rad =
+        CalibrationStddev(bearings, wheels, calibrated, *covariance);
+  }
   if (nominal) out.nominal = Trend(bearings, wheels, *nominal);
   out.right_angled =
       2 * out.scans_with_walls >= out.scans && out.calibrated.scatter_rad <= kMaxScatterRad;

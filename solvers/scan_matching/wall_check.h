@@ -5,6 +5,7 @@
 #include <calib/core/encoder_sample.h>
 #include <calib/core/scan/laser_scan.h>
 
+#include <Eigen/Core>
 #include <optional>
 #include <vector>
 
@@ -25,6 +26,10 @@ std::optional<double> WallDirectionRad(const LaserScan& scan);
 // of the scans about that trend (1.4826 × the median absolute deviation).
 struct WallHeading {
   double drift_rad = 0.0, drift_stddev_rad = 0.0, scatter_rad = 0.0;
+  // The drift's σ from the wheels' own uncertainty (the calibration's covariance): the radius
+  // ratio's σ alone turns the walls by several degrees over a long log, so a drift within it is
+  // no disagreement. 0 when no covariance is given.
+  double calibration_stddev_rad = 0.0;
 };
 
 struct WallCheck {
@@ -39,12 +44,13 @@ struct WallCheck {
 
 // The scans (stamp order; `mirrored`: an upside-down lidar's, as recorded) against the heading of
 // `calibrated` (and of `nominal` when given) from the wheel angles, each scan taken at its stamp
-// plus scan_time_offset_s on the wheels' clock.
+// plus scan_time_offset_s on the wheels' clock. `covariance` (r_l, r_r, b), when given, is the
+// calibrated wheels' (WallHeading::calibration_stddev_rad).
 WallCheck CheckAgainstWalls(const std::vector<LaserScan>& scans, bool mirrored,
                             const std::vector<EncoderSample>& wheels,
                             const OdometryParams& calibrated,
-                            const std::optional<OdometryParams>& nominal,
-                            double scan_time_offset_s);
+                            const std::optional<OdometryParams>& nominal, double scan_time_offset_s,
+                            const std::optional<Eigen::Matrix3d>& covariance = std::nullopt);
 
 }  // namespace calib
 

@@ -35,7 +35,10 @@ nlohmann::ordered_json BeamTimingJson(const BeamTimingCheck& check) {
 }
 
 nlohmann::ordered_json WallHeadingJson(const WallHeading& h) {
-  return {{"drift", h.drift_rad}, {"drift_stddev", h.drift_stddev_rad}, {"scatter", h.scatter_rad}};
+  return {{"drift", h.drift_rad},
+          {"drift_stddev", h.drift_stddev_rad},
+          {"drift_stddev_calibration", h.calibration_stddev_rad},
+          {"scatter", h.scatter_rad}};
 }
 
 nlohmann::ordered_json WallCheckJson(const WallCheck& w) {
@@ -63,6 +66,10 @@ std::string WallCheckSummary(const WallCheck& w) {
   }
   std::string out = "  walls: under the calibrated heading their direction (mod 90°) moves " +
                     heading(w.calibrated) + Format(" over %.0f s, ", w.duration_s) + scans;
+  if (w.calibrated.calibration_stddev_rad > 0.0) {
+    out += Format(" (the calibration's own σ moves it by ± %.1f°)",
+                  kDegrees * w.calibrated.calibration_stddev_rad);
+  }
   if (w.nominal) out += "; under the nominal wheels " + heading(*w.nominal);
   return out + ": a check of the heading that needs no scan matching\n";
 }

@@ -79,6 +79,16 @@ TEST(WallCheck, TheTrueWheelsKeepTheWallsDirection) {
   EXPECT_GT(std::abs(truth.nominal->drift_rad), 10.0 * kDeg);
   EXPECT_GT(std::abs(truth.nominal->drift_rad), 5.0 * truth.nominal->drift_stddev_rad);
 
+  // The drift's σ through the wheels' covariance: a σ of 1 mm on r_r alone moves the drift as
+  // r_r + 1 mm does.
+  const Eigen::Matrix3d r_r_only = Eigen::Vector3d(0.0, 1e-6, 0.0).asDiagonal();
+  const WallCheck with_sigma =
+      CheckAgainstWalls(r.scans, false, r.wheels, kTruth, {}, 0.0, r_r_only);
+  EXPECT_NEAR(with_sigma.calibrated.calibration_stddev_rad,
+              std::abs(truth.nominal->drift_rad - truth.calibrated.drift_rad),
+              0.05 * std::abs(truth.nominal->drift_rad));
+  EXPECT_EQ(truth.calibrated.calibration_stddev_rad, 0.0);  // No covariance given.
+
   const OdometryParams short_base{0.10, 0.10, 0.475};
   const WallCheck turns = CheckAgainstWalls(r.scans, false, r.wheels, short_base, {}, 0.0);
   EXPECT_GT(turns.calibrated.scatter_rad, 3.0 * truth.calibrated.scatter_rad);
