@@ -182,7 +182,9 @@ WallCheck CheckAgainstWalls(const std::vector<LaserScan>& scans, bool mirrored,
   }
   out.scans_with_walls = static_cast<int>(bearings.size());
   if (bearings.size() < 2 * kStretches) return out;
-  out.duration_s = bearings.back().t_s - bearings.front().t_s;
+  const double duration_s = bearings.back().t_s - bearings.front().t_s;
+  if (!(duration_s > 0.0)) return out;  // One instant: no trend.
+  out.duration_s = duration_s;
   out.calibrated = Trend(bearings, wheels, calibrated);
   if (covariance) {
     out.calibrated.calibration_stddev_rad =
