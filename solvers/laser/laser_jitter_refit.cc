@@ -64,11 +64,12 @@ class RoundsSettling {
 
 // Inliers under the per-interval whitening (squared whitened norm below the cut).
 std::vector<bool> Inliers(const std::vector<Eigen::Vector3d>& errors,
-                          const std::vector<Eigen::Matrix3d>& roots, double inlier_chi2) {
-  std::vector<bool> inlier(errors.size());
-  for (size_t k = 0; k < errors.size(); ++k) {
-    inlier[k] = (roots[k] * errors[k]).squaredNorm() < inlier_chi2;
-  }
+                          const std::vector<IntervalTimeSensitivity>& sensitivities,
+                          const IntervalJitterEstimate& jitter, double inlier_chi2) {
+  const std::vector<double> norms =
+      JitterWhitenedSquaredNorms(errors, sensitivities, jitter.noise_sigma, UsedJitter(jitter));
+  std::vector<bool> inlier(norms.size());
+  for (size_t k = 0; k < norms.size(); ++k) inlier[k] = norms[k] < inlier_chi2;
   return inlier;
 }
 
@@ -124,9 +125,11 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
 
   // Refit, re-estimate σ_j and the scan noise jointly at the new parameters, refit while they move.
   std::vector<LaserDataset> datasets;
+  std::vector<std::vector<IntervalBoundarySpeeds>> speeds(logs.size());
   std::vector<std::vector<IntervalTimeSensitivity>> sensitivities(logs.size());
   for (size_t d = 0; d < logs.size(); ++d) {
-    sensitivities[d] = IntervalTimeSensitivities(*logs[d], result->estimate);
+    speeds[d] = BoundaryWheelSpeeds(*logs[d]);
+    sensitivities[d] = IntervalTimeSensitivities(*logs[d], speeds[d], result->estimate);
     datasets.push_back(LaserDataset{
         logs[d], Eigen::Matrix3d::Identity(),
         JitterSqrtInformation(sensitivities[d], jitter[d].noise_sigma, UsedJitter(jitter[d]))});
@@ -142,7 +145,7 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
   // real sets, only sets the next round's whitening), which always follows and corrects.
   std::vector<std::vector<Eigen::Matrix2d>> increment_covariance(logs.size());
   for (size_t d = 0; d < logs.size(); ++d) {
-    increment_covariance[d] = JitterIncrementCovariances(*logs[d], UsedJitter(jitter[d]));
+    increment_covariance[d] = JitterIncrementCovariances(speeds[d], UsedJitter(jitter[d]));
   }
   for (int round = 0; round < rounds; ++round) {
     const bool corrected = round > 0 || rounds == 1;
@@ -157,12 +160,9 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
     const LaserCalibration estimate = problem.calibration();
     double change = 0.0;
     for (size_t d = 0; d < logs.size(); ++d) {
-      sensitivities[d] = IntervalTimeSensitivities(*logs[d], estimate);
+      sensitivities[d] = IntervalTimeSensitivities(*logs[d], speeds[d], estimate);
       const std::vector<Eigen::Vector3d> errors = problem.Errors(d);
-      inliers[d] = Inliers(
-          errors,
-          JitterSqrtInformation(sensitivities[d], jitter[d].noise_sigma, UsedJitter(jitter[d])),
-          options.inlier_chi2);
+      inliers[d] = Inliers(errors, sensitivities[d], jitter[d], options.inlier_chi2);
       IntervalJitterOptions near = options.jitter;
       near.previous_jitter_s = jitter[d].jitter_s;  // The refit moves σ_j little.
       // σ of σ_j only where this round may be the last (see the loop's end).
@@ -181,7 +181,7 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
     if ((corrected && settling.Settled(change)) || round + 1 == rounds) break;
     settling.NextRound(change);
     for (size_t d = 0; d < logs.size(); ++d) {
-      increment_covariance[d] = JitterIncrementCovariances(*logs[d], UsedJitter(jitter[d]));
+      increment_covariance[d] = JitterIncrementCovariances(speeds[d], UsedJitter(jitter[d]));
       CALIB_RETURN_IF_ERROR(problem.SetIntervalSqrtInformation(
           d,
           JitterSqrtInformation(sensitivities[d], jitter[d].noise_sigma, UsedJitter(jitter[d]))));

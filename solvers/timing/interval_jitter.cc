@@ -80,6 +80,14 @@ IntervalTimeSensitivity ShiftSensitivity(const OdometryParams& p, const Pose2d& 
   return g;
 }
 
+// G = g_s g_sᵀ + g_e g_eᵀ, packed as (00, 01, 02, 11, 12, 22).
+void PackedGram(const IntervalTimeSensitivity& g, double gram[6]) {
+  const Eigen::Vector3d &s = g.start, &e = g.end;
+  gram[0] = s(0) * s(0) + e(0) * e(0), gram[1] = s(0) * s(1) + e(0) * e(1);
+  gram[2] = s(0) * s(2) + e(0) * e(2), gram[3] = s(1) * s(1) + e(1) * e(1);
+  gram[4] = s(1) * s(2) + e(1) * e(2), gram[5] = s(2) * s(2) + e(2) * e(2);
+}
+
 // Golden-section maximum of f on [lo, hi].
 template <typename F>
 double GoldenMaximum(const F& f, double lo, double hi, double tolerance = 1e-6) {
@@ -173,28 +181,42 @@ std::vector<IntervalBoundarySpeeds> BoundaryWheelSpeeds(
 
 std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
     const std::vector<LaserInterval>& intervals, const LaserCalibration& calibration) {
-  std::vector<size_t> all(intervals.size());
-  for (size_t k = 0; k < all.size(); ++k) all[k] = k;
-  return IntervalTimeSensitivities(intervals, calibration, all);
+  return IntervalTimeSensitivities(intervals, BoundaryWheelSpeeds(intervals), calibration);
 }
 
-std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
-    const std::vector<LaserInterval>& intervals, const LaserCalibration& calibration,
-    const std::vector<size_t>& indices) {
-  const std::vector<IntervalBoundarySpeeds> speeds = BoundaryWheelSpeeds(intervals);
+namespace {
+
+// The sensitivities of the intervals at indices[i] (all when `indices` is null).
+std::vector<IntervalTimeSensitivity> SensitivitiesAt(
+    const std::vector<LaserInterval>& intervals, const std::vector<IntervalBoundarySpeeds>& speeds,
+    const LaserCalibration& calibration, const std::vector<size_t>* indices) {
   const OdometryParams& p = calibration.odometry;
   const Pose2d& mounting = calibration.base_T_sensor;
   const double cl = std::cos(mounting(2)), sl = std::sin(mounting(2));
   const Eigen::Matrix2d to_sensor = (Eigen::Matrix2d() << cl, sl, -sl, cl).finished();
   const Eigen::Vector2d mount(mounting(0), mounting(1));
-  std::vector<IntervalTimeSensitivity> sensitivities(indices.size());
-  for (size_t i = 0; i < indices.size(); ++i) {
-    const size_t k = indices[i];
+  std::vector<IntervalTimeSensitivity> sensitivities(indices ? indices->size() : intervals.size());
+  for (size_t i = 0; i < sensitivities.size(); ++i) {
+    const size_t k = indices ? (*indices)[i] : i;
     const Pose2d robot_motion =
         IntervalRobotMotion(p.left_radius_m, p.right_radius_m, p.wheelbase_m, intervals[k]);
     sensitivities[i] = ShiftSensitivity(p, robot_motion, speeds[k], to_sensor, mount);
   }
   return sensitivities;
+}
+
+}  // namespace
+
+std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
+    const std::vector<LaserInterval>& intervals, const LaserCalibration& calibration,
+    const std::vector<size_t>& indices) {
+  return SensitivitiesAt(intervals, BoundaryWheelSpeeds(intervals), calibration, &indices);
+}
+
+std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
+    const std::vector<LaserInterval>& intervals, const std::vector<IntervalBoundarySpeeds>& speeds,
+    const LaserCalibration& calibration) {
+  return SensitivitiesAt(intervals, speeds, calibration, nullptr);
 }
 
 Eigen::Matrix3d JitterCovariance(const IntervalTimeSensitivity& g, double jitter_s) {
@@ -216,12 +238,16 @@ std::vector<Eigen::Matrix3d> JitterCrossCovariances(
 
 std::vector<Eigen::Matrix2d> JitterIncrementCovariances(const std::vector<LaserInterval>& intervals,
                                                         double jitter_s) {
+  return JitterIncrementCovariances(BoundaryWheelSpeeds(intervals), jitter_s);
+}
+
+std::vector<Eigen::Matrix2d> JitterIncrementCovariances(
+    const std::vector<IntervalBoundarySpeeds>& speeds, double jitter_s) {
   std::vector<Eigen::Matrix2d> covariances;
-  covariances.reserve(intervals.size());
-  for (const IntervalBoundarySpeeds& speeds : BoundaryWheelSpeeds(intervals)) {
-    covariances.push_back(
-        jitter_s * jitter_s *
-        (speeds.start * speeds.start.transpose() + speeds.end * speeds.end.transpose()));
+  covariances.reserve(speeds.size());
+  for (const IntervalBoundarySpeeds& at : speeds) {
+    covariances.push_back(jitter_s * jitter_s *
+                          (at.start * at.start.transpose() + at.end * at.end.transpose()));
   }
   return covariances;
 }
@@ -236,6 +262,31 @@ std::vector<Eigen::Matrix3d> JitterSqrtInformation(
     roots.push_back(SqrtInformation<3>(noise + JitterCovariance(g, jitter_s)));
   }
   return roots;
+}
+
+std::vector<double> JitterWhitenedSquaredNorms(
+    const std::vector<Eigen::Vector3d>& errors,
+    const std::vector<IntervalTimeSensitivity>& sensitivities, const Eigen::Vector3d& noise_sigma,
+    double jitter_s) {
+  const size_t n = std::min(errors.size(), sensitivities.size());
+  std::vector<double> norms(n);
+  const Eigen::Vector3d theta = noise_sigma.cwiseAbs2();
+  for (size_t k = 0; k < n; ++k) {
+    double gram[6], sigma[6], inverse[6], w[3];
+    PackedGram(sensitivities[k], gram);
+    jitter_internal::PackedCovariance(theta, jitter_s * jitter_s, gram, sigma);
+    const double* error = errors[k].data();
+    if (jitter_internal::InverseOfSymmetric(sigma, inverse) > 0.0) {
+      jitter_internal::MultiplySymmetric(inverse, error, w);
+      norms[k] = error[0] * w[0] + error[1] * w[1] + error[2] * w[2];
+    } else {  // Not numerically positive definite: as the root does it.
+      norms[k] = (SqrtInformation<3>(theta.asDiagonal().toDenseMatrix() +
+                                     JitterCovariance(sensitivities[k], jitter_s)) *
+                  errors[k])
+                     .squaredNorm();
+    }
+  }
+  return norms;
 }
 
 std::vector<size_t> JitterSampleIndices(size_t n, const std::vector<bool>& is_inlier,
@@ -260,12 +311,9 @@ IntervalJitterEstimate EstimateIntervalJitter(
   JitterData data;
   const size_t n = std::min(errors.size(), sensitivities.size());
   for (size_t k : JitterSampleIndices(n, is_inlier, options.max_intervals)) {
-    const IntervalTimeSensitivity& g = sensitivities[k];
-    const Eigen::Matrix3d gram = g.start * g.start.transpose() + g.end * g.end.transpose();
-    const double error[3] = {errors[k](0), errors[k](1), errors[k](2)};
-    const double packed[6] = {gram(0, 0), gram(0, 1), gram(0, 2),
-                              gram(1, 1), gram(1, 2), gram(2, 2)};
-    data.Add(error, packed);
+    double gram[6];
+    PackedGram(sensitivities[k], gram);
+    data.Add(errors[k].data(), gram);
   }
   IntervalJitterEstimate estimate;
   estimate.intervals_used = static_cast<int>(data.size());

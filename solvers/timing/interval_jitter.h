@@ -51,6 +51,10 @@ std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
 std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
     const std::vector<LaserInterval>& intervals, const LaserCalibration& calibration,
     const std::vector<size_t>& indices);
+// The same with the intervals' BoundaryWheelSpeeds given (a refit's rounds share them).
+std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
+    const std::vector<LaserInterval>& intervals, const std::vector<IntervalBoundarySpeeds>& speeds,
+    const LaserCalibration& calibration);
 
 // σ_j²·(g_s g_sᵀ + g_e g_eᵀ): what the jitter adds to one interval's error covariance.
 Eigen::Matrix3d JitterCovariance(const IntervalTimeSensitivity& sensitivity, double jitter_s);
@@ -66,9 +70,17 @@ std::vector<Eigen::Matrix3d> JitterCrossCovariances(
 // removes.
 std::vector<Eigen::Matrix2d> JitterIncrementCovariances(const std::vector<LaserInterval>& intervals,
                                                         double jitter_s);
+std::vector<Eigen::Matrix2d> JitterIncrementCovariances(
+    const std::vector<IntervalBoundarySpeeds>& speeds, double jitter_s);
 
 // Per interval, the upper-triangular L with LᵀL = Σ_k⁻¹, Σ_k = diag(σ_n²) + the jitter's part.
 std::vector<Eigen::Matrix3d> JitterSqrtInformation(
+    const std::vector<IntervalTimeSensitivity>& sensitivities, const Eigen::Vector3d& noise_sigma,
+    double jitter_s);
+
+// Per interval, e_kᵀΣ_k⁻¹e_k with Σ_k as above (‖L·e_k‖², by cofactors, without the root).
+std::vector<double> JitterWhitenedSquaredNorms(
+    const std::vector<Eigen::Vector3d>& errors,
     const std::vector<IntervalTimeSensitivity>& sensitivities, const Eigen::Vector3d& noise_sigma,
     double jitter_s);
 

@@ -16,33 +16,6 @@ void JitterData::Add(const double error_k[3], const double gram_k[6]) {
 
 namespace {
 
-// Σ = diag(θ) + s·G, packed.
-inline void Covariance(const Eigen::Vector3d& theta, double s, const double g[6], double m[6]) {
-  m[0] = theta(0) + s * g[0], m[1] = s * g[1], m[2] = s * g[2];
-  m[3] = theta(1) + s * g[3], m[4] = s * g[4], m[5] = theta(2) + s * g[5];
-}
-
-// The inverse of a packed symmetric 3×3 matrix by cofactors; returns the determinant (the
-// inverse is meaningless unless it is > 0).
-inline double InverseOfSymmetric(const double m[6], double inverse[6]) {
-  const double c00 = m[3] * m[5] - m[4] * m[4], c01 = m[2] * m[4] - m[1] * m[5],
-               c02 = m[1] * m[4] - m[2] * m[3];
-  const double det = m[0] * c00 + m[1] * c01 + m[2] * c02;
-  const double r = 1.0 / det;
-  inverse[0] = c00 * r, inverse[1] = c01 * r, inverse[2] = c02 * r;
-  inverse[3] = (m[0] * m[5] - m[2] * m[2]) * r;
-  inverse[4] = (m[1] * m[2] - m[0] * m[4]) * r;
-  inverse[5] = (m[0] * m[3] - m[1] * m[1]) * r;
-  return det;
-}
-
-// y = M·x for a packed symmetric M.
-inline void MultiplySymmetric(const double m[6], const double x[3], double y[3]) {
-  y[0] = m[0] * x[0] + m[1] * x[1] + m[2] * x[2];
-  y[1] = m[1] * x[0] + m[3] * x[1] + m[4] * x[2];
-  y[2] = m[2] * x[0] + m[4] * x[1] + m[5] * x[2];
-}
-
 // Σ log x_k over positive x without a logarithm per term: binary exponents summed as integers,
 // mantissas (in [1, 2)) multiplied and folded back every 32 terms.
 class LogSum {
@@ -200,7 +173,7 @@ double LogLikelihood(const JitterData& data, const Eigen::Vector3d& theta, doubl
     const double error[3] = {data.error[0][k], data.error[1][k], data.error[2][k]};
     double gram[6], sigma[6], inverse[6], w[3];
     for (int i = 0; i < 6; ++i) gram[i] = data.gram[i][k];
-    Covariance(theta, jitter2, gram, sigma);
+    PackedCovariance(theta, jitter2, gram, sigma);
     const double det = InverseOfSymmetric(sigma, inverse);
     // Σ is a positive diagonal plus a positive semi-definite term, so det Σ > 0.
     if (!(det > 0.0)) return -std::numeric_limits<double>::infinity();

@@ -19,6 +19,34 @@ struct JitterData {
   std::vector<double> gram[6];
 };
 
+// Σ = diag(θ) + s·G, packed.
+inline void PackedCovariance(const Eigen::Vector3d& theta, double s, const double g[6],
+                             double m[6]) {
+  m[0] = theta(0) + s * g[0], m[1] = s * g[1], m[2] = s * g[2];
+  m[3] = theta(1) + s * g[3], m[4] = s * g[4], m[5] = theta(2) + s * g[5];
+}
+
+// The inverse of a packed symmetric 3×3 matrix by cofactors; returns the determinant (the
+// inverse is meaningless unless it is > 0).
+inline double InverseOfSymmetric(const double m[6], double inverse[6]) {
+  const double c00 = m[3] * m[5] - m[4] * m[4], c01 = m[2] * m[4] - m[1] * m[5],
+               c02 = m[1] * m[4] - m[2] * m[3];
+  const double det = m[0] * c00 + m[1] * c01 + m[2] * c02;
+  const double r = 1.0 / det;
+  inverse[0] = c00 * r, inverse[1] = c01 * r, inverse[2] = c02 * r;
+  inverse[3] = (m[0] * m[5] - m[2] * m[2]) * r;
+  inverse[4] = (m[1] * m[2] - m[0] * m[4]) * r;
+  inverse[5] = (m[0] * m[3] - m[1] * m[1]) * r;
+  return det;
+}
+
+// y = M·x for a packed symmetric M.
+inline void MultiplySymmetric(const double m[6], const double x[3], double y[3]) {
+  y[0] = m[0] * x[0] + m[1] * x[1] + m[2] * x[2];
+  y[1] = m[1] * x[0] + m[3] * x[1] + m[4] * x[2];
+  y[2] = m[2] * x[0] + m[4] * x[1] + m[5] * x[2];
+}
+
 // Floor of the noise variances: σ = 1e-12 m or rad, as RobustNoiseSigma.
 constexpr double kMinVariance = 1e-24;
 

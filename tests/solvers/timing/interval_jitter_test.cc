@@ -120,6 +120,44 @@ TEST(IntervalJitterTest, SqrtInformationWhitensTheCovariance) {
   EXPECT_LT((l * sigma * l.transpose() - Eigen::Matrix3d::Identity()).norm(), 1e-9);
 }
 
+// The refit's inlier test takes eᵀΣ⁻¹e by cofactors: ‖L·e‖² with the root's L, and the
+// sensitivities from given boundary speeds are those computed from the intervals.
+TEST(IntervalJitterTest, WhitenedNormsAreTheRootsNorms) {
+  const JitteredCase jittered(300, 11, 0.02);
+  const LaserCalibration truth = Truth(jittered.sim);
+  const std::vector<LaserInterval>& intervals = jittered.log.intervals;
+  const std::vector<IntervalTimeSensitivity> g = IntervalTimeSensitivities(intervals, truth);
+  const std::vector<IntervalTimeSensitivity> given =
+      IntervalTimeSensitivities(intervals, BoundaryWheelSpeeds(intervals), truth);
+  ASSERT_EQ(given.size(), g.size());
+  for (size_t k = 0; k < g.size(); ++k) {
+    EXPECT_TRUE(given[k].start == g[k].start && given[k].end == g[k].end) << k;
+  }
+  const LaserParamVector p = truth.ToVector();
+  std::vector<Eigen::Vector3d> errors;
+  for (const LaserInterval& interval : intervals) {
+    errors.push_back(LaserResidual::Error(interval, p.data(), p.data() + 3));
+  }
+  for (const double jitter_s : {0.0, 0.02}) {
+    const std::vector<double> norms =
+        JitterWhitenedSquaredNorms(errors, g, jittered.sim.scan_noise_sigma, jitter_s);
+    const std::vector<Eigen::Matrix3d> roots =
+        JitterSqrtInformation(g, jittered.sim.scan_noise_sigma, jitter_s);
+    ASSERT_EQ(norms.size(), errors.size());
+    for (size_t k = 0; k < errors.size(); ++k) {
+      const double expected = (roots[k] * errors[k]).squaredNorm();
+      EXPECT_NEAR(norms[k], expected, 1e-12 * expected) << k << " at " << jitter_s;
+    }
+  }
+  // A zero noise level and no jitter: Σ singular, the root's answer (no division by zero hidden).
+  const std::vector<double> singular = JitterWhitenedSquaredNorms(
+      {Eigen::Vector3d(1.0, 0.0, 0.0)}, {g[0]}, Eigen::Vector3d::Zero(), 0.0);
+  const double root_norm =
+      (JitterSqrtInformation({g[0]}, Eigen::Vector3d::Zero(), 0.0)[0] * Eigen::Vector3d::UnitX())
+          .squaredNorm();
+  EXPECT_TRUE(singular[0] == root_norm || (std::isnan(singular[0]) && std::isnan(root_norm)));
+}
+
 TEST(IntervalJitterTest, RecoversTheJitterWithinItsSigma) {
   const double jitter_s = 0.03;
   const JitteredCase jittered(2000, 5, jitter_s);
