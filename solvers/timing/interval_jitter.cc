@@ -310,7 +310,9 @@ IntervalJitterEstimate EstimateIntervalJitter(
     const std::vector<bool>& is_inlier, const IntervalJitterOptions& options) {
   JitterData data;
   const size_t n = std::min(errors.size(), sensitivities.size());
-  for (size_t k : JitterSampleIndices(n, is_inlier, options.max_intervals)) {
+  const std::vector<size_t> sample = JitterSampleIndices(n, is_inlier, options.max_intervals);
+  data.Reserve(sample.size());
+  for (size_t k : sample) {
     double gram[6];
     PackedGram(sensitivities[k], gram);
     data.Add(errors[k].data(), gram);
@@ -324,6 +326,7 @@ IntervalJitterEstimate EstimateIntervalJitter(
   estimate.log_likelihood = estimate.log_likelihood_without_jitter;
   // The jitter that doubles a typical interval's variance sets the grid's scale.
   std::vector<double> relative;
+  relative.reserve(data.size());
   for (size_t k = 0; k < data.size(); ++k) {
     relative.push_back(data.gram[0][k] / theta(0) + data.gram[3][k] / theta(1) +
                        data.gram[5][k] / theta(2));

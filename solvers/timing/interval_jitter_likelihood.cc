@@ -14,6 +14,11 @@ void JitterData::Add(const double error_k[3], const double gram_k[6]) {
   for (int i = 0; i < 6; ++i) gram[i].push_back(gram_k[i]);
 }
 
+void JitterData::Reserve(size_t n) {
+  for (std::vector<double>& column : error) column.reserve(n);
+  for (std::vector<double>& column : gram) column.reserve(n);
+}
+
 namespace {
 
 // Σ log x_k over positive x without a logarithm per term: binary exponents summed as integers,

@@ -14,6 +14,7 @@ namespace calib::jitter_internal {
 struct JitterData {
   // Appends an interval: its error e_k and G_k = g_s g_sᵀ + g_e g_eᵀ, packed.
   void Add(const double error_k[3], const double gram_k[6]);
+  void Reserve(size_t n);
   size_t size() const { return error[0].size(); }
   std::vector<double> error[3];
   std::vector<double> gram[6];
