@@ -1,4 +1,5 @@
 #include <calib/core/text_format.h>
+#include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/diagnosis/multiple_testing.h>
 #include <calib/solvers/laser/laser_consistency.h>
 #include <calib/solvers/laser/laser_consistency_terms.h>
@@ -15,9 +16,10 @@ using consistency_internal::AutomaticLag;
 using consistency_internal::BartlettAhead;
 using consistency_internal::BartlettCentred;
 using consistency_internal::ComputeTerms;
-using consistency_internal::InfluenceLongRun;
 using consistency_internal::IntervalTerms;
+using consistency_internal::kMinChunkIntervals;
 using consistency_internal::LogTerms;
+using consistency_internal::ScoreLongRun;
 using consistency_internal::Vector6;
 
 struct Window {
@@ -33,34 +35,30 @@ double Term(const std::vector<IntervalTerms>& t, const Window& w, long k, Differ
   return difference(t[k]);
 }
 
-// σ² of the timing at the cuts of the window: where a counted interval borders one that is not
-// (window ends, excluded intervals), the wheel rotation of a misplaced stamp, rate × f·period,
-// the rate the smaller of the two sides' (a rest on either side makes it vanish).
+// σ² of the timing at a cut k of the window, where a counted interval borders one that is not
+// (window ends, excluded intervals): the wheel rotation of a misplaced stamp, rate × f·period,
+// the rate the smaller of the two sides' (a rest on either side makes it vanish). 0 elsewhere.
 template <typename Predicted>
-double EndsVariance(const LaserConsistencyOptions& options, const LogTerms& log, const Window& w,
-                    Predicted predicted) {
+double CutVariance(const LaserConsistencyOptions& options, const LogTerms& log, const Window& w,
+                   long k, Predicted predicted) {
   const std::vector<IntervalTerms>& t = log.terms;
   const std::vector<LaserInterval>& in = *log.intervals;
-  const auto counted = [&](long k) { return k >= w.first && k <= w.last && t[k].counted; };
-  double variance = 0.0;
-  for (long k = w.first; k <= w.last + 1; ++k) {
-    if (counted(k - 1) == counted(k)) continue;
-    // The counted side always exists; the other one unless beyond the log or across a gap.
-    const long inside = counted(k) ? k : k - 1;
-    const long outside = counted(k) ? k - 1 : k;
-    const bool continuous =
-        outside >= 0 && outside < static_cast<long>(t.size()) && !in[std::max(k, 0L)].gap_before;
-    const auto rate = [&](long i) { return std::abs(predicted(t[i])) / in[i].duration_s; };
-    double period = in[inside].duration_s;
-    double speed = rate(inside);
-    if (continuous) {
-      speed = std::min(speed, rate(outside));
-      period = (period + in[outside].duration_s) / 2.0;
-    }
-    const double sigma = options.end_timing_fraction * speed * period;
-    variance += sigma * sigma;
+  const auto counted = [&](long i) { return i >= w.first && i <= w.last && t[i].counted; };
+  if (counted(k - 1) == counted(k)) return 0.0;
+  // The counted side always exists; the other one unless beyond the log or across a gap.
+  const long inside = counted(k) ? k : k - 1;
+  const long outside = counted(k) ? k - 1 : k;
+  const bool continuous =
+      outside >= 0 && outside < static_cast<long>(t.size()) && !in[std::max(k, 0L)].gap_before;
+  const auto rate = [&](long i) { return std::abs(predicted(t[i])) / in[i].duration_s; };
+  double period = in[inside].duration_s;
+  double speed = rate(inside);
+  if (continuous) {
+    speed = std::min(speed, rate(outside));
+    period = (period + in[outside].duration_s) / 2.0;
   }
-  return variance;
+  const double sigma = options.end_timing_fraction * speed * period;
+  return sigma * sigma;
 }
 
 }  // namespace
@@ -73,23 +71,20 @@ std::vector<Window> FindWindows(const std::vector<LogTerms>& logs, int min_inter
   for (size_t d = 0; d < logs.size(); ++d) {
     const std::vector<IntervalTerms>& t = logs[d].terms;
     const std::vector<LaserInterval>& in = *logs[d].intervals;
-    const auto count = [&](int a, int b, bool moving_only) {
-      int n = 0;
-      for (int k = a; k <= b; ++k) n += t[k].counted && !(moving_only && t[k].still);
-      return n;
-    };
-    for (int a = 0; a < static_cast<int>(t.size());) {
-      int b = a;
-      while (b + 1 < static_cast<int>(t.size()) && !in[b + 1].gap_before) ++b;
-      if (count(a, b, false) >= min_intervals) {
-        windows.push_back(Window{static_cast<int>(d), "run", a, b});
+    const int size = static_cast<int>(t.size());
+    for (int a = 0; a < size;) {
+      // The run [a, b] up to the next gap, and its counted intervals, all and in motion.
+      int b = a, counted = 0, moving = 0;
+      for (;; ++b) {
+        counted += t[b].counted;
+        moving += t[b].counted && !t[b].still;
+        if (b + 1 == size || in[b + 1].gap_before) break;
       }
-      const int moving = count(a, b, true);
+      if (counted >= min_intervals) windows.push_back(Window{static_cast<int>(d), "run", a, b});
       for (int s = a + 1; s < b; ++s) {
         if (!t[s - 1].still || t[s].still) continue;
-        int e = s;
-        while (e + 1 <= b && !t[e + 1].still) ++e;
-        const int n = count(s, e, false);
+        int e = s, n = t[s].counted;
+        while (e + 1 <= b && !t[e + 1].still) n += t[++e].counted;
         if (e < b && n >= min_intervals && n < 0.9 * moving) {
           between_rests.push_back(Window{static_cast<int>(d), "between rests", s, e});
         }
@@ -102,58 +97,88 @@ std::vector<Window> FindWindows(const std::vector<LogTerms>& logs, int min_inter
   return windows;
 }
 
-// What every total needs beyond its window: the covariance given, the long-run covariance of the
-// estimate's influence, the parameters that moved, the Bartlett lag.
+// What every total needs beyond its window: the covariance given, the map A from an interval's
+// score to its influence (IntervalTerms::score), the long-run covariance of the estimate's
+// influence, the parameters that moved, the Bartlett lag.
 struct Context {
   const LaserConsistencyOptions* options = nullptr;
   const LaserParamMatrix* covariance = nullptr;
-  const LaserParamMatrix* influence_long_run = nullptr;  // At `lag`.
-  Vector6 free = Vector6::Ones();                        // 0 for parameters held fixed.
+  const LaserParamMatrix* influence_map = nullptr;                 // A.
+  LaserParamMatrix influence_long_run = LaserParamMatrix::Zero();  // At `lag`.
+  Vector6 free = Vector6::Ones();                                  // 0 for parameters held fixed.
   int lag = 1;
 };
 
-// One quantity over one window. `difference` and `predicted` read an interval's terms; `g_pred` and
-// `g_meas` are the gradients of the window's predicted and measured totals.
+// One quantity's sums over a window's counted intervals k (h_k its difference): the totals,
+// Σ h_k² + 2Σ_{j≥1} w_j h_k h_{k+j}, Σ h_k Σ_{|j|≤L} w_j g_{k+j}, and the cuts' timing σ².
+struct QuantitySums {
+  double predicted = 0.0, measured = 0.0, v_hh = 0.0, ends = 0.0;
+  Vector6 v_gh = Vector6::Zero();
+  QuantitySums& operator+=(const QuantitySums& o) {
+    predicted += o.predicted;
+    measured += o.measured;
+    v_hh += o.v_hh;
+    ends += o.ends;
+    v_gh += o.v_gh;
+    return *this;
+  }
+};
+
+// The sums over the window's intervals [begin, end), a chunk of it: its running Bartlett sums
+// start at `begin`. h_k is 0 outside the window and where not counted; g_k spans the whole log.
 template <typename Difference, typename Predicted>
-LaserConsistencyTotal Total(const Context& c, const LogTerms& log, const Window& w,
-                            Difference difference, Predicted predicted, const Vector6& g_pred,
-                            const Vector6& g_meas) {
+QuantitySums SumQuantity(const Context& c, const LogTerms& log, const Window& w, long begin,
+                         long end, Difference difference, Predicted predicted) {
   const std::vector<IntervalTerms>& t = log.terms;
   const long n = static_cast<long>(t.size());
-  LaserConsistencyTotal total;
-  double v_hh = 0.0;
-  Vector6 v_psi_h = Vector6::Zero();
-  // h_k, 0 outside the window and where not counted; ψ_k over the whole log.
   const auto h_at = [&](long k) { return Term(t, w, k, difference); };
-  const auto psi_at = [&](long k) {
-    return k >= 0 && k < n ? t[k].Influence() : Vector6::Zero().eval();
-  };
-  BartlettAhead<double, decltype(h_at)> h_ahead(h_at, c.lag, w.first);
-  BartlettCentred<Vector6, decltype(psi_at)> psi_around(psi_at, c.lag, w.first);
-  for (long k = w.first; k <= w.last; ++k, h_ahead.Advance(), psi_around.Advance()) {
+  const auto g_at = [&](long k) { return k >= 0 && k < n ? t[k].Score() : Vector6::Zero().eval(); };
+  BartlettAhead<double, decltype(h_at)> h_ahead(h_at, c.lag, begin);
+  BartlettCentred<Vector6, decltype(g_at)> g_around(g_at, c.lag, begin);
+  QuantitySums s;
+  for (long k = begin; k < end; ++k, h_ahead.Advance(), g_around.Advance()) {
+    s.ends += CutVariance(*c.options, log, w, k, predicted);
     if (!t[k].counted) continue;
     const double h = difference(t[k]);
-    total.predicted += predicted(t[k]);
-    total.measured += predicted(t[k]) + h;
-    // Σ_k h_k² + 2Σ_{j≥1} w_j h_k h_{k+j}, and Σ_k h_k Σ_{|j|≤L} w_j ψ_{k+j}.
-    v_hh += h * h + 2.0 * h * h_ahead.value();
-    v_psi_h += h * psi_around.value();
+    s.predicted += predicted(t[k]);
+    s.measured += predicted(t[k]) + h;
+    s.v_hh += h * h + 2.0 * h * h_ahead.value();
+    s.v_gh += h * g_around.value();
   }
+  return s;
+}
+
+// One quantity over one window from its sums. `g_pred` and `g_meas` are the gradients of the
+// window's predicted and measured totals.
+LaserConsistencyTotal Total(const Context& c, const QuantitySums& s, const Vector6& g_pred,
+                            const Vector6& g_meas) {
+  LaserConsistencyTotal total;
+  total.predicted = s.predicted;
+  total.measured = s.measured;
   // d_k = 1[k∈w]·h_k + Gᵀψ_k sums to the difference; its long-run variance is the difference's.
   const Vector6 g = (g_meas - g_pred).cwiseProduct(c.free);
   const double fitted = g.dot(*c.covariance * g);
-  double variance = v_hh + 2.0 * g.dot(v_psi_h) + g.dot(*c.influence_long_run * g);
-  variance = std::max(variance, 0.01 * (v_hh + fitted));  // Never below a tenth of the σ sum.
-  const double ends = EndsVariance(*c.options, log, w, predicted);
-  total.sigma_measured = std::sqrt(std::max(v_hh, 0.0));
+  const Vector6 v_psi_h = *c.influence_map * s.v_gh;
+  double variance = s.v_hh + 2.0 * g.dot(v_psi_h) + g.dot(c.influence_long_run * g);
+  variance = std::max(variance, 0.01 * (s.v_hh + fitted));  // Never below a tenth of the σ sum.
+  total.sigma_measured = std::sqrt(std::max(s.v_hh, 0.0));
   total.sigma_predicted = std::sqrt(std::max(g_pred.dot(*c.covariance * g_pred), 0.0));
-  total.sigma_ends = std::sqrt(ends);
-  total.sigma = std::sqrt(variance + ends);
+  total.sigma_ends = std::sqrt(s.ends);
+  total.sigma = std::sqrt(variance + s.ends);
   const double d = total.measured - total.predicted;
   total.z = total.sigma > 0.0 ? d / total.sigma : 0.0;
   total.p_value = std::erfc(std::abs(total.z) / std::sqrt(2.0));
   return total;
 }
+
+// What CheckWindow sums over a window, chunk by chunk.
+struct WindowSums {
+  int intervals = 0;
+  Eigen::Vector2d wheel = Eigen::Vector2d::Zero();
+  Eigen::Vector3d travel_gradient = Eigen::Vector3d::Zero();
+  double rotation = 0.0;
+  QuantitySums rotation_sums, travel_sums;
+};
 
 LaserConsistencyWindow CheckWindow(const Context& rotation_context, const Context& travel_context,
                                    const LogTerms& log, const Window& w,
@@ -167,29 +192,53 @@ LaserConsistencyWindow CheckWindow(const Context& rotation_context, const Contex
   const std::vector<LaserInterval>& in = *log.intervals;
   out.start_s = in[w.first].start_s;
   out.end_s = in[w.last].start_s + in[w.last].duration_s;
-  Eigen::Vector2d wheel = Eigen::Vector2d::Zero();
-  Eigen::Vector3d travel_gradient = Eigen::Vector3d::Zero();
-  double rotation = 0.0;
-  for (int k = w.first; k <= w.last; ++k) {
-    const IntervalTerms& t = log.terms[k];
-    if (!t.counted) continue;
-    ++out.intervals;
-    wheel += IntervalWheelRotation(in[k]);
-    travel_gradient += t.travel_gradient.cast<double>();
-    rotation += t.rotation_predicted;
+  const auto rotation_difference = [](const IntervalTerms& t) { return t.rotation_difference(); };
+  const auto rotation_predicted = [](const IntervalTerms& t) { return t.rotation_predicted; };
+  const auto travel_difference = [](const IntervalTerms& t) { return t.travel_difference(); };
+  const auto travel_predicted = [](const IntervalTerms& t) { return t.travel_predicted; };
+  const size_t length = static_cast<size_t>(w.last - w.first + 1);
+  std::vector<WindowSums> chunks(SplitCount(length, kMinChunkIntervals));
+  ParallelSplit(length, rotation_context.options->num_threads, kMinChunkIntervals,
+                [&](size_t chunk, size_t begin, size_t end) {
+                  WindowSums& s = chunks[chunk];
+                  const long first = w.first + static_cast<long>(begin);
+                  const long last = w.first + static_cast<long>(end);
+                  for (long k = first; k < last; ++k) {
+                    const IntervalTerms& t = log.terms[k];
+                    if (!t.counted) continue;
+                    ++s.intervals;
+                    s.wheel += IntervalWheelRotation(in[k]);
+                    s.travel_gradient += t.travel_gradient.cast<double>();
+                    s.rotation += t.rotation_predicted;
+                  }
+                  s.rotation_sums = SumQuantity(rotation_context, log, w, first, last,
+                                                rotation_difference, rotation_predicted);
+                  s.travel_sums = SumQuantity(travel_context, log, w, first, last,
+                                              travel_difference, travel_predicted);
+                });
+  WindowSums sums;
+  for (const WindowSums& s : chunks) {
+    sums.intervals += s.intervals;
+    sums.wheel += s.wheel;
+    sums.travel_gradient += s.travel_gradient;
+    sums.rotation += s.rotation;
+    sums.rotation_sums += s.rotation_sums;
+    sums.travel_sums += s.travel_sums;
   }
+  // The cut after the window's last interval.
+  sums.rotation_sums.ends +=
+      CutVariance(*rotation_context.options, log, w, w.last + 1, rotation_predicted);
+  sums.travel_sums.ends +=
+      CutVariance(*travel_context.options, log, w, w.last + 1, travel_predicted);
+  out.intervals = sums.intervals;
   // Gradients of the totals in (r_l, r_r, b, x, y, θ).
   Vector6 g_rotation, g_travel, g_travel_measured;
-  g_rotation << -wheel(0) / odo.wheelbase_m, wheel(1) / odo.wheelbase_m,
-      -rotation / odo.wheelbase_m, 0.0, 0.0, 0.0;
-  g_travel << wheel(0) / 2.0, wheel(1) / 2.0, 0.0, 0.0, 0.0, 0.0;
-  g_travel_measured << 0.0, 0.0, 0.0, travel_gradient;
-  out.rotation = Total(
-      rotation_context, log, w, [](const IntervalTerms& t) { return t.rotation_difference(); },
-      [](const IntervalTerms& t) { return t.rotation_predicted; }, g_rotation, Vector6::Zero());
-  out.translation = Total(
-      travel_context, log, w, [](const IntervalTerms& t) { return t.travel_difference(); },
-      [](const IntervalTerms& t) { return t.travel_predicted; }, g_travel, g_travel_measured);
+  g_rotation << -sums.wheel(0) / odo.wheelbase_m, sums.wheel(1) / odo.wheelbase_m,
+      -sums.rotation / odo.wheelbase_m, 0.0, 0.0, 0.0;
+  g_travel << sums.wheel(0) / 2.0, sums.wheel(1) / 2.0, 0.0, 0.0, 0.0, 0.0;
+  g_travel_measured << 0.0, 0.0, 0.0, sums.travel_gradient;
+  out.rotation = Total(rotation_context, sums.rotation_sums, g_rotation, Vector6::Zero());
+  out.translation = Total(travel_context, sums.travel_sums, g_travel, g_travel_measured);
   return out;
 }
 
@@ -285,22 +334,18 @@ LaserConsistency CheckLaserConsistencyJoint(
     out.note = "not checked: the inliers do not determine the parameters";
     return out;
   }
-  for (LogTerms& log : terms) {
-    for (IntervalTerms& t : log.terms) {
-      // ψ_k: θ̂ − θ ≈ Σψ_k.
-      t.influence = (-ldlt.solve(t.Influence().cwiseProduct(c.free))).cast<float>();
-    }
-  }
+  // ψ_k = A·g_k with A = −H⁻¹ on the free parameters: θ̂ − θ ≈ Σψ_k.
+  const LaserParamMatrix influence_map = -ldlt.solve(LaserParamMatrix(c.free.asDiagonal()));
+  c.influence_map = &influence_map;
   // Each quantity with its own lag (Andrews) and the estimate's long-run covariance at it.
   Context rotation = c, travel = c;
   rotation.lag =
       AutomaticLag(terms, [](const IntervalTerms& t) { return t.rotation_difference(); });
   travel.lag = AutomaticLag(terms, [](const IntervalTerms& t) { return t.travel_difference(); });
-  const LaserParamMatrix rotation_long_run =
-      InfluenceLongRun(terms, rotation.lag, options.num_threads);
-  const LaserParamMatrix travel_long_run = InfluenceLongRun(terms, travel.lag, options.num_threads);
-  rotation.influence_long_run = &rotation_long_run;
-  travel.influence_long_run = &travel_long_run;
+  const std::vector<LaserParamMatrix> score_long_run =
+      ScoreLongRun(terms, {rotation.lag, travel.lag}, options.num_threads);
+  rotation.influence_long_run = influence_map * score_long_run[0] * influence_map.transpose();
+  travel.influence_long_run = influence_map * score_long_run[1] * influence_map.transpose();
   out.rotation_lag = rotation.lag;
   out.translation_lag = travel.lag;
   for (const Window& w : FindWindows(terms, options.min_window_intervals)) {

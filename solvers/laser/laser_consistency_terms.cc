@@ -11,9 +11,6 @@
 namespace calib::consistency_internal {
 namespace {
 
-// The passes run in chunks of at least this many intervals (ParallelSplit).
-constexpr size_t kMinChunk = 500;
-
 // Rescues the fit's outliers that are timing artefacts (see ComputeTerms).
 void RescueTimingOutliers(const std::vector<LaserInterval>& intervals,
                           const Eigen::Vector3d& noise_sigma, std::vector<IntervalTerms>* terms) {
@@ -75,10 +72,11 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
   LogTerms log{&intervals, {}};
   ReserveOnHugePages(&log.terms, intervals.size());
   log.terms.resize(intervals.size());
-  std::vector<LaserParamMatrix> hessians(SplitCount(intervals.size(), kMinChunk),
+  std::vector<LaserParamMatrix> hessians(SplitCount(intervals.size(), kMinChunkIntervals),
                                          LaserParamMatrix::Zero());
   ParallelSplit(
-      intervals.size(), num_threads, kMinChunk, [&](size_t chunk, size_t begin, size_t end) {
+      intervals.size(), num_threads, kMinChunkIntervals,
+      [&](size_t chunk, size_t begin, size_t end) {
         // On the thread's stack: side by side in `hessians` the sums would share cache lines.
         LaserParamMatrix h = LaserParamMatrix::Zero();
         for (size_t k = begin; k < end; ++k) {
@@ -101,7 +99,7 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
           Eigen::Matrix<double, 3, kNumLaserParams> jacobian;
           Eigen::Vector3d e;
           LaserResidual::Linearize(in, identity, v.data(), mounting, &e, &jacobian);
-          t.influence = (jacobian.transpose() * weight.asDiagonal() * e).cast<float>();
+          t.score = (jacobian.transpose() * weight.asDiagonal() * e).cast<float>();
           h += jacobian.transpose() * weight.asDiagonal() * jacobian;
         }
         hessians[chunk] = h;
@@ -111,28 +109,40 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
   return log;
 }
 
-LaserParamMatrix InfluenceLongRun(const std::vector<LogTerms>& logs, int lag, int num_threads) {
-  LaserParamMatrix s = LaserParamMatrix::Zero();
+std::vector<LaserParamMatrix> ScoreLongRun(const std::vector<LogTerms>& logs,
+                                           const std::vector<int>& lags, int num_threads) {
+  const size_t num_lags = lags.size();
+  std::vector<LaserParamMatrix> s(num_lags, LaserParamMatrix::Zero());
   for (const LogTerms& log : logs) {
     const std::vector<IntervalTerms>& t = log.terms;
-    std::vector<LaserParamMatrix> sums(SplitCount(t.size(), kMinChunk), LaserParamMatrix::Zero());
-    ParallelSplit(t.size(), num_threads, kMinChunk, [&](size_t chunk, size_t begin, size_t end) {
-      // Σ_k ψ_kψ_kᵀ + C + Cᵀ with C = Σ_k ψ_k·(Σ_j w_j ψ_{k+j})ᵀ: one outer product per
-      // interval, the lags summed as a running vector.
-      LaserParamMatrix cross = LaserParamMatrix::Zero();
-      LaserParamMatrix sum = LaserParamMatrix::Zero();  // Stored once (see ComputeTerms).
-      const auto psi_at = [&](long k) {
-        return k < static_cast<long>(t.size()) ? t[k].Influence() : Vector6::Zero().eval();
-      };
-      BartlettAhead<Vector6, decltype(psi_at)> ahead(psi_at, lag, static_cast<long>(begin));
-      for (size_t k = begin; k < end; ++k, ahead.Advance()) {
-        const Vector6 psi = t[k].Influence();
-        sum.noalias() += psi * psi.transpose();
-        cross.noalias() += psi * ahead.value().transpose();
-      }
-      sums[chunk] = sum + cross + cross.transpose();
-    });
-    for (const LaserParamMatrix& sum : sums) s += sum;
+    const long n = static_cast<long>(t.size());
+    std::vector<std::vector<LaserParamMatrix>> sums(SplitCount(t.size(), kMinChunkIntervals));
+    ParallelSplit(
+        t.size(), num_threads, kMinChunkIntervals, [&](size_t chunk, size_t begin, size_t end) {
+          // Σ_k g_kg_kᵀ + C + Cᵀ with C = Σ_k g_k·(Σ_j w_j g_{k+j})ᵀ: one outer product per
+          // interval and lag, the lags summed as running vectors.
+          const auto g_at = [&](long k) { return k < n ? t[k].Score() : Vector6::Zero().eval(); };
+          using Ahead = BartlettAhead<Vector6, decltype(g_at)>;
+          std::vector<Ahead> ahead;
+          for (int lag : lags) ahead.emplace_back(g_at, lag, static_cast<long>(begin));
+          LaserParamMatrix square = LaserParamMatrix::Zero();
+          std::vector<LaserParamMatrix> cross(num_lags, LaserParamMatrix::Zero());
+          for (size_t k = begin; k < end; ++k) {
+            const Vector6 g = t[k].Score();
+            square.noalias() += g * g.transpose();
+            for (size_t l = 0; l < num_lags; ++l) {
+              cross[l].noalias() += g * ahead[l].value().transpose();
+              ahead[l].Advance();
+            }
+          }
+          sums[chunk].resize(num_lags);
+          for (size_t l = 0; l < num_lags; ++l) {
+            sums[chunk][l] = square + cross[l] + cross[l].transpose();
+          }
+        });
+    for (const std::vector<LaserParamMatrix>& chunk : sums) {
+      for (size_t l = 0; l < num_lags; ++l) s[l] += chunk[l];
+    }
   }
   return s;
 }

@@ -19,6 +19,9 @@ namespace calib::consistency_internal {
 
 using Vector6 = Eigen::Matrix<double, kNumLaserParams, 1>;
 
+// The check's passes run in chunks of at least this many intervals (ParallelSplit).
+constexpr size_t kMinChunkIntervals = 500;
+
 // The robot's forward travel over an interval from the sensor displacement: o = ℓ ∘ sm ∘ ℓ⁻¹,
 // and the component of its chord along the mid-interval heading over sinc(Δθ/2). For an arc of
 // length d turning by Δθ this is d exactly (the chord is d·sinc(Δθ/2) along the mid heading); on
@@ -40,11 +43,11 @@ struct IntervalTerms {
   Eigen::Vector3f travel_gradient = Eigen::Vector3f::Zero();  // ∂travel_measured/∂ℓ.
   double rotation_predicted = 0.0, rotation_measured = 0.0;
   double travel_predicted = 0.0, travel_measured = 0.0;
-  // JᵀWe of the fit's inliers (0 otherwise); the check turns it into the influence
-  // ψ = −H⁻¹JᵀWe, the interval's share of θ̂ − θ.
-  Eigen::Matrix<float, kNumLaserParams, 1> influence =
-      Eigen::Matrix<float, kNumLaserParams, 1>::Zero();
-  Vector6 Influence() const { return influence.cast<double>(); }
+  // The score g = JᵀWe of the fit's inliers (0 otherwise). The interval's share of θ̂ − θ is its
+  // influence ψ = A·g, A = −H⁻¹ (free parameters only); every sum of ψ is linear in g, so the
+  // check sums the scores and applies A once.
+  Eigen::Matrix<float, kNumLaserParams, 1> score = Eigen::Matrix<float, kNumLaserParams, 1>::Zero();
+  Vector6 Score() const { return score.cast<double>(); }
   double rotation_difference() const { return rotation_measured - rotation_predicted; }
   double travel_difference() const { return travel_measured - travel_predicted; }
 };
@@ -121,9 +124,10 @@ class BartlettAhead {
 template <typename Series>
 int AutomaticLag(const std::vector<LogTerms>& logs, Series series);
 
-// The long-run (HAC) covariance of Σψ_k over every log: the estimate's sandwich with its serial
-// correlation.
-LaserParamMatrix InfluenceLongRun(const std::vector<LogTerms>& logs, int lag, int num_threads = 1);
+// The long-run (HAC) covariance of Σg_k over every log at each of `lags`, in one pass; with A
+// (IntervalTerms::score) it gives the estimate's sandwich with its serial correlation, A·S·Aᵀ.
+std::vector<LaserParamMatrix> ScoreLongRun(const std::vector<LogTerms>& logs,
+                                           const std::vector<int>& lags, int num_threads = 1);
 
 template <typename Series>
 int AutomaticLag(const std::vector<LogTerms>& logs, Series series) {

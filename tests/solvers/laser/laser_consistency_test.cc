@@ -291,6 +291,32 @@ TEST(LaserConsistencyTest, RunningBartlettSumsEqualDirectSums) {
   }
 }
 
+// The scores' long-run covariance at several lags in one chunked pass equals the direct sum
+// Σ_k Σ_{|j|≤L} w_j g_k g_{k+j}ᵀ at each lag, on a log split into several chunks.
+TEST(LaserConsistencyTest, ScoreLongRunEqualsDirectSums) {
+  Random random(8);
+  consistency_internal::LogTerms log;
+  log.terms.resize(2600);
+  for (auto& t : log.terms) {
+    for (int i = 0; i < kNumLaserParams; ++i) t.score(i) = static_cast<float>(random.Normal());
+  }
+  const long n = static_cast<long>(log.terms.size());
+  const std::vector<int> lags = {1, 4, 23};
+  const std::vector<LaserParamMatrix> fast = consistency_internal::ScoreLongRun({log}, lags, 2);
+  ASSERT_EQ(fast.size(), lags.size());
+  for (size_t l = 0; l < lags.size(); ++l) {
+    LaserParamMatrix direct = LaserParamMatrix::Zero();
+    for (long k = 0; k < n; ++k) {
+      for (long j = -lags[l]; j <= lags[l]; ++j) {
+        if (k + j < 0 || k + j >= n) continue;
+        const double w = 1.0 - static_cast<double>(std::abs(j)) / (lags[l] + 1);
+        direct += w * log.terms[k].Score() * log.terms[k + j].Score().transpose();
+      }
+    }
+    EXPECT_LT((fast[l] - direct).norm(), 1e-10 * direct.norm()) << "lag " << lags[l];
+  }
+}
+
 TEST(LaserConsistencyTest, CensiTupleLogs) {
   const std::string dir = CALIB_CENSI_DATA_DIR;
   if (!std::filesystem::exists(dir + "/l90.tuple")) GTEST_SKIP() << "no recordings at " << dir;
