@@ -14,6 +14,9 @@
 namespace calib {
 namespace {
 
+// The unwhitened errors of every dataset's intervals (LaserProblem::Errors).
+using DatasetErrors = std::vector<std::vector<Eigen::Vector3d>>;
+
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -217,13 +220,13 @@ Status CheckEnoughIntervals(const LaserMotionCensus& census) {
 
 // Whether the fit can be relied on: most intervals gross (the robust loss then follows them), or
 // inliers that lack the motion the parameters need, make the result unreliable.
-void JudgeInliers(const LaserProblem& problem, const std::vector<LaserInterval>& joined,
-                  LaserCalibrationResult* result) {
+void JudgeInliers(const LaserProblem& problem, const DatasetErrors& errors,
+                  const std::vector<LaserInterval>& joined, LaserCalibrationResult* result) {
   Eigen::MatrixXd whitened(result->samples, 3);
   std::vector<bool> inlier;
   Eigen::Index row = 0;
   for (size_t d = 0; d < problem.num_datasets(); ++d) {
-    for (const Eigen::Vector3d& e : problem.Errors(d)) {
+    for (const Eigen::Vector3d& e : errors[d]) {
       whitened.row(row++) = (problem.sqrt_information(d) * e).transpose();
     }
     inlier.insert(inlier.end(), result->is_inlier[d].begin(), result->is_inlier[d].end());
@@ -247,10 +250,10 @@ void JudgeInliers(const LaserProblem& problem, const std::vector<LaserInterval>&
 
 // Inliers of each log (squared whitened residual below the cut) and their noise level. A log
 // without inliers keeps the robust level of all its intervals, with a warning (never NaN).
-void ClassifyInliers(const LaserProblem& problem, double inlier_chi2,
-                     LaserCalibrationResult* result) {
+void ClassifyInliers(const LaserProblem& problem, const DatasetErrors& all_errors,
+                     double inlier_chi2, LaserCalibrationResult* result) {
   for (size_t d = 0; d < problem.num_datasets(); ++d) {
-    const std::vector<Eigen::Vector3d> errors = problem.Errors(d);
+    const std::vector<Eigen::Vector3d>& errors = all_errors[d];
     const Eigen::Matrix3d& sqrt_information = problem.sqrt_information(d);
     std::vector<bool> inlier(errors.size());
     Eigen::Vector3d sum_sq = Eigen::Vector3d::Zero();
@@ -440,7 +443,11 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   if (!outcome.converged) result.warnings.push_back(outcome.not_converged);
   result.estimate = problem.calibration();
   result.refinement_seconds = SecondsSince(start);
-  ClassifyInliers(problem, options.inlier_chi2, &result);
+  // The errors at the estimate, one pass for the inlier flags, the covariance's loss correction
+  // and the judgement of the inliers; released before the consistency check.
+  DatasetErrors errors;
+  for (size_t d = 0; d < problem.num_datasets(); ++d) errors.push_back(problem.Errors(d));
+  ClassifyInliers(problem, errors, options.inlier_chi2, &result);
   if (options.estimate_only) return result;
 
   // The jitter first: when it is significant the refit replaces the covariance.
@@ -457,7 +464,7 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
     // The fused problem hands ceres::Covariance a 7×6 Jacobian whatever N: one pass, no switch
     // to another estimator on long logs.
     CALIB_ASSIGN_OR_RETURN(const CorrectedCovariance<LaserParamMatrix> covariance,
-                           problem.Covariance());
+                           problem.Covariance(&errors));
     result.covariance = covariance.covariance;
     result.covariance_scale = covariance.kappa;
     result.stddev = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
@@ -475,7 +482,8 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
     report("interval jitter done in " + std::to_string(jitter_seconds) + " s");
   }
   start = std::chrono::steady_clock::now();
-  JudgeInliers(problem, joined, &result);
+  JudgeInliers(problem, errors, joined, &result);
+  DatasetErrors().swap(errors);
   result.consistency = CheckLaserConsistencyJoint(logs, result.estimate, result.covariance,
                                                   result.noise_sigma, result.is_inlier);
   report("inlier and consistency checks done in " + std::to_string(SecondsSince(start)) + " s");

@@ -182,8 +182,11 @@ std::vector<Eigen::Vector3d> LaserProblem::Errors(size_t dataset) const {
   return errors;
 }
 
-std::vector<double> LaserProblem::WhitenedSquaredNorms(size_t dataset) const {
-  const std::vector<Eigen::Vector3d> errors = Errors(dataset);
+std::vector<double> LaserProblem::WhitenedSquaredNorms(
+    size_t dataset, const std::vector<Eigen::Vector3d>* given) const {
+  const std::vector<Eigen::Vector3d> computed =
+      given ? std::vector<Eigen::Vector3d>() : Errors(dataset);
+  const std::vector<Eigen::Vector3d>& errors = given ? *given : computed;
   std::vector<double> s(errors.size());
   for (size_t k = 0; k < errors.size(); ++k) {
     s[k] = (IntervalSqrtInformation(dataset, k) * errors[k]).squaredNorm();
@@ -193,7 +196,8 @@ std::vector<double> LaserProblem::WhitenedSquaredNorms(size_t dataset) const {
 
 double LaserProblem::LossWeight(double s) const { return EvaluateLoss(loss_.get(), s).rho1; }
 
-StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::Covariance() const {
+StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::Covariance(
+    const std::vector<std::vector<Eigen::Vector3d>>* errors) const {
   ceres::Covariance::Options covariance_options = MakeCovarianceOptions(options_.num_threads);
   // Six parameters: the SVD of the dense 3N × 6 Jacobian is cheaper than a sparse QR.
   covariance_options.algorithm_type = ceres::DENSE_SVD;
@@ -207,7 +211,9 @@ StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::Covariance() const
   // Ceres fills row-major; the matrix is symmetric, so the layout does not matter.
   LossCorrectionSums sums;
   for (size_t d = 0; d < datasets_.size(); ++d) {
-    for (double s : WhitenedSquaredNorms(d)) sums.Add(s, loss_.get(), 3);
+    for (double s : WhitenedSquaredNorms(d, errors ? &(*errors)[d] : nullptr)) {
+      sums.Add(s, loss_.get(), 3);
+    }
   }
   const double components = 3.0 * sums.blocks;
   if (components <= kNumLaserParams) return Status::NotObservable(kTooFew);

@@ -95,13 +95,17 @@ class LaserProblem {
 
   // Unwhitened errors e (see LaserResidual) of every interval of a dataset.
   std::vector<Eigen::Vector3d> Errors(size_t dataset) const;
-  // Squared whitened norms s = ‖L·e‖² of every interval of a dataset.
-  std::vector<double> WhitenedSquaredNorms(size_t dataset) const;
+  // Squared whitened norms s = ‖L·e‖² of every interval of a dataset, from its errors when given
+  // (Errors(dataset) at the current parameters).
+  std::vector<double> WhitenedSquaredNorms(
+      size_t dataset, const std::vector<Eigen::Vector3d>* errors = nullptr) const;
 
   // Covariance of the six parameters: ceres::Covariance of the robustified problem (whose
   // Jacobian carries the IRLS weights √ρ'), times the loss correction κ with n/(n − 6), n the
-  // residual components (solvers/common/robust_covariance.h), and that κ.
-  StatusOr<CorrectedCovariance<LaserParamMatrix>> Covariance() const;
+  // residual components (solvers/common/robust_covariance.h), and that κ. `errors`, when given,
+  // holds Errors(d) of every dataset at the current parameters (saves a pass).
+  StatusOr<CorrectedCovariance<LaserParamMatrix>> Covariance(
+      const std::vector<std::vector<Eigen::Vector3d>>* errors = nullptr) const;
 
   // The M-estimator's sandwich H⁻¹·B·H⁻¹·n/(n − 6) from the per-interval Jacobians (κ = 1): one
   // pass over the intervals, for logs where ceres::Covariance takes too long.
