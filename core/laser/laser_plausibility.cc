@@ -68,11 +68,11 @@ class Judge {
   explicit Judge(const std::vector<LaserInterval>& intervals)
       : intervals_(intervals), allowed_(std::max<size_t>(2, intervals.size() / 50)) {
     finding_.implausible.assign(intervals.size(), false);
-    ReserveOnHugePages(&values_, intervals.size());
-    values_.resize(intervals.size());
+    for (std::vector<double>& column : values_) ReserveOnHugePages(&column, intervals.size());
     turns_.resize(intervals.size());
     for (size_t k = 0; k < intervals.size(); ++k) {
-      values_[k] = Quantities(intervals[k]);
+      const std::array<double, kNumQuantities> values = Quantities(intervals[k]);
+      for (int q = 0; q < kNumQuantities; ++q) values_[q].push_back(values[q]);
       turns_[k] = std::abs(intervals[k].sensor_motion(2)) > kTwoPi;
       if (Absurd(intervals[k])) Mark(k, AbsurdField(intervals[k]));
     }
@@ -87,18 +87,24 @@ class Judge {
                           intervals_[k].sensor_motion(2));
           });
     if (n <= allowed_) return std::move(finding_);
+    std::vector<double> column;  // One buffer for every quantity: its pages fault in once.
+    ReserveOnHugePages(&column, n);
     for (int q = 0; q < kNumQuantities; ++q) {
-      std::vector<double> column;
-      ReserveOnHugePages(&column, n);
-      for (size_t k = 0; k < n; ++k) {
-        if (!finding_.implausible[k]) column.push_back(values_[k][q]);
+      const std::vector<double>& values = values_[q];
+      column.clear();
+      if (finding_.count == 0) {
+        column.assign(values.begin(), values.end());
+      } else {
+        for (size_t k = 0; k < n; ++k) {
+          if (!finding_.implausible[k]) column.push_back(values[k]);
+        }
       }
       if (column.size() <= allowed_) continue;
       const double scale = KthSmallest(&column, column.size() - 1 - allowed_);
       if (!(scale > 0.0)) continue;
-      Apply([&](size_t k) { return values_[k][q] > kScaleFactor * scale; },
+      Apply([&](size_t k) { return values[k] > kScaleFactor * scale; },
             [&](size_t k) {
-              const double value = values_[k][q];
+              const double value = values[k];
               return Format("%s = %.4g %s, %.3g times the log's typical value", kQuantityNames[q],
                             value, kQuantityUnits[q], value / scale);
             });
@@ -129,8 +135,8 @@ class Judge {
 
   const std::vector<LaserInterval>& intervals_;
   const size_t allowed_;
-  std::vector<std::array<double, kNumQuantities>> values_;
-  std::vector<bool> turns_;  // More than a full turn.
+  std::array<std::vector<double>, kNumQuantities> values_;  // By quantity: each pass reads one.
+  std::vector<bool> turns_;                                 // More than a full turn.
   Finding finding_;
 };
 

@@ -186,10 +186,26 @@ std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
 
 namespace {
 
-// The sensitivities of the intervals at indices[i] (all when `indices` is null).
-std::vector<IntervalTimeSensitivity> SensitivitiesAt(
-    const std::vector<LaserInterval>& intervals, const std::vector<IntervalBoundarySpeeds>& speeds,
-    const LaserCalibration& calibration, const std::vector<size_t>* indices) {
+// BoundaryWheelSpeeds(intervals)[k] alone: a sample of a long log needs only its own.
+IntervalBoundarySpeeds BoundaryWheelSpeedsOf(const std::vector<LaserInterval>& intervals,
+                                             size_t k) {
+  IntervalBoundarySpeeds at;
+  at.start = k > 0 && !intervals[k].gap_before
+                 ? Interpolate(EndSide(intervals[k - 1]), StartSide(intervals[k]))
+                 : StartSide(intervals[k]).speed;
+  at.end = k + 1 < intervals.size() && !intervals[k + 1].gap_before
+               ? Interpolate(EndSide(intervals[k]), StartSide(intervals[k + 1]))
+               : EndSide(intervals[k]).speed;
+  return at;
+}
+
+// The sensitivities of the intervals at indices[i] (all when `indices` is null), speeds_of(k)
+// giving interval k's boundary speeds.
+template <typename SpeedsOf>
+std::vector<IntervalTimeSensitivity> SensitivitiesAt(const std::vector<LaserInterval>& intervals,
+                                                     const SpeedsOf& speeds_of,
+                                                     const LaserCalibration& calibration,
+                                                     const std::vector<size_t>* indices) {
   const OdometryParams& p = calibration.odometry;
   const Pose2d& mounting = calibration.base_T_sensor;
   const double cl = std::cos(mounting(2)), sl = std::sin(mounting(2));
@@ -200,7 +216,7 @@ std::vector<IntervalTimeSensitivity> SensitivitiesAt(
     const size_t k = indices ? (*indices)[i] : i;
     const Pose2d robot_motion =
         IntervalRobotMotion(p.left_radius_m, p.right_radius_m, p.wheelbase_m, intervals[k]);
-    sensitivities[i] = ShiftSensitivity(p, robot_motion, speeds[k], to_sensor, mount);
+    sensitivities[i] = ShiftSensitivity(p, robot_motion, speeds_of(k), to_sensor, mount);
   }
   return sensitivities;
 }
@@ -210,13 +226,17 @@ std::vector<IntervalTimeSensitivity> SensitivitiesAt(
 std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
     const std::vector<LaserInterval>& intervals, const LaserCalibration& calibration,
     const std::vector<size_t>& indices) {
-  return SensitivitiesAt(intervals, BoundaryWheelSpeeds(intervals), calibration, &indices);
+  return SensitivitiesAt(
+      intervals, [&](size_t k) { return BoundaryWheelSpeedsOf(intervals, k); }, calibration,
+      &indices);
 }
 
 std::vector<IntervalTimeSensitivity> IntervalTimeSensitivities(
     const std::vector<LaserInterval>& intervals, const std::vector<IntervalBoundarySpeeds>& speeds,
     const LaserCalibration& calibration) {
-  return SensitivitiesAt(intervals, speeds, calibration, nullptr);
+  return SensitivitiesAt(
+      intervals, [&](size_t k) -> const IntervalBoundarySpeeds& { return speeds[k]; }, calibration,
+      nullptr);
 }
 
 Eigen::Matrix3d JitterCovariance(const IntervalTimeSensitivity& g, double jitter_s) {

@@ -121,7 +121,7 @@ TEST(IntervalJitterTest, SqrtInformationWhitensTheCovariance) {
 }
 
 // The refit's inlier test takes eᵀΣ⁻¹e by cofactors: ‖L·e‖² with the root's L, and the
-// sensitivities from given boundary speeds are those computed from the intervals.
+// sensitivities from given boundary speeds, or of a sample, are those computed from the intervals.
 TEST(IntervalJitterTest, WhitenedNormsAreTheRootsNorms) {
   const JitteredCase jittered(300, 11, 0.02);
   const LaserCalibration truth = Truth(jittered.sim);
@@ -132,6 +132,19 @@ TEST(IntervalJitterTest, WhitenedNormsAreTheRootsNorms) {
   ASSERT_EQ(given.size(), g.size());
   for (size_t k = 0; k < g.size(); ++k) {
     EXPECT_TRUE(given[k].start == g[k].start && given[k].end == g[k].end) << k;
+  }
+  // A sample's sensitivities, from its intervals' own boundary speeds, are the full ones: at the
+  // log's ends and on both sides of a gap too.
+  std::vector<LaserInterval> gapped = intervals;
+  gapped[150].gap_before = true;
+  const std::vector<IntervalTimeSensitivity> full = IntervalTimeSensitivities(gapped, truth);
+  const std::vector<size_t> sample = {0, 7, 149, 150, 151, gapped.size() - 1};
+  const std::vector<IntervalTimeSensitivity> sampled =
+      IntervalTimeSensitivities(gapped, truth, sample);
+  ASSERT_EQ(sampled.size(), sample.size());
+  for (size_t i = 0; i < sample.size(); ++i) {
+    EXPECT_TRUE(sampled[i].start == full[sample[i]].start && sampled[i].end == full[sample[i]].end)
+        << sample[i];
   }
   const LaserParamVector p = truth.ToVector();
   std::vector<Eigen::Vector3d> errors;
