@@ -11,9 +11,11 @@ double GrossOutlierShare(const Eigen::MatrixXd& residuals, const OutlierShareOpt
   if (n == 0) return 0.0;
   constexpr double kQ20OfAbsGaussian = 0.2533;  // P(|z| < 0.2533) = 0.2.
   Eigen::VectorXd limit(residuals.cols());
+  std::vector<double> a;  // One buffer for every column: its pages fault in once.
+  a.reserve(static_cast<size_t>(n));
   for (Eigen::Index c = 0; c < residuals.cols(); ++c) {
-    std::vector<double> a(static_cast<size_t>(n));
-    for (Eigen::Index i = 0; i < n; ++i) a[static_cast<size_t>(i)] = std::abs(residuals(i, c));
+    a.clear();
+    for (Eigen::Index i = 0; i < n; ++i) a.push_back(std::abs(residuals(i, c)));
     const double sigma = KthSmallest(&a, a.size() / 5) / kQ20OfAbsGaussian;
     limit(c) = std::max(options.cut * sigma, options.floor);
   }
