@@ -34,10 +34,12 @@ std::string_view WithoutBom(std::string_view text) {
 
 namespace {
 
-// Clinger's fast path: a decimal of at most 15 significant digits times a power of ten within
-// 10^±22 is one correctly rounded operation on exact doubles, so it is from_chars' value (logs
-// write their numbers so: %.6e, %.9g), at a fifth of its time. Null for anything else (more
-// digits, a larger exponent, inf, nan, no digits): from_chars then reads it.
+// Clinger's fast path: a decimal whose digits form an integer m ≤ 2^53 (exact as a double: any
+// 15 significant digits, most 16) times a power of ten within 10^±22 is one correctly rounded
+// operation on exact doubles, so it is from_chars' value (logs write their numbers so: %.6e,
+// %.9g, and the round trip's 16 digits half the time), at a fifth of its time. Null for anything
+// else (a larger m, from 20 significant digits on as soon as it is seen; a larger exponent, inf,
+// nan, no digits): from_chars then reads it.
 const char* ScanShortDecimal(const char* p, const char* end, double* value) {
   static constexpr double kPowers[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
                                        1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
@@ -45,19 +47,23 @@ const char* ScanShortDecimal(const char* p, const char* end, double* value) {
   const auto digit = [&](const char* q) { return q < end && *q >= '0' && *q <= '9'; };
   const bool negative = p < end && *p == '-';
   if (negative) ++p;
+  constexpr int kMaxSignificant = 19;  // 10^19 − 1 < 2^64: m cannot overflow.
+  constexpr uint64_t kLargestExact = uint64_t{1} << 53;
   uint64_t mantissa = 0;
   int significant = 0, exponent = 0, digits = 0;
   for (; digit(p); ++p, ++digits) {
     mantissa = 10 * mantissa + static_cast<uint64_t>(*p - '0');
-    significant += mantissa != 0;
+    significant += significant > 0 || *p != '0';  // From the first nonzero digit on.
+    if (significant > kMaxSignificant) return nullptr;
   }
   if (p < end && *p == '.') {
     for (++p; digit(p); ++p, ++digits, --exponent) {
       mantissa = 10 * mantissa + static_cast<uint64_t>(*p - '0');
-      significant += mantissa != 0;
+      significant += significant > 0 || *p != '0';  // From the first nonzero digit on.
+      if (significant > kMaxSignificant) return nullptr;
     }
   }
-  if (digits == 0 || significant > 15) return nullptr;
+  if (digits == 0 || mantissa > kLargestExact) return nullptr;
   if (p < end && (*p == 'e' || *p == 'E')) {
     const char* q = p + 1;
     const bool negative_exponent = q < end && *q == '-';

@@ -20,8 +20,8 @@ TEST(TextFormatTest, FormatsLikePrintfAndCutsAtItsLimit) {
 }
 
 // ScanDouble reads what from_chars reads, to the bit and to the character: the logs' own formats
-// (%.6e, %.9g, %.17g, %f), short and long mantissas, large exponents, signed zeros, and text
-// around or inside a number.
+// (%.6e, %.9g, %.17g, %f, the shortest round trip), short and long mantissas (around 2^53 and
+// 2^64), large exponents, signed zeros, and text around or inside a number.
 TEST(TextNumberTest, ScanDoubleReadsWhatFromCharsReads) {
   std::vector<std::string> tokens = {"0",
                                      "-0",
@@ -50,6 +50,14 @@ TEST(TextNumberTest, ScanDoubleReadsWhatFromCharsReads) {
                                      "1.5e+07 ",
                                      "123456789012345",
                                      "1234567890123456",
+                                     "9007199254740992",
+                                     "9007199254740993",
+                                     "-9.007199254740993e-5",
+                                     "9.007199254740992e22",
+                                     "1234567890123456789",
+                                     "12345678901234567890",
+                                     "0.000000000000000000009007199254740991",
+                                     "18446744073709551616",
                                      "0.000000000000000000001234",
                                      "999999999999999e22",
                                      "000000000000000000000000123",
@@ -59,9 +67,15 @@ TEST(TextNumberTest, ScanDoubleReadsWhatFromCharsReads) {
   for (int i = 0; i < 20000; ++i) {
     const double value =
         std::ldexp(random.Uniform(-1.0, 1.0), static_cast<int>(random.Index(200)) - 100);
-    const char* formats[] = {"%.6e", "%.9g", "%.17g", "%f", "%.3f", "%.15e"};
-    std::snprintf(buffer, sizeof(buffer), formats[i % 6], value);
-    tokens.push_back(buffer);
+    const char* formats[] = {"%.6e", "%.9g", "%.17g", "%f", "%.3f", "%.15e", "%.16e"};
+    if (i % 8 == 7) {  // The shortest round trip (calib's own writers): 15 to 17 digits.
+      const auto written =
+          std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::scientific);
+      tokens.emplace_back(buffer, written.ptr);
+    } else {
+      std::snprintf(buffer, sizeof(buffer), formats[i % 8], value);
+      tokens.push_back(buffer);
+    }
   }
   for (const std::string& token : tokens) {
     const char* begin = token.data();
