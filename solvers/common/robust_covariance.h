@@ -51,6 +51,13 @@ struct LossCorrectionSums {
   void Add(double s, const ceres::LossFunction* loss, int dimension = 1) {
     Add(s, EvaluateLoss(loss, s), dimension);
   }
+  // Another set of blocks' sums (a chunk of a parallel pass).
+  void Add(const LossCorrectionSums& other) {
+    weight += other.weight;
+    meat += other.meat;
+    bread += other.bread;
+    blocks += other.blocks;
+  }
 };
 
 // The scale of likelihood-ratio statistics mean(ρ'²s/d)/mean(ρ' + 2ρ''s/d) (2·Δcost/scale is χ²

@@ -48,6 +48,8 @@ struct SolveOutcome {
   int iterations = 0;
   bool converged = true;
   std::string not_converged;  // Why the last solve stopped, when it did not converge.
+  // Each log's errors at the final parameters, when the last noise estimate computed them.
+  DatasetErrors errors;
 };
 
 // The convex stage between two calibrations of one log: `given` (may be null) replaces the
@@ -105,12 +107,16 @@ Status FirstSolve(const LaserCalibrationOptions& options, const ConvexStageHandO
 StatusOr<SolveOutcome> RefineWithNoise(const LaserCalibrationOptions& options,
                                        const ConvexStageHandOff& hand_off, LaserProblem* problem,
                                        const std::function<void(const std::string&)>& report) {
-  // Whitens each log by its robust noise level; returns the largest relative change.
+  SolveOutcome outcome;
+  // Whitens each log by its robust noise level; returns the largest relative change. The errors
+  // after the last solve are kept for the checks that follow (the same parameters).
   const auto estimate_noise = [&]() {
     double change = 0.0;
+    outcome.errors.clear();
     for (size_t d = 0; d < problem->num_datasets(); ++d) {
+      if (!options.noise_sigma) outcome.errors.push_back(problem->Errors(d));
       const Eigen::Vector3d sigma =
-          options.noise_sigma ? *options.noise_sigma : RobustNoiseSigma(problem->Errors(d));
+          options.noise_sigma ? *options.noise_sigma : RobustNoiseSigma(outcome.errors.back());
       const Eigen::Vector3d old_sigma = problem->sqrt_information(d).diagonal().cwiseInverse();
       change = std::max(change, ((sigma - old_sigma).cwiseQuotient(sigma)).cwiseAbs().maxCoeff());
       problem->SetSqrtInformation(d, DiagonalSqrtInformation(sigma));
@@ -118,7 +124,7 @@ StatusOr<SolveOutcome> RefineWithNoise(const LaserCalibrationOptions& options,
     return change;
   };
   estimate_noise();
-  SolveOutcome outcome;
+  outcome.errors.clear();  // Before the solve: not the final parameters'.
   for (int round = 0; round < std::max(1, options.noise_rounds); ++round) {
     const int before = outcome.iterations;
     if (round == 0) {
@@ -436,17 +442,21 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   } else if (options.closed_forms_done) {
     options.closed_forms_done(result);
   }
-  CALIB_ASSIGN_OR_RETURN(const SolveOutcome outcome,
+  CALIB_ASSIGN_OR_RETURN(SolveOutcome outcome,
                          RefineWithNoise(options, hand_off, &problem, report));
   result.iterations += outcome.iterations;
   result.converged = outcome.converged;
   if (!outcome.converged) result.warnings.push_back(outcome.not_converged);
   result.estimate = problem.calibration();
   result.refinement_seconds = SecondsSince(start);
-  // The errors at the estimate, one pass for the inlier flags, the covariance's loss correction
-  // and the judgement of the inliers; released before the consistency check.
-  DatasetErrors errors;
-  for (size_t d = 0; d < problem.num_datasets(); ++d) errors.push_back(problem.Errors(d));
+  // The errors at the estimate (the refinement's last noise estimate's), one pass for the inlier
+  // flags, the covariance's loss correction and the judgement of the inliers; released before the
+  // consistency check.
+  DatasetErrors errors = std::move(outcome.errors);
+  if (errors.size() != problem.num_datasets()) {
+    errors.clear();
+    for (size_t d = 0; d < problem.num_datasets(); ++d) errors.push_back(problem.Errors(d));
+  }
   ClassifyInliers(problem, errors, options.inlier_chi2, &result);
   if (options.estimate_only) return result;
 

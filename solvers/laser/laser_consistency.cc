@@ -178,6 +178,15 @@ struct WindowSums {
   Eigen::Vector3d travel_gradient = Eigen::Vector3d::Zero();
   double rotation = 0.0;
   QuantitySums rotation_sums, travel_sums;
+  WindowSums& operator+=(const WindowSums& o) {
+    intervals += o.intervals;
+    wheel += o.wheel;
+    travel_gradient += o.travel_gradient;
+    rotation += o.rotation;
+    rotation_sums += o.rotation_sums;
+    travel_sums += o.travel_sums;
+    return *this;
+  }
 };
 
 LaserConsistencyWindow CheckWindow(const Context& rotation_context, const Context& travel_context,
@@ -217,14 +226,7 @@ LaserConsistencyWindow CheckWindow(const Context& rotation_context, const Contex
                                               travel_difference, travel_predicted);
                 });
   WindowSums sums;
-  for (const WindowSums& s : chunks) {
-    sums.intervals += s.intervals;
-    sums.wheel += s.wheel;
-    sums.travel_gradient += s.travel_gradient;
-    sums.rotation += s.rotation;
-    sums.rotation_sums += s.rotation_sums;
-    sums.travel_sums += s.travel_sums;
-  }
+  for (const WindowSums& s : chunks) sums += s;
   // The cut after the window's last interval.
   sums.rotation_sums.ends +=
       CutVariance(*rotation_context.options, log, w, w.last + 1, rotation_predicted);

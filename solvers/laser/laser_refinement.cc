@@ -182,16 +182,23 @@ std::vector<Eigen::Vector3d> LaserProblem::Errors(size_t dataset) const {
   return errors;
 }
 
-std::vector<double> LaserProblem::WhitenedSquaredNorms(
-    size_t dataset, const std::vector<Eigen::Vector3d>* given) const {
+LossCorrectionSums LaserProblem::LossSums(size_t dataset,
+                                          const std::vector<Eigen::Vector3d>* given) const {
   const std::vector<Eigen::Vector3d> computed =
       given ? std::vector<Eigen::Vector3d>() : Errors(dataset);
   const std::vector<Eigen::Vector3d>& errors = given ? *given : computed;
-  std::vector<double> s(errors.size());
-  for (size_t k = 0; k < errors.size(); ++k) {
-    s[k] = (IntervalSqrtInformation(dataset, k) * errors[k]).squaredNorm();
-  }
-  return s;
+  std::vector<LossCorrectionSums> partial(SplitCount(errors.size(), kMinChunk));
+  ParallelSplit(
+      errors.size(), options_.num_threads, kMinChunk, [&](size_t chunk, size_t begin, size_t end) {
+        LossCorrectionSums own;  // On the thread's stack (see SandwichCovariance).
+        for (size_t k = begin; k < end; ++k) {
+          own.Add((IntervalSqrtInformation(dataset, k) * errors[k]).squaredNorm(), loss_.get(), 3);
+        }
+        partial[chunk] = own;
+      });
+  LossCorrectionSums sums;
+  for (const LossCorrectionSums& own : partial) sums.Add(own);
+  return sums;
 }
 
 double LaserProblem::LossWeight(double s) const { return EvaluateLoss(loss_.get(), s).rho1; }
@@ -211,9 +218,7 @@ StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::Covariance(
   // Ceres fills row-major; the matrix is symmetric, so the layout does not matter.
   LossCorrectionSums sums;
   for (size_t d = 0; d < datasets_.size(); ++d) {
-    for (double s : WhitenedSquaredNorms(d, errors ? &(*errors)[d] : nullptr)) {
-      sums.Add(s, loss_.get(), 3);
-    }
+    sums.Add(LossSums(d, errors ? &(*errors)[d] : nullptr));
   }
   const double components = 3.0 * sums.blocks;
   if (components <= kNumLaserParams) return Status::NotObservable(kTooFew);

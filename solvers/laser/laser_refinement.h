@@ -95,11 +95,6 @@ class LaserProblem {
 
   // Unwhitened errors e (see LaserResidual) of every interval of a dataset.
   std::vector<Eigen::Vector3d> Errors(size_t dataset) const;
-  // Squared whitened norms s = ‖L·e‖² of every interval of a dataset, from its errors when given
-  // (Errors(dataset) at the current parameters).
-  std::vector<double> WhitenedSquaredNorms(
-      size_t dataset, const std::vector<Eigen::Vector3d>* errors = nullptr) const;
-
   // Covariance of the six parameters: ceres::Covariance of the robustified problem (whose
   // Jacobian carries the IRLS weights √ρ'), times the loss correction κ with n/(n − 6), n the
   // residual components (solvers/common/robust_covariance.h), and that κ. `errors`, when given,
@@ -165,6 +160,9 @@ class LaserProblem {
                               const SensorMounting& mounting, IncrementSums* sums) const;
   void AddResidualBlocks(ceres::LossFunction* block_loss);
   void AddFusedBlock(ceres::LossFunction* block_loss);
+  // The loss correction's sums over a dataset's intervals, from its errors when given
+  // (Errors(dataset) at the current parameters), in parallel chunks.
+  LossCorrectionSums LossSums(size_t dataset, const std::vector<Eigen::Vector3d>* errors) const;
   const Eigen::Matrix3d& IntervalSqrtInformation(size_t dataset, size_t k) const {
     return interval_sqrt_information_[dataset].empty() ? *sqrt_information_[dataset]
                                                        : interval_sqrt_information_[dataset][k];
