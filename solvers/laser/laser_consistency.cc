@@ -3,7 +3,6 @@
 #include <calib/solvers/diagnosis/multiple_testing.h>
 #include <calib/solvers/laser/laser_consistency.h>
 #include <calib/solvers/laser/laser_consistency_terms.h>
-#include <calib/solvers/laser/laser_motion.h>
 
 #include <Eigen/Cholesky>
 #include <algorithm>
@@ -124,29 +123,61 @@ struct QuantitySums {
   }
 };
 
-// The sums over the window's intervals [begin, end), a chunk of it: its running Bartlett sums
-// start at `begin`. h_k is 0 outside the window and where not counted; g_k spans the whole log.
-template <typename Difference, typename Predicted>
-QuantitySums SumQuantity(const Context& c, const LogTerms& log, const Window& w, long begin,
-                         long end, Difference difference, Predicted predicted) {
-  const std::vector<IntervalTerms>& t = log.terms;
-  const long n = static_cast<long>(t.size());
-  const auto h_at = [&](long k) { return Term(t, w, k, difference); };
-  const auto g_at = [&](long k) { return k >= 0 && k < n ? t[k].Score() : Vector6::Zero().eval(); };
-  BartlettAhead<double, decltype(h_at)> h_ahead(h_at, c.lag, begin);
-  BartlettCentred<Vector6, decltype(g_at)> g_around(g_at, c.lag, begin);
-  QuantitySums s;
-  for (long k = begin; k < end; ++k, h_ahead.Advance(), g_around.Advance()) {
-    s.ends += CutVariance(*c.options, log, w, k, predicted);
-    if (!t[k].counted) continue;
-    const double h = difference(t[k]);
-    s.predicted += predicted(t[k]);
-    s.measured += predicted(t[k]) + h;
-    s.v_hh += h * h + 2.0 * h * h_ahead.value();
-    s.v_gh += h * g_around.value();
+// h_k of a window's counted intervals (0 elsewhere), and g_k over the whole log (0 beyond it).
+template <typename Difference>
+struct DifferenceAt {
+  const std::vector<IntervalTerms>* t;
+  const Window* w;
+  Difference difference;
+  double operator()(long k) const { return Term(*t, *w, k, difference); }
+};
+struct ScoreAt {
+  const std::vector<IntervalTerms>* t;
+  Vector6 operator()(long k) const {
+    return k >= 0 && k < static_cast<long>(t->size()) ? (*t)[k].Score() : Vector6::Zero().eval();
   }
-  return s;
-}
+};
+
+// One quantity's sums over a chunk of a window's intervals, one interval a Step: its running
+// Bartlett sums start at the chunk's first interval.
+template <typename Difference, typename Predicted>
+class QuantityPass {
+ public:
+  QuantityPass(const Context& c, const LogTerms& log, const Window& w, long begin,
+               Difference difference, Predicted predicted)
+      : c_(c),
+        log_(log),
+        w_(w),
+        difference_(difference),
+        predicted_(predicted),
+        h_ahead_(DifferenceAt<Difference>{&log.terms, &w, difference}, c.lag, begin),
+        g_around_(ScoreAt{&log.terms}, c.lag, begin) {}
+
+  void Step(long k) {
+    sums_.ends += CutVariance(*c_.options, log_, w_, k, predicted_);
+    const IntervalTerms& t = log_.terms[k];
+    if (t.counted) {
+      const double h = difference_(t);
+      sums_.predicted += predicted_(t);
+      sums_.measured += predicted_(t) + h;
+      sums_.v_hh += h * h + 2.0 * h * h_ahead_.value();
+      sums_.v_gh += h * g_around_.value();
+    }
+    h_ahead_.Advance();
+    g_around_.Advance();
+  }
+  const QuantitySums& sums() const { return sums_; }
+
+ private:
+  const Context& c_;
+  const LogTerms& log_;
+  const Window& w_;
+  Difference difference_;
+  Predicted predicted_;
+  BartlettAhead<double, DifferenceAt<Difference>> h_ahead_;
+  BartlettCentred<Vector6, ScoreAt> g_around_;
+  QuantitySums sums_;
+};
 
 // One quantity over one window from its sums. `g_pred` and `g_meas` are the gradients of the
 // window's predicted and measured totals.
@@ -174,15 +205,11 @@ LaserConsistencyTotal Total(const Context& c, const QuantitySums& s, const Vecto
 // What CheckWindow sums over a window, chunk by chunk.
 struct WindowSums {
   int intervals = 0;
-  Eigen::Vector2d wheel = Eigen::Vector2d::Zero();
   Eigen::Vector3d travel_gradient = Eigen::Vector3d::Zero();
-  double rotation = 0.0;
   QuantitySums rotation_sums, travel_sums;
   WindowSums& operator+=(const WindowSums& o) {
     intervals += o.intervals;
-    wheel += o.wheel;
     travel_gradient += o.travel_gradient;
-    rotation += o.rotation;
     rotation_sums += o.rotation_sums;
     travel_sums += o.travel_sums;
     return *this;
@@ -212,18 +239,20 @@ LaserConsistencyWindow CheckWindow(const Context& rotation_context, const Contex
                   WindowSums& s = chunks[chunk];
                   const long first = w.first + static_cast<long>(begin);
                   const long last = w.first + static_cast<long>(end);
+                  QuantityPass rotation(rotation_context, log, w, first, rotation_difference,
+                                        rotation_predicted);
+                  QuantityPass travel(travel_context, log, w, first, travel_difference,
+                                      travel_predicted);
                   for (long k = first; k < last; ++k) {
+                    rotation.Step(k);
+                    travel.Step(k);
                     const IntervalTerms& t = log.terms[k];
                     if (!t.counted) continue;
                     ++s.intervals;
-                    s.wheel += IntervalWheelRotation(in[k]);
                     s.travel_gradient += t.travel_gradient.cast<double>();
-                    s.rotation += t.rotation_predicted;
                   }
-                  s.rotation_sums = SumQuantity(rotation_context, log, w, first, last,
-                                                rotation_difference, rotation_predicted);
-                  s.travel_sums = SumQuantity(travel_context, log, w, first, last,
-                                              travel_difference, travel_predicted);
+                  s.rotation_sums = rotation.sums();
+                  s.travel_sums = travel.sums();
                 });
   WindowSums sums;
   for (const WindowSums& s : chunks) sums += s;
@@ -233,11 +262,17 @@ LaserConsistencyWindow CheckWindow(const Context& rotation_context, const Contex
   sums.travel_sums.ends +=
       CutVariance(*travel_context.options, log, w, w.last + 1, travel_predicted);
   out.intervals = sums.intervals;
+  // Each wheel's rotation summed over the counted intervals, from the predicted totals R and T
+  // (linear in it): r_l·φ_l = T − R·b/2, r_r·φ_r = T + R·b/2.
+  const double rotation = sums.rotation_sums.predicted;
+  const double half_turn = rotation * odo.wheelbase_m / 2.0;
+  const Eigen::Vector2d wheel((sums.travel_sums.predicted - half_turn) / odo.left_radius_m,
+                              (sums.travel_sums.predicted + half_turn) / odo.right_radius_m);
   // Gradients of the totals in (r_l, r_r, b, x, y, θ).
   Vector6 g_rotation, g_travel, g_travel_measured;
-  g_rotation << -sums.wheel(0) / odo.wheelbase_m, sums.wheel(1) / odo.wheelbase_m,
-      -sums.rotation / odo.wheelbase_m, 0.0, 0.0, 0.0;
-  g_travel << sums.wheel(0) / 2.0, sums.wheel(1) / 2.0, 0.0, 0.0, 0.0, 0.0;
+  g_rotation << -wheel(0) / odo.wheelbase_m, wheel(1) / odo.wheelbase_m,
+      -rotation / odo.wheelbase_m, 0.0, 0.0, 0.0;
+  g_travel << wheel(0) / 2.0, wheel(1) / 2.0, 0.0, 0.0, 0.0, 0.0;
   g_travel_measured << 0.0, 0.0, 0.0, sums.travel_gradient;
   out.rotation = Total(rotation_context, sums.rotation_sums, g_rotation, Vector6::Zero());
   out.translation = Total(travel_context, sums.travel_sums, g_travel, g_travel_measured);
