@@ -25,8 +25,8 @@ bool PopulateForWriting(void* data, size_t bytes);
 
 // v->reserve(n) with the new storage advised as above. An estimate that asks for more memory than
 // there is leaves the vector to grow as its elements come.
-template <typename T>
-void ReserveOnHugePages(std::vector<T>* v, size_t n) {
+template <typename T, typename Allocator>
+void ReserveOnHugePages(std::vector<T, Allocator>* v, size_t n) {
   if (n <= v->capacity()) return;
   try {
     v->reserve(n);

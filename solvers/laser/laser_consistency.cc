@@ -19,6 +19,7 @@ using consistency_internal::IntervalTerms;
 using consistency_internal::kMinChunkIntervals;
 using consistency_internal::LogTerms;
 using consistency_internal::ScoreLongRun;
+using consistency_internal::TermsVector;
 using consistency_internal::Vector6;
 
 struct Window {
@@ -29,7 +30,7 @@ struct Window {
 
 // Intervals k of `log` within [w.first, w.last] that count, and their difference h_k.
 template <typename Difference>
-double Term(const std::vector<IntervalTerms>& t, const Window& w, long k, Difference difference) {
+double Term(const TermsVector& t, const Window& w, long k, Difference difference) {
   if (k < w.first || k > w.last || !t[k].counted) return 0.0;
   return difference(t[k]);
 }
@@ -40,7 +41,7 @@ double Term(const std::vector<IntervalTerms>& t, const Window& w, long k, Differ
 template <typename Predicted>
 double CutVariance(const LaserConsistencyOptions& options, const LogTerms& log, const Window& w,
                    long k, Predicted predicted) {
-  const std::vector<IntervalTerms>& t = log.terms;
+  const TermsVector& t = log.terms;
   const std::vector<LaserInterval>& in = *log.intervals;
   const auto counted = [&](long i) { return i >= w.first && i <= w.last && t[i].counted; };
   if (counted(k - 1) == counted(k)) return 0.0;
@@ -68,7 +69,7 @@ namespace {
 std::vector<Window> FindWindows(const std::vector<LogTerms>& logs, int min_intervals) {
   std::vector<Window> windows, between_rests;
   for (size_t d = 0; d < logs.size(); ++d) {
-    const std::vector<IntervalTerms>& t = logs[d].terms;
+    const TermsVector& t = logs[d].terms;
     const std::vector<LaserInterval>& in = *logs[d].intervals;
     const int size = static_cast<int>(t.size());
     for (int a = 0; a < size;) {
@@ -126,13 +127,13 @@ struct QuantitySums {
 // h_k of a window's counted intervals (0 elsewhere), and g_k over the whole log (0 beyond it).
 template <typename Difference>
 struct DifferenceAt {
-  const std::vector<IntervalTerms>* t;
+  const TermsVector* t;
   const Window* w;
   Difference difference;
   double operator()(long k) const { return Term(*t, *w, k, difference); }
 };
 struct ScoreAt {
-  const std::vector<IntervalTerms>* t;
+  const TermsVector* t;
   Vector6 operator()(long k) const {
     return k >= 0 && k < static_cast<long>(t->size()) ? (*t)[k].Score() : Vector6::Zero().eval();
   }

@@ -13,8 +13,8 @@ namespace {
 
 // Rescues the fit's outliers that are timing artefacts (see ComputeTerms).
 void RescueTimingOutliers(const std::vector<LaserInterval>& intervals,
-                          const Eigen::Vector3d& noise_sigma, std::vector<IntervalTerms>* terms) {
-  std::vector<IntervalTerms>& t = *terms;
+                          const Eigen::Vector3d& noise_sigma, TermsVector* terms) {
+  TermsVector& t = *terms;
   const double rotation_limit = 4.0 * std::sqrt(2.0) * noise_sigma(2);
   const double travel_limit = 4.0 * std::sqrt(2.0) * noise_sigma.head<2>().maxCoeff();
   const auto agrees = [&](size_t a, size_t b) {
@@ -95,16 +95,26 @@ LogTerms ComputeTerms(const std::vector<LaserInterval>& intervals, const LaserCa
           t.still = wheel.cwiseAbs().sum() < 1e-6 ||
                     (std::abs(t.rotation_predicted) <= 0.5 * noise_sigma(2) &&
                      std::abs(t.travel_predicted) <= still_travel_m);
-          if (!t.counted) continue;
+          if (!t.counted) {
+            t.score.setZero();
+            continue;
+          }
           Eigen::Matrix<double, 3, kNumLaserParams> jacobian;
           Eigen::Vector3d e;
           LaserResidual::Linearize(in, identity, v.data(), mounting, &e, &jacobian);
-          t.score = (jacobian.transpose() * weight.asDiagonal() * e).cast<float>();
-          h += jacobian.transpose() * weight.asDiagonal() * jacobian;
+          const Eigen::Matrix<double, 3, kNumLaserParams> weighted = weight.asDiagonal() * jacobian;
+          t.score = (weighted.transpose() * e).cast<float>();
+          // JᵀWJ by its upper triangle (mirrored once after the pass), as FusedNormalCost does.
+          for (int b = 0; b < kNumLaserParams; ++b) {
+            for (int a = 0; a <= b; ++a) h(a, b) += weighted.col(a).dot(jacobian.col(b));
+          }
         }
         hessians[chunk] = h;
       });
-  for (const LaserParamMatrix& h : hessians) *hessian += h;
+  LaserParamMatrix sum = LaserParamMatrix::Zero();
+  for (const LaserParamMatrix& h : hessians) sum += h;
+  sum.triangularView<Eigen::StrictlyLower>() = sum.transpose();
+  *hessian += sum;
   RescueTimingOutliers(intervals, noise_sigma, &log.terms);
   return log;
 }
@@ -114,7 +124,7 @@ std::vector<LaserParamMatrix> ScoreLongRun(const std::vector<LogTerms>& logs,
   const size_t num_lags = lags.size();
   std::vector<LaserParamMatrix> s(num_lags, LaserParamMatrix::Zero());
   for (const LogTerms& log : logs) {
-    const std::vector<IntervalTerms>& t = log.terms;
+    const TermsVector& t = log.terms;
     const long n = static_cast<long>(t.size());
     std::vector<std::vector<LaserParamMatrix>> sums(SplitCount(t.size(), kMinChunkIntervals));
     ParallelSplit(

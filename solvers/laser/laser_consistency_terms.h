@@ -1,6 +1,7 @@
 #ifndef CALIB_SOLVERS_LASER_LASER_CONSISTENCY_TERMS_H_
 #define CALIB_SOLVERS_LASER_LASER_CONSISTENCY_TERMS_H_
 
+#include <calib/core/default_init_allocator.h>
 #include <calib/core/laser/laser_log.h>
 #include <calib/core/laser/laser_params.h>
 
@@ -36,25 +37,27 @@ double ForwardTravel(const Pose2d& sensor_motion, const SensorMounting& mounting
 // What each interval adds to the totals and to the fit. A million intervals hold one each: what
 // the interval itself gives (its T, its wheel rotation) is read from it, and the vectors that are
 // only summed (over windows, lags and the log) are kept in single precision: 64 bytes instead of
-// 136, and the sums, in double, move by ~1e-11 relative.
+// 136, and the sums, in double, move by ~1e-11 relative. No initial values: ComputeTerms writes
+// every field, and a million of them are allocated without writing them first (TermsVector).
 struct IntervalTerms {
-  bool counted = false;  // Enters the sums: an inlier, or an outlier rescued as a timing artefact.
-  bool still = false;    // The robot rests (wheel model and noise agree on no motion).
-  Eigen::Vector3f travel_gradient = Eigen::Vector3f::Zero();  // ∂travel_measured/∂ℓ.
-  double rotation_predicted = 0.0, rotation_measured = 0.0;
-  double travel_predicted = 0.0, travel_measured = 0.0;
+  bool counted;  // Enters the sums: an inlier, or an outlier rescued as a timing artefact.
+  bool still;    // The robot rests (wheel model and noise agree on no motion).
+  Eigen::Vector3f travel_gradient;  // ∂travel_measured/∂ℓ.
+  double rotation_predicted, rotation_measured;
+  double travel_predicted, travel_measured;
   // The score g = JᵀWe of the fit's inliers (0 otherwise). The interval's share of θ̂ − θ is its
   // influence ψ = A·g, A = −H⁻¹ (free parameters only); every sum of ψ is linear in g, so the
   // check sums the scores and applies A once.
-  Eigen::Matrix<float, kNumLaserParams, 1> score = Eigen::Matrix<float, kNumLaserParams, 1>::Zero();
+  Eigen::Matrix<float, kNumLaserParams, 1> score;
   Vector6 Score() const { return score.cast<double>(); }
   double rotation_difference() const { return rotation_measured - rotation_predicted; }
   double travel_difference() const { return travel_measured - travel_predicted; }
 };
+using TermsVector = std::vector<IntervalTerms, DefaultInitAllocator<IntervalTerms>>;
 
 struct LogTerms {
   const std::vector<LaserInterval>* intervals = nullptr;
-  std::vector<IntervalTerms> terms;
+  TermsVector terms;
 };
 
 // Every term of a log at the estimate; adds the fit's JᵀWJ (its inliers, W = diag(1/σ²)) to
@@ -134,7 +137,7 @@ int AutomaticLag(const std::vector<LogTerms>& logs, Series series) {
   double lag0 = 0.0, lag1 = 0.0;
   long n = 0;
   for (const LogTerms& log : logs) {
-    const std::vector<IntervalTerms>& t = log.terms;
+    const TermsVector& t = log.terms;
     for (size_t k = 0; k < t.size(); ++k) {
       if (!t[k].counted) continue;
       ++n;
