@@ -1,5 +1,6 @@
 #include <calib/core/order_statistic.h>
 #include <calib/solvers/common/outlier_share.h>
+#include <calib/solvers/common/parallel_chunks.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,20 +12,34 @@ double GrossOutlierShare(const Eigen::MatrixXd& residuals, const OutlierShareOpt
   if (n == 0) return 0.0;
   constexpr double kQ20OfAbsGaussian = 0.2533;  // P(|z| < 0.2533) = 0.2.
   Eigen::VectorXd limit(residuals.cols());
-  std::vector<double> a;  // One buffer for every column: its pages fault in once.
-  a.reserve(static_cast<size_t>(n));
-  for (Eigen::Index c = 0; c < residuals.cols(); ++c) {
-    a.clear();
-    for (Eigen::Index i = 0; i < n; ++i) a.push_back(std::abs(residuals(i, c)));
-    const double sigma = KthSmallest(&a, a.size() / 5) / kQ20OfAbsGaussian;
-    limit(c) = std::max(options.cut * sigma, options.floor);
-  }
-  Eigen::Index gross = 0;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    // NaN counts as gross: !(x <= limit).
-    if (!(residuals.row(i).cwiseAbs().transpose().array() <= limit.array()).all()) ++gross;
-  }
-  return static_cast<double>(gross) / static_cast<double>(n);
+  // Each column's level on its own (a selection over a million samples is a pass of its own).
+  ParallelSplit(static_cast<size_t>(residuals.cols()), options.num_threads, 1,
+                [&](size_t, size_t begin, size_t end) {
+                  std::vector<double> a(static_cast<size_t>(n));
+                  for (Eigen::Index c = begin; c < static_cast<Eigen::Index>(end); ++c) {
+                    for (Eigen::Index i = 0; i < n; ++i) {
+                      a[static_cast<size_t>(i)] = std::abs(residuals(i, c));
+                    }
+                    const double sigma = KthSmallest(&a, a.size() / 5) / kQ20OfAbsGaussian;
+                    limit(c) = std::max(options.cut * sigma, options.floor);
+                  }
+                });
+  // Counts are exact in any order: chunks.
+  constexpr size_t kMinChunk = 4096;
+  std::vector<Eigen::Index> gross(SplitCount(static_cast<size_t>(n), kMinChunk), 0);
+  ParallelSplit(static_cast<size_t>(n), options.num_threads, kMinChunk,
+                [&](size_t chunk, size_t begin, size_t end) {
+                  Eigen::Index count = 0;
+                  for (Eigen::Index i = begin; i < static_cast<Eigen::Index>(end); ++i) {
+                    // NaN counts as gross: !(x <= limit).
+                    count +=
+                        !(residuals.row(i).cwiseAbs().transpose().array() <= limit.array()).all();
+                  }
+                  gross[chunk] = count;
+                });
+  Eigen::Index total = 0;
+  for (const Eigen::Index g : gross) total += g;
+  return static_cast<double>(total) / static_cast<double>(n);
 }
 
 }  // namespace calib

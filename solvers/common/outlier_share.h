@@ -19,6 +19,7 @@ namespace calib {
 struct OutlierShareOptions {
   double cut = 12.0;
   double floor = 1e-9;
+  int num_threads = 2;  // The columns' levels side by side, the count in chunks.
 };
 
 // `residuals`: one row per sample, one column per component.

@@ -116,7 +116,9 @@ StatusOr<SolveOutcome> RefineWithNoise(const LaserCalibrationOptions& options,
     for (size_t d = 0; d < problem->num_datasets(); ++d) {
       if (!options.noise_sigma) outcome.errors.push_back(problem->Errors(d));
       const Eigen::Vector3d sigma =
-          options.noise_sigma ? *options.noise_sigma : RobustNoiseSigma(outcome.errors.back());
+          options.noise_sigma
+              ? *options.noise_sigma
+              : RobustNoiseSigma(outcome.errors.back(), options.refinement.num_threads);
       const Eigen::Vector3d old_sigma = problem->sqrt_information(d).diagonal().cwiseInverse();
       change = std::max(change, ((sigma - old_sigma).cwiseQuotient(sigma)).cwiseAbs().maxCoeff());
       problem->SetSqrtInformation(d, DiagonalSqrtInformation(sigma));

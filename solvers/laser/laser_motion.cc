@@ -1,3 +1,4 @@
+#include <calib/solvers/common/parallel_chunks.h>
 #include <calib/solvers/laser/laser_motion.h>
 
 #include <cmath>
@@ -10,27 +11,34 @@ constexpr int kMinimumIntervals = 3;
 }  // namespace
 
 LaserMotionCensus CountLaserMotion(const std::vector<LaserInterval>& intervals,
-                                   const std::vector<bool>* use) {
-  LaserMotionCensus census;
-  for (size_t k = 0; k < intervals.size(); ++k) {
-    if (use != nullptr && !(*use)[k]) continue;
-    ++census.total;
-    const Eigen::Vector2d rotation = IntervalWheelRotation(intervals[k]);
-    const double size = rotation.cwiseAbs().sum();
-    if (size < kStillRad) {
-      ++census.still;
-      continue;
-    }
-    const bool turns = std::abs(rotation(1) - rotation(0)) > kComponentShare * size;
-    const bool moves = std::abs(rotation(1) + rotation(0)) > kComponentShare * size;
-    if (turns && moves) {
-      ++census.arc;
-    } else if (turns) {
-      ++census.pure_rotation;
-    } else {
-      ++census.straight;
-    }
-  }
+                                   const std::vector<bool>* use, int num_threads) {
+  constexpr size_t kMinChunk = 4096;
+  std::vector<LaserMotionCensus> chunks(SplitCount(intervals.size(), kMinChunk));
+  ParallelSplit(intervals.size(), num_threads, kMinChunk,
+                [&](size_t chunk, size_t begin, size_t end) {
+                  LaserMotionCensus& census = chunks[chunk];
+                  for (size_t k = begin; k < end; ++k) {
+                    if (use != nullptr && !(*use)[k]) continue;
+                    ++census.total;
+                    const Eigen::Vector2d rotation = IntervalWheelRotation(intervals[k]);
+                    const double size = rotation.cwiseAbs().sum();
+                    if (size < kStillRad) {
+                      ++census.still;
+                      continue;
+                    }
+                    const bool turns = std::abs(rotation(1) - rotation(0)) > kComponentShare * size;
+                    const bool moves = std::abs(rotation(1) + rotation(0)) > kComponentShare * size;
+                    if (turns && moves) {
+                      ++census.arc;
+                    } else if (turns) {
+                      ++census.pure_rotation;
+                    } else {
+                      ++census.straight;
+                    }
+                  }
+                });
+  LaserMotionCensus census;  // Counts: the same in any order.
+  for (const LaserMotionCensus& chunk : chunks) census.Add(chunk);
   return census;
 }
 

@@ -18,11 +18,16 @@ struct LaserMotionCensus {
   int straight = 0;       // Driving without turning.
   int arc = 0;            // Turning and translating together.
   int turning() const { return pure_rotation + arc; }
+  void Add(const LaserMotionCensus& other) {
+    total += other.total, still += other.still, pure_rotation += other.pure_rotation;
+    straight += other.straight, arc += other.arc;
+  }
   int translating() const { return straight + arc; }
 };
 
+// Over the intervals `use` marks (all when null), in chunks on up to `num_threads` threads.
 LaserMotionCensus CountLaserMotion(const std::vector<LaserInterval>& intervals,
-                                   const std::vector<bool>* use = nullptr);
+                                   const std::vector<bool>* use = nullptr, int num_threads = 2);
 
 // The minimum motion the laser problem needs, in words, or "" when the log has it. The
 // parameters are identifiable only with both turning and translation in the log.
