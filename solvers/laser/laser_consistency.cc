@@ -6,12 +6,13 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace calib {
 namespace {
 
-using consistency_internal::AutomaticLag;
+using consistency_internal::AutomaticLags;
 using consistency_internal::BartlettAhead;
 using consistency_internal::BartlettCentred;
 using consistency_internal::ComputeTerms;
@@ -377,9 +378,9 @@ LaserConsistency CheckLaserConsistencyJoint(
   c.influence_map = &influence_map;
   // Each quantity with its own lag (Andrews) and the estimate's long-run covariance at it.
   Context rotation = c, travel = c;
-  rotation.lag =
-      AutomaticLag(terms, [](const IntervalTerms& t) { return t.rotation_difference(); });
-  travel.lag = AutomaticLag(terms, [](const IntervalTerms& t) { return t.travel_difference(); });
+  const std::array<int, 2> lags = AutomaticLags(terms, options.num_threads);
+  rotation.lag = lags[0];
+  travel.lag = lags[1];
   const std::vector<LaserParamMatrix> score_long_run =
       ScoreLongRun(terms, {rotation.lag, travel.lag}, options.num_threads);
   rotation.influence_long_run = influence_map * score_long_run[0] * influence_map.transpose();

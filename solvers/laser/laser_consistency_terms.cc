@@ -30,7 +30,53 @@ void RescueTimingOutliers(const std::vector<LaserInterval>& intervals,
   for (size_t k = 0; k < t.size(); ++k) t[k].counted = t[k].counted || rescued[k];
 }
 
+// Andrews' lag from a series' sums Σx_k² and Σx_k·x_{k+1} over its n counted intervals.
+int AndrewsLag(double lag0, double lag1, long n) {
+  if (n < 8 || !(lag0 > 0.0)) return 1;
+  const double rho = std::clamp(lag1 / lag0, -0.97, 0.97);
+  const double alpha = 4.0 * rho * rho / ((1 - rho) * (1 - rho) * (1 + rho) * (1 + rho));
+  const double lag = std::ceil(1.1447 * std::cbrt(alpha * static_cast<double>(n)));
+  return static_cast<int>(std::clamp(lag, 1.0, static_cast<double>(n / 4)));
+}
+
 }  // namespace
+
+std::array<int, 2> AutomaticLags(const std::vector<LogTerms>& logs, int num_threads) {
+  struct Sums {
+    double lag0[2] = {0.0, 0.0}, lag1[2] = {0.0, 0.0};
+    long n = 0;
+    void Add(const Sums& o) {
+      n += o.n;
+      for (int q = 0; q < 2; ++q) lag0[q] += o.lag0[q], lag1[q] += o.lag1[q];
+    }
+  };
+  const auto series = [](const IntervalTerms& t, int q) {
+    return q == 0 ? t.rotation_difference() : t.travel_difference();
+  };
+  Sums total;
+  for (const LogTerms& log : logs) {
+    const TermsVector& t = log.terms;
+    std::vector<Sums> chunks(SplitCount(t.size(), kMinChunkIntervals));
+    ParallelSplit(t.size(), num_threads, kMinChunkIntervals,
+                  [&](size_t chunk, size_t begin, size_t end) {
+                    Sums s;
+                    for (size_t k = begin; k < end; ++k) {
+                      if (!t[k].counted) continue;
+                      ++s.n;
+                      const bool next = k + 1 < t.size() && t[k + 1].counted;
+                      for (int q = 0; q < 2; ++q) {
+                        const double x = series(t[k], q);
+                        s.lag0[q] += x * x;
+                        if (next) s.lag1[q] += x * series(t[k + 1], q);
+                      }
+                    }
+                    chunks[chunk] = s;
+                  });
+    for (const Sums& s : chunks) total.Add(s);
+  }
+  return {AndrewsLag(total.lag0[0], total.lag1[0], total.n),
+          AndrewsLag(total.lag0[1], total.lag1[1], total.n)};
+}
 
 double ForwardTravel(const Pose2d& sensor_motion, const Pose2d& base_T_sensor,
                      Eigen::Vector3d* gradient) {

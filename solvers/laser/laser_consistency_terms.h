@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -121,36 +122,16 @@ class BartlettAhead {
   Value u_, s_;
 };
 
-// Andrews (1991) automatic Bartlett lag from an AR(1) fit to the counted series of every log:
-// 1.1447·(α·n)^{1/3}, α = 4ρ²/((1 − ρ)²(1 + ρ)²); at least 1, at most n/4. Negative correlation
-// (telescoping poses, misplaced stamps) and positive (model errors) both lengthen it.
-template <typename Series>
-int AutomaticLag(const std::vector<LogTerms>& logs, Series series);
+// Andrews (1991) automatic Bartlett lags from AR(1) fits to the counted rotation and travel
+// differences of every log (in that order), in one pass: 1.1447·(α·n)^{1/3},
+// α = 4ρ²/((1 − ρ)²(1 + ρ)²); at least 1, at most n/4. Negative correlation (telescoping poses,
+// misplaced stamps) and positive (model errors) both lengthen it.
+std::array<int, 2> AutomaticLags(const std::vector<LogTerms>& logs, int num_threads = 1);
 
 // The long-run (HAC) covariance of Σg_k over every log at each of `lags`, in one pass; with A
 // (IntervalTerms::score) it gives the estimate's sandwich with its serial correlation, A·S·Aᵀ.
 std::vector<LaserParamMatrix> ScoreLongRun(const std::vector<LogTerms>& logs,
                                            const std::vector<int>& lags, int num_threads = 1);
-
-template <typename Series>
-int AutomaticLag(const std::vector<LogTerms>& logs, Series series) {
-  double lag0 = 0.0, lag1 = 0.0;
-  long n = 0;
-  for (const LogTerms& log : logs) {
-    const TermsVector& t = log.terms;
-    for (size_t k = 0; k < t.size(); ++k) {
-      if (!t[k].counted) continue;
-      ++n;
-      lag0 += series(t[k]) * series(t[k]);
-      if (k + 1 < t.size() && t[k + 1].counted) lag1 += series(t[k]) * series(t[k + 1]);
-    }
-  }
-  if (n < 8 || !(lag0 > 0.0)) return 1;
-  const double rho = std::clamp(lag1 / lag0, -0.97, 0.97);
-  const double alpha = 4.0 * rho * rho / ((1 - rho) * (1 - rho) * (1 + rho) * (1 + rho));
-  const double lag = std::ceil(1.1447 * std::cbrt(alpha * static_cast<double>(n)));
-  return static_cast<int>(std::clamp(lag, 1.0, static_cast<double>(n / 4)));
-}
 
 }  // namespace calib::consistency_internal
 
