@@ -9,7 +9,8 @@
 namespace calib {
 
 // std::allocator whose resize() default-initializes instead of value-initializing: a vector of a
-// trivially default-constructible type then grows without writing its new elements. For long
+// type whose default constructor writes nothing (scalars, fixed-size Eigen members, no default
+// member initializers) then grows without writing its new elements. For long
 // arrays that a parallel pass fills at once: the serial zeroing of a million elements (and its
 // page faults, all on one thread) would cost more than the pass.
 template <typename T>

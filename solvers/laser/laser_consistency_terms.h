@@ -37,7 +37,7 @@ double ForwardTravel(const Pose2d& sensor_motion, const SensorMounting& mounting
 
 // What each interval adds to the totals and to the fit. A million intervals hold one each: what
 // the interval itself gives (its T, its wheel rotation) is read from it, and the vectors that are
-// only summed (over windows, lags and the log) are kept in single precision: 64 bytes instead of
+// only summed (over windows, lags and the log) are kept in single precision: 72 bytes instead of
 // 136, and the sums, in double, move by ~1e-11 relative. No initial values: ComputeTerms writes
 // every field, and a million of them are allocated without writing them first (TermsVector).
 struct IntervalTerms {
