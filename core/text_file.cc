@@ -150,6 +150,22 @@ Status CheckTextBytes(std::string_view bytes, const std::string& source) {
                               " (binary data, or a file of zeros); nothing was parsed");
 }
 
+std::string ReadFileHead(const std::string& path, size_t count) {
+  Fd fd(open(path.c_str(), O_RDONLY | O_CLOEXEC));
+  std::string bytes;
+  if (fd.get() < 0) return bytes;
+  bytes.resize(count);
+  size_t got = 0;
+  while (got < count) {
+    const ssize_t n = read(fd.get(), bytes.data() + got, count - got);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    got += static_cast<size_t>(n);
+  }
+  bytes.resize(got);
+  return bytes;
+}
+
 Status ReadWholeFile(const std::string& path, std::string* text) {
   CALIB_ASSIGN_OR_RETURN(const MappedFile file, MappedFile::Open(path));
   return GuardAllocation(path, [&] {

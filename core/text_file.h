@@ -85,6 +85,11 @@ Status CheckTextBytes(std::string_view bytes, const std::string& source);
 // std::string). Text readers use MappedFile::OpenText instead.
 Status ReadWholeFile(const std::string& path, std::string* text);
 
+// Up to the first `count` bytes of a file (fewer when it is shorter; none when it cannot be read),
+// read rather than mapped: the sniffers that tell formats apart run while another thread may
+// hold the address space's lock (tools/process_memory.h), which a mapping would wait for.
+std::string ReadFileHead(const std::string& path, size_t count);
+
 // Writes `text` to `path`, replacing it.
 Status WriteWholeFile(const std::string& path, const std::string& text);
 

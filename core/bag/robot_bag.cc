@@ -1,8 +1,7 @@
 #include <calib/core/bag/robot_bag.h>
+#include <calib/core/text_file.h>
 
-#include <algorithm>
 #include <filesystem>
-#include <fstream>
 
 namespace calib {
 namespace {
@@ -13,14 +12,6 @@ constexpr char kMcapMagic[] = "\x89MCAP0\r\n";
 constexpr char kRos1Magic[] = "#ROSBAG V";
 constexpr char kOldRos1Magic[] = "#ROSRECORD V";  // Bags of format 1.x (before ROS 1.1).
 constexpr char kSqliteMagic[] = "SQLite format 3";
-
-std::string FirstBytes(const std::string& path, size_t count) {
-  std::ifstream in(path, std::ios::binary);
-  std::string bytes(count, '\0');
-  in.read(bytes.data(), static_cast<std::streamsize>(count));
-  bytes.resize(static_cast<size_t>(std::max<std::streamsize>(0, in.gcount())));
-  return bytes;
-}
 
 bool StartsWith(const std::string& bytes, const char* magic) {
   return bytes.compare(0, std::char_traits<char>::length(magic), magic) == 0;
@@ -59,7 +50,7 @@ bool LooksLikeRobotBag(const std::string& path) {
   const std::string extension = fs::path(path).extension().string();
   // Read as one, or said not to be.
   if (extension == ".mcap" || extension == ".bag" || SqliteBagName(path)) return true;
-  const std::string bytes = FirstBytes(path, 16);
+  const std::string bytes = ReadFileHead(path, 16);
   return StartsWith(bytes, kMcapMagic) || Ros1Bag(bytes) || StartsWith(bytes, kSqliteMagic);
 }
 
@@ -69,7 +60,7 @@ StatusOr<RobotMessages> ReadRobotBag(const std::string& path, const BagReadOptio
   }
   std::error_code ec;
   if (!fs::exists(path, ec)) return Status::Io(path + ": no such file or directory");
-  const std::string bytes = FirstBytes(path, 16);
+  const std::string bytes = ReadFileHead(path, 16);
   if (Ros1Bag(bytes)) return ReadRos1Bag(path, options);
   if (StartsWith(bytes, kMcapMagic)) return ReadMcapBag(path, options);
   if (StartsWith(bytes, kSqliteMagic) || (SqliteBagName(path) && !bytes.empty())) {

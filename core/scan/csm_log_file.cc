@@ -25,20 +25,21 @@ bool IsBz2(std::string_view bytes) { return bytes.substr(0, 3) == "BZh"; }
 bool IsBz2File(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) return false;
-  const StatusOr<MappedFile> file = MappedFile::Open(path);
-  return file.ok() && IsBz2(file->text());
+  return IsBz2(ReadFileHead(path, 3));
 }
 
 bool LooksLikeCsmLog(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) return false;
-  StatusOr<MappedFile> file = MappedFile::Open(path);
-  if (!file.ok()) return false;
-  std::string_view head = file->text().substr(0, kSniffBytes);
+  const std::string plain = ReadFileHead(path, kSniffBytes);
+  std::string_view head = plain;
   std::string unpacked;
-  if (IsBz2(file->text())) {
+  if (IsBz2(plain)) {  // The compressed head may need more than kSniffBytes of the file.
+    const StatusOr<MappedFile> file = MappedFile::Open(path);
     bool ended = false;
-    if (!Bz2Decompress(file->text(), {kSniffBytes, true}, &unpacked, &ended).ok()) return false;
+    if (!file.ok() || !Bz2Decompress(file->text(), {kSniffBytes, true}, &unpacked, &ended).ok()) {
+      return false;
+    }
     head = unpacked;
   }
   const size_t first = head.find_first_not_of(" \t\r\n");

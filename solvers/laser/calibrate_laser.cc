@@ -50,6 +50,7 @@ struct SolveOutcome {
   std::string not_converged;  // Why the last solve stopped, when it did not converge.
   // Each log's errors at the final parameters, when the last noise estimate computed them.
   DatasetErrors errors;
+  std::vector<Eigen::Vector3d> noise_sigma;  // Each log's last noise level (at those parameters).
 };
 
 // The convex stage between two calibrations of one log: `given` (may be null) replaces the
@@ -113,6 +114,7 @@ StatusOr<SolveOutcome> RefineWithNoise(const LaserCalibrationOptions& options,
   const auto estimate_noise = [&]() {
     double change = 0.0;
     outcome.errors.clear();
+    outcome.noise_sigma.clear();
     for (size_t d = 0; d < problem->num_datasets(); ++d) {
       if (!options.noise_sigma) outcome.errors.push_back(problem->Errors(d));
       const Eigen::Vector3d sigma =
@@ -122,6 +124,7 @@ StatusOr<SolveOutcome> RefineWithNoise(const LaserCalibrationOptions& options,
       const Eigen::Vector3d old_sigma = problem->sqrt_information(d).diagonal().cwiseInverse();
       change = std::max(change, ((sigma - old_sigma).cwiseQuotient(sigma)).cwiseAbs().maxCoeff());
       problem->SetSqrtInformation(d, DiagonalSqrtInformation(sigma));
+      outcome.noise_sigma.push_back(sigma);
     }
     return change;
   };
@@ -450,6 +453,7 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   result.converged = outcome.converged;
   if (!outcome.converged) result.warnings.push_back(outcome.not_converged);
   result.estimate = problem.calibration();
+  result.robust_noise_sigma = std::move(outcome.noise_sigma);
   result.refinement_seconds = SecondsSince(start);
   // The errors at the estimate (the refinement's last noise estimate's), one pass for the inlier
   // flags, the covariance's loss correction and the judgement of the inliers; released before the
@@ -467,7 +471,7 @@ StatusOr<LaserCalibrationResult> CalibrateLaserJoint(
   double jitter_seconds = 0.0;
   if (options.interval_jitter) {
     start = std::chrono::steady_clock::now();
-    jitter_refit = EstimateBaseFitJitter(logs, options, &result);
+    jitter_refit = EstimateBaseFitJitter(logs, options, &result, &errors);
     jitter_seconds = SecondsSince(start);
   }
   if (!jitter_refit) {

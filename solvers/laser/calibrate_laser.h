@@ -100,6 +100,9 @@ struct LaserCalibrationResult {
   int inliers = 0;
   std::vector<std::vector<bool>> is_inlier;  // Per log, per interval.
   std::vector<Eigen::Vector3d> noise_sigma;  // Per log: the scan noise of its inliers.
+  // Per log: the robust noise level of all its intervals (RobustNoiseSigma of their errors, or
+  // the given one) at `estimate`, the refinement's last; empty after a jitter refit moved it.
+  std::vector<Eigen::Vector3d> robust_noise_sigma;
   LaserMotionCensus census;
   LaserObservability observability;
   // Timing-free totals over long windows, wheel model against sensor (warnings also in `warnings`).

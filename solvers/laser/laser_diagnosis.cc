@@ -43,11 +43,16 @@ namespace {
 
 // The whitening of the effect fits: the base fit's robust noise level (or the given one).
 Eigen::Matrix3d SqrtInformation(const std::vector<LaserInterval>& intervals,
-                                const LaserCalibration& estimate,
+                                const LaserCalibrationResult& base,
                                 const LaserDiagnosisOptions& options) {
-  const std::vector<Eigen::Vector3d> errors = LaserIntervalErrors(intervals, estimate);
+  if (options.calibration.noise_sigma) {
+    return options.calibration.noise_sigma->cwiseInverse().asDiagonal();
+  }
+  // The base fit's own last noise estimate is this one (at its estimate): not computed again.
   const Eigen::Vector3d sigma =
-      options.calibration.noise_sigma ? *options.calibration.noise_sigma : RobustNoiseSigma(errors);
+      base.robust_noise_sigma.size() == 1
+          ? base.robust_noise_sigma.front()
+          : RobustNoiseSigma(LaserIntervalErrors(intervals, base.estimate));
   return sigma.cwiseInverse().asDiagonal();
 }
 
@@ -283,6 +288,11 @@ StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& interva
     return Status::InvalidInput("diagnosis needs at least 50 intervals (the log has " +
                                 std::to_string(intervals.size()) + ")");
   }
+  // The effects' contexts and the folds need the intervals only: made first, so that a screen
+  // beside a calibration makes them while it waits for that calibration's closed forms.
+  LaserEffectData data(intervals, Eigen::Matrix3d::Identity(), options.calibration.refinement);
+  Context context{intervals, options, data, intervals.front().start_s, {}, {}};
+  MakeFolds(&context);
   // 1. The robust base fit, whitened by its robust noise level (the stamp jitter is a candidate
   // of the diagnosis, not part of its base fit).
   LaserCalibrationOptions base_options = options.calibration;
@@ -292,10 +302,7 @@ StatusOr<LaserDiagnosis> DiagnoseLaser(const std::vector<LaserInterval>& interva
   base_options.estimate_only = true;  // Its estimate seeds the effect fits; nothing else is read.
   CALIB_ASSIGN_OR_RETURN(const LaserCalibrationResult base,
                          CalibrateLaser(intervals, base_options));
-  LaserEffectData data(intervals, SqrtInformation(intervals, base.estimate, options),
-                       options.calibration.refinement);
-  Context context{intervals, options, data, intervals.front().start_s, {}, {}};
-  MakeFolds(&context);
+  data.SetSqrtInformation(SqrtInformation(intervals, base, options));
   LaserEffectModel model;
   model.boundary = options.boundary == BoundaryChoice::kPiecewiseConstant
                        ? BoundarySpeedModel::kPiecewiseConstant

@@ -51,6 +51,8 @@ class LaserEffectData {
   const Eigen::Matrix3d& sqrt_information(size_t k) const {
     return interval_sqrt_information_.empty() ? sqrt_information_ : interval_sqrt_information_[k];
   }
+  // The shared whitening. Fits made before keep their values.
+  void SetSqrtInformation(const Eigen::Matrix3d& root) { sqrt_information_ = root; }
   // One per interval (empty: back to the shared whitening). Fits made before keep their values.
   void SetIntervalSqrtInformation(std::vector<Eigen::Matrix3d> roots) {
     interval_sqrt_information_ = std::move(roots);

@@ -103,7 +103,8 @@ StatusOr<LaserProblem::IncrementCorrection> SolveAndCorrect(
 }  // namespace
 
 bool EstimateBaseFitJitter(const std::vector<const std::vector<LaserInterval>*>& logs,
-                           const LaserCalibrationOptions& options, LaserCalibrationResult* result) {
+                           const LaserCalibrationOptions& options, LaserCalibrationResult* result,
+                           const std::vector<std::vector<Eigen::Vector3d>>* errors) {
   bool any = false;
   // A significant jitter is estimated again by the refit, σ of σ_j with it: none here.
   IntervalJitterOptions base = options.jitter;
@@ -111,8 +112,10 @@ bool EstimateBaseFitJitter(const std::vector<const std::vector<LaserInterval>*>&
     return !e.significant && (!given || given(e));
   };
   for (size_t d = 0; d < logs.size(); ++d) {
-    result->interval_jitter.push_back(EstimateIntervalJitter(
-        *logs[d], result->estimate, result->noise_sigma[d], result->is_inlier[d], base));
+    const bool given = errors != nullptr && d < errors->size();
+    result->interval_jitter.push_back(
+        EstimateIntervalJitter(*logs[d], result->estimate, result->noise_sigma[d],
+                               result->is_inlier[d], base, given ? &(*errors)[d] : nullptr));
     any = any || result->interval_jitter.back().significant;
   }
   return any;
@@ -190,6 +193,7 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
 
   result->jitter_refit = true;
   result->estimate = problem.calibration();
+  result->robust_noise_sigma.clear();  // Of the base fit's estimate.
   result->is_inlier = inliers;
   result->inliers = 0;
   result->noise_sigma.clear();

@@ -5,6 +5,7 @@
 #include <calib/core/status.h>
 #include <calib/solvers/laser/calibrate_laser.h>
 
+#include <Eigen/Core>
 #include <vector>
 
 // The interval-jitter step of CalibrateLaser (internal): σ_j per log at the base fit and, when one
@@ -12,9 +13,11 @@
 namespace calib {
 
 // Fills result->interval_jitter with σ_j per log at the base fit; true when one is significant
-// (the refit is then due, and the base fit's covariance is not needed).
+// (the refit is then due, and the base fit's covariance is not needed). `errors`, when given,
+// holds every log's errors at the base fit (saves a pass).
 bool EstimateBaseFitJitter(const std::vector<const std::vector<LaserInterval>*>& logs,
-                           const LaserCalibrationOptions& options, LaserCalibrationResult* result);
+                           const LaserCalibrationOptions& options, LaserCalibrationResult* result,
+                           const std::vector<std::vector<Eigen::Vector3d>>* errors = nullptr);
 
 // After EstimateBaseFitJitter said true: replaces the estimate, inliers, noise levels, covariance
 // (and its seconds) and observability by the refit's, sets jitter_refit and adds the statement

@@ -323,15 +323,19 @@ StatusOr<CorrectedCovariance<LaserParamMatrix>> LaserProblem::CorrelatedSandwich
 
 namespace {
 
-// The interval with `increment` (rad) added to its wheel rotations, spread evenly over its steps.
-LaserInterval ShiftIncrements(LaserInterval interval, const Eigen::Vector2d& increment) {
-  interval.left_speed += increment(0) / interval.duration_s;
-  interval.right_speed += increment(1) / interval.duration_s;
-  for (WheelStep& step : interval.steps) {
-    step.left_rad += increment(0) * step.duration_s / interval.duration_s;
-    step.right_rad += increment(1) * step.duration_s / interval.duration_s;
+// `interval` with `increment` (rad) added to its wheel rotations, spread evenly over its steps,
+// into `shifted` (a copy of it: the same steps, whose values are overwritten).
+void ShiftIncrements(const LaserInterval& interval, const Eigen::Vector2d& increment,
+                     LaserInterval* shifted) {
+  shifted->left_speed = interval.left_speed + increment(0) / interval.duration_s;
+  shifted->right_speed = interval.right_speed + increment(1) / interval.duration_s;
+  for (size_t i = 0; i < interval.steps.size(); ++i) {
+    const WheelStep& step = interval.steps[i];
+    shifted->steps[i].left_rad =
+        step.left_rad + increment(0) * step.duration_s / interval.duration_s;
+    shifted->steps[i].right_rad =
+        step.right_rad + increment(1) * step.duration_s / interval.duration_s;
   }
-  return interval;
 }
 
 // ψ = ρ'·Jᵀr of one interval (ρ' given).
@@ -365,14 +369,16 @@ void LaserProblem::AddIncrementCorrection(size_t d, size_t k, const Eigen::Matri
   // 2×2: the closed-form eigen decomposition (the iterative one cost as much as a residual).
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen;
   eigen.computeDirect(*covariance);
+  LaserInterval shifted = interval;  // One copy for the four evaluations.
   for (int i = 0; i < 2; ++i) {
     const double variance = eigen.eigenvalues()(i);
     if (!(variance > 0.0)) continue;
     const Eigen::Vector2d u = std::sqrt(variance) * eigen.eigenvectors().col(i);
+    ShiftIncrements(interval, u, &shifted);
+    const LaserParamVector plus = Score(shifted, root, odometry_, mounting, weight);
+    ShiftIncrements(interval, -u, &shifted);
     sums->correction +=
-        0.5 *
-        (Score(ShiftIncrements(interval, u), root, odometry_, mounting, weight) +
-         Score(ShiftIncrements(interval, -u), root, odometry_, mounting, weight) - 2.0 * center);
+        0.5 * (plus + Score(shifted, root, odometry_, mounting, weight) - 2.0 * center);
   }
 }
 

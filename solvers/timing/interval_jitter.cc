@@ -420,18 +420,23 @@ IntervalJitterEstimate EstimateIntervalJitter(const std::vector<LaserInterval>& 
                                               const LaserCalibration& calibration,
                                               const Eigen::Vector3d& noise_sigma,
                                               const std::vector<bool>& is_inlier,
-                                              const IntervalJitterOptions& options) {
+                                              const IntervalJitterOptions& options,
+                                              const std::vector<Eigen::Vector3d>* errors) {
   // Errors and sensitivities of the sampled intervals only (a million-interval log samples 2 %).
   const std::vector<size_t> sample =
       JitterSampleIndices(intervals.size(), is_inlier, options.max_intervals);
   const LaserParamVector p = calibration.ToVector();
   const SensorMounting mounting(p.data() + 3);
-  std::vector<Eigen::Vector3d> errors;
-  errors.reserve(sample.size());
-  for (size_t k : sample) errors.push_back(LaserResidual::Error(intervals[k], p.data(), mounting));
+  const bool given = errors != nullptr && errors->size() == intervals.size();
+  std::vector<Eigen::Vector3d> sampled;
+  sampled.reserve(sample.size());
+  for (size_t k : sample) {
+    sampled.push_back(given ? (*errors)[k]
+                            : LaserResidual::Error(intervals[k], p.data(), mounting));
+  }
   IntervalJitterOptions all = options;
   all.max_intervals = std::max<int>(options.max_intervals, static_cast<int>(sample.size()));
-  return EstimateIntervalJitter(errors, IntervalTimeSensitivities(intervals, calibration, sample),
+  return EstimateIntervalJitter(sampled, IntervalTimeSensitivities(intervals, calibration, sample),
                                 noise_sigma, {}, all);
 }
 

@@ -138,12 +138,14 @@ IntervalJitterEstimate EstimateIntervalJitter(
     const std::vector<IntervalTimeSensitivity>& sensitivities, const Eigen::Vector3d& noise_sigma,
     const std::vector<bool>& is_inlier, const IntervalJitterOptions& options = {});
 
-// The same from the intervals and a calibration (errors and sensitivities computed at it).
+// The same from the intervals and a calibration (errors and sensitivities computed at it; the
+// errors taken from `errors` instead when given: every interval's, at `calibration`).
 IntervalJitterEstimate EstimateIntervalJitter(const std::vector<LaserInterval>& intervals,
                                               const LaserCalibration& calibration,
                                               const Eigen::Vector3d& noise_sigma,
                                               const std::vector<bool>& is_inlier,
-                                              const IntervalJitterOptions& options = {});
+                                              const IntervalJitterOptions& options = {},
+                                              const std::vector<Eigen::Vector3d>* errors = nullptr);
 
 // The output's sentence: only the weaker treatment was possible on these intervals.
 std::string IntervalJitterStatement(const IntervalJitterEstimate& estimate);

@@ -308,5 +308,20 @@ TEST(ReaderLimitsTest, McapLengthFieldBeyondTheFileIsRefusedNamingTheRecord) {
                 {"huge.mcap", "at byte 8", "runs past the end"});
 }
 
+// The format sniffers read a file's head, never more than asked, and nothing from what is not a
+// readable file.
+TEST(ReaderLimitsTest, FileHeadIsAtMostWhatIsAsked) {
+  TempDir dir;
+  const std::string path = dir / "head.txt";
+  std::string text;
+  for (int i = 0; i < 100; ++i) text += static_cast<char>('a' + i % 26);
+  ASSERT_TRUE(WriteWholeFile(path, text).ok());
+  EXPECT_EQ(ReadFileHead(path, 16), text.substr(0, 16));
+  EXPECT_EQ(ReadFileHead(path, 1000), text);
+  EXPECT_EQ(ReadFileHead(path, 0), "");
+  EXPECT_EQ(ReadFileHead(dir / "missing.txt", 16), "");
+  EXPECT_EQ(ReadFileHead(dir / ".", 16), "");  // A directory.
+}
+
 }  // namespace
 }  // namespace calib

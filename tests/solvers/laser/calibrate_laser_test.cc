@@ -1,6 +1,8 @@
 #include <calib/core/laser/laser_log_io.h>
 #include <calib/core/laser/laser_simulator.h>
 #include <calib/solvers/laser/calibrate_laser.h>
+#include <calib/solvers/laser/laser_dead_reckoning.h>
+#include <calib/solvers/laser/laser_refinement.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -489,6 +491,27 @@ TEST(CalibrateLaserTest, AbsurdValueInMemoryIsRefusedAndGlitchCostsOneInterval) 
         << kLaserParamNames[i];
   }
   EXPECT_TRUE(glitch->unreliable.empty());
+}
+
+// The diagnosis whitens its effect fits by the base fit's robust noise level without computing it
+// again: it must be exactly that of every interval's error at the estimate.
+TEST(CalibrateLaserTest, RobustNoiseLevelIsThatOfTheEstimate) {
+  LaserSimOptions sim;
+  sim.num_intervals = 800;
+  sim.outlier_fraction = 0.1;
+  const LaserLog log = SimulateLaserLog(sim);
+  for (const double redescending_scale : {0.0, LaserRefinementOptions{}.redescending_scale}) {
+    LaserCalibrationOptions options;
+    options.interval_jitter = false;
+    options.estimate_only = true;
+    options.refinement.redescending_scale = redescending_scale;
+    const StatusOr<LaserCalibrationResult> result = CalibrateLaser(log.intervals, options);
+    ASSERT_TRUE(result.ok()) << result.message();
+    ASSERT_EQ(result->robust_noise_sigma.size(), 1u);
+    const Eigen::Vector3d direct =
+        RobustNoiseSigma(LaserIntervalErrors(log.intervals, result->estimate));
+    EXPECT_EQ(result->robust_noise_sigma[0], direct) << redescending_scale;
+  }
 }
 
 }  // namespace
