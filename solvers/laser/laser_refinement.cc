@@ -93,10 +93,12 @@ void LaserProblem::AddFusedBlock(ceres::LossFunction* block_loss) {
       return true;
     };
   };
-  problem_->AddResidualBlock(
-      NewFusedNormalCost<3, kNumLaserParams>({3, 3}, num_intervals(), linearize, block_loss,
-                                             options_.num_threads, kMinChunk),
-      nullptr, odometry_, base_T_sensor_);
+  auto* cost = NewFusedNormalCost<3, kNumLaserParams>({3, 3}, num_intervals(), linearize,
+                                                      block_loss, options_.num_threads, kMinChunk);
+  // Evaluate and Linearize give the same residuals (laser_residual.h).
+  cost->set_speculate(true);
+  forget_speculation_ = [cost] { cost->ForgetSpeculation(); };
+  problem_->AddResidualBlock(cost, nullptr, odometry_, base_T_sensor_);
 }
 
 void LaserProblem::Linearize(size_t d, size_t k, const SensorMounting& mounting, Eigen::Vector3d* r,
@@ -133,6 +135,7 @@ void LaserProblem::Redescend() {
   loss_->Reset(MakeLossFunction(RobustLoss::kTukey, options_.redescending_scale).release(),
                ceres::TAKE_OWNERSHIP);
   redescended_ = true;
+  ForgetSpeculation();
 }
 
 std::string LaserProblem::LossDescription() const {
@@ -155,6 +158,7 @@ void LaserProblem::set_calibration(const LaserCalibration& calibration) {
 
 void LaserProblem::SetSqrtInformation(size_t dataset, const Eigen::Matrix3d& sqrt_information) {
   *sqrt_information_[dataset] = sqrt_information;
+  ForgetSpeculation();
 }
 
 Status LaserProblem::SetIntervalSqrtInformation(size_t dataset,
@@ -166,6 +170,7 @@ Status LaserProblem::SetIntervalSqrtInformation(size_t dataset,
                                 " per-interval ones");
   }
   std::copy(roots.begin(), roots.end(), own.begin());  // In place: the residuals point here.
+  ForgetSpeculation();
   return Status::Ok();
 }
 

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -177,6 +178,12 @@ class LaserProblem {
 
   // The residuals' loss; Redescend() swaps what it wraps.
   std::unique_ptr<ceres::LossFunctionWrapper> loss_;
+  // The fused block's ForgetSpeculation (fused_normal_cost.h), when there is one: whenever the
+  // whitening or the loss changes.
+  std::function<void()> forget_speculation_;
+  void ForgetSpeculation() const {
+    if (forget_speculation_) forget_speculation_();
+  }
   bool redescended_ = false;
   std::unique_ptr<ceres::Problem> problem_;
   LaserRefinementOptions options_;

@@ -8,7 +8,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <atomic>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <vector>
 
@@ -118,6 +120,73 @@ TEST(FusedNormalCostTest, CeresSeesTheSameLinearizationAsFromSeparateBlocks) {
       EXPECT_NEAR(cost_only, a.cost, 1e-10 * a.cost);
     }
   }
+}
+
+// One evaluation of a fused block: its N + 1 residuals and, when asked, its (N + 1)×6 Jacobian.
+struct FusedOutput {
+  bool ok = false;
+  std::vector<double> residuals = std::vector<double>(7, std::nan(""));
+  std::vector<double> jacobians[2] = {std::vector<double>(21, std::nan("")),
+                                      std::vector<double>(21, std::nan(""))};
+};
+FusedOutput EvaluateFused(const ceres::CostFunction& cost, const double* odometry,
+                          const double* sensor, bool with_jacobian) {
+  FusedOutput out;
+  const double* parameters[2] = {odometry, sensor};
+  double* jacobians[2] = {out.jacobians[0].data(), out.jacobians[1].data()};
+  out.ok = cost.Evaluate(parameters, out.residuals.data(), with_jacobian ? jacobians : nullptr);
+  return out;
+}
+void ExpectSameBits(const std::vector<double>& a, const std::vector<double>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), sizeof(double) * a.size()), 0);
+}
+
+// A speculating block's cost-only evaluation serves the Jacobian evaluation that follows it at the
+// same parameters (no second pass), to the bit what a block without speculation gives; other
+// parameters, or a whitening changed and forgotten, are evaluated afresh.
+TEST(FusedNormalCostTest, ACostOnlyEvaluationServesTheJacobianThatFollowsIt) {
+  const LaserLog log = NoisyLogWithSlips(300, 4);
+  Eigen::Matrix3d root = Eigen::Vector3d(1e3, 1e3, 5e2).asDiagonal();
+  ceres::CauchyLoss cauchy(3.0);
+  using Cost = FusedNormalCost<3, 6>;
+  std::atomic<int> jacobian_items{0};
+  const auto linearize = [&](size_t k, const double* const* parameters, Cost::Residual* r,
+                             Cost::Jacobian* j) {
+    if (j == nullptr) {
+      LaserResidual::Evaluate(log.intervals[k], root, parameters[0], parameters[1], r);
+    } else {
+      ++jacobian_items;
+      LaserResidual::Linearize(log.intervals[k], root, parameters[0], parameters[1], r, j);
+    }
+    return true;
+  };
+  Cost plain({3, 3}, log.intervals.size(), linearize, &cauchy, 2);
+  Cost speculating({3, 3}, log.intervals.size(), linearize, &cauchy, 2);
+  speculating.set_speculate(true);
+  const int n = static_cast<int>(log.intervals.size());
+  double odometry[3] = {0.033, 0.031, 0.31};
+  const double sensor[3] = {0.1, 0.02, 0.3};
+  const auto expect_same = [&](bool with_jacobian, int passes) {
+    const FusedOutput want = EvaluateFused(plain, odometry, sensor, with_jacobian);
+    jacobian_items = 0;
+    const FusedOutput got = EvaluateFused(speculating, odometry, sensor, with_jacobian);
+    EXPECT_EQ(jacobian_items.load(), passes * n);
+    ASSERT_TRUE(want.ok && got.ok);
+    ExpectSameBits(got.residuals, want.residuals);
+    for (int b = 0; with_jacobian && b < 2; ++b)
+      ExpectSameBits(got.jacobians[b], want.jacobians[b]);
+  };
+  expect_same(false, 1);  // The cost, with the normal equations formed and kept.
+  expect_same(true, 0);   // Taken from the cost-only evaluation.
+  expect_same(true, 1);   // Kept for one evaluation only.
+  expect_same(false, 1);
+  odometry[2] = 0.32;  // Another candidate.
+  expect_same(true, 1);
+  expect_same(false, 1);
+  root(0, 0) = 2e3;  // The owner changes the whitening and says so.
+  speculating.ForgetSpeculation();
+  expect_same(true, 1);
 }
 
 // The fused refinement (the default) ends where the per-interval one does, after the same
