@@ -95,7 +95,9 @@ void LaserProblem::AddFusedBlock(ceres::LossFunction* block_loss) {
   };
   auto* cost = NewFusedNormalCost<3, kNumLaserParams>({3, 3}, num_intervals(), linearize,
                                                       block_loss, options_.num_threads, kMinChunk);
-  // Evaluate and Linearize give the same residuals (laser_residual.h).
+  // Evaluate and Linearize give the same residuals (laser_residual.h): a constant-speed interval's
+  // from one closed form, a stepped one's to rounding (automatic derivatives divide by a
+  // reciprocal), so that Ceres' costs then come from one evaluation of each point.
   cost->set_speculate(true);
   forget_speculation_ = [cost] { cost->ForgetSpeculation(); };
   problem_->AddResidualBlock(cost, nullptr, odometry_, base_T_sensor_);
