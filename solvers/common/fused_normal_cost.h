@@ -69,10 +69,11 @@ class FusedNormalCost : public ceres::CostFunction {
   // Speculation: a cost-only evaluation also forms the normal equations and keeps them for a
   // Jacobian evaluation at the same parameters right after it, which Ceres' trust region asks for
   // whenever it takes the step whose cost it has just evaluated (one pass instead of two: on a
-  // million intervals the refinement's cost-only passes were 3 of 7). Only where the residuals
-  // with and without the Jacobian are the same numbers (the cost then is too); the owner calls
-  // ForgetSpeculation() whenever something other than the parameters changes the items (their
-  // whitening, the loss).
+  // million intervals the refinement's cost-only passes were 3 of 7). For linearizations whose
+  // residuals with and without the Jacobian agree (bit for bit, or the cost changes by rounding),
+  // whose Jacobian costs about what the residuals do, and which are evaluated from one thread at
+  // a time (as Ceres does a block). The owner calls ForgetSpeculation() whenever something other
+  // than the parameters changes the items (their whitening, the loss).
   void set_speculate(bool speculate) { speculate_ = speculate; }
   void ForgetSpeculation() const { speculated_.valid = false; }
 
