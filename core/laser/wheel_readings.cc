@@ -36,24 +36,31 @@ int UnwrapWheelAngles(std::vector<double>* values, size_t stride, size_t column)
   return turns;
 }
 
+Status ScaleWheelReadings(double radians_per_unit, LaserLog* log) {
+  if (!(radians_per_unit > 0.0) || !std::isfinite(radians_per_unit)) {
+    return Status::InvalidInput("radians per wheel-reading unit must be positive, got " +
+                                Num(radians_per_unit));
+  }
+  for (LaserInterval& interval : log->intervals) {
+    interval.left_speed *= radians_per_unit;
+    interval.right_speed *= radians_per_unit;
+    for (WheelStep& step : interval.steps) {
+      step.left_rad *= radians_per_unit;
+      step.right_rad *= radians_per_unit;
+    }
+  }
+  for (EncoderSample& sample : log->streams.odometry) {
+    sample.left_rad *= radians_per_unit;
+    sample.right_rad *= radians_per_unit;
+  }
+  return Status::Ok();
+}
+
 Status ConvertWheelTicks(double ticks_per_rev, LaserLog* log) {
   if (!(ticks_per_rev > 0.0) || !std::isfinite(ticks_per_rev)) {
     return Status::InvalidInput("ticks per wheel turn must be positive, got " + Num(ticks_per_rev));
   }
-  const double radians_per_tick = 2.0 * kPi / ticks_per_rev;
-  for (LaserInterval& interval : log->intervals) {
-    interval.left_speed *= radians_per_tick;
-    interval.right_speed *= radians_per_tick;
-    for (WheelStep& step : interval.steps) {
-      step.left_rad *= radians_per_tick;
-      step.right_rad *= radians_per_tick;
-    }
-  }
-  for (EncoderSample& sample : log->streams.odometry) {
-    sample.left_rad *= radians_per_tick;
-    sample.right_rad *= radians_per_tick;
-  }
-  return Status::Ok();
+  return ScaleWheelReadings(2.0 * kPi / ticks_per_rev, log);
 }
 
 }  // namespace calib

@@ -17,8 +17,14 @@ namespace calib {
 // row-major with `stride` values per sample; `column` is the angle's.
 int UnwrapWheelAngles(std::vector<double>* values, size_t stride, size_t column);
 
-// Wheel readings in encoder ticks (N per wheel turn) to radians: the interval speeds and steps and
-// the raw encoder samples are multiplied by 2π/N. Fails unless N is positive and finite.
+// Wheel readings in another unit (degrees, encoder counts) to radians: the interval speeds and
+// steps and the raw encoder samples are multiplied by `radians_per_unit`. Fails unless it is
+// positive and finite. The readers unwrap angles in radians only: a stream in another unit must
+// hold cumulative readings.
+Status ScaleWheelReadings(double radians_per_unit, LaserLog* log);
+
+// Wheel readings in encoder ticks (N per wheel turn) to radians: ScaleWheelReadings by 2π/N.
+// Fails unless N is positive and finite.
 Status ConvertWheelTicks(double ticks_per_rev, LaserLog* log);
 
 }  // namespace calib

@@ -229,7 +229,7 @@ Status CheckSizes(const LaserLog& log, const Names& names, const LaserCalibratio
         log.source + ": the wheel radius comes out at " + Format("%.4g", 1e3 * radius) +
         " mm, which no wheel has: " + names.wheels +
         " look like encoder ticks (or degrees), not radians. Give --ticks_per_rev N, the ticks "
-        "per wheel turn (360 for degrees): the radius is then " +
+        "per wheel turn (--wheel_angle_unit deg for degrees): the radius is then " +
         Format("%.4g", 1e3 * radius) + " mm × N/2π (N = 1024 gives " +
         Mm(radius * 1024 / (2 * kPi)) + ", N = 4096 gives " + Mm(radius * 4096 / (2 * kPi)) + ")");
   }

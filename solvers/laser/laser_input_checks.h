@@ -40,7 +40,7 @@ struct LaserInputCheckOptions {
 // Ok when the log reads as the contract says; otherwise InvalidInput naming log.source, what
 // looks wrong (with the figures that show it) and what to do. Every finding is a guess about
 // the input, so none is corrected here: the user fixes the file or says its unit
-// (ConvertWheelTicks). A log the closed form cannot fit in any reading passes: the calibration
+// (ScaleWheelReadings). A log the closed form cannot fit in any reading passes: the calibration
 // then says what is missing.
 Status CheckLaserInput(const LaserLog& log, const LaserInputCheckOptions& options = {});
 

@@ -118,6 +118,49 @@ TEST_F(InputSanityCliTest, StreamTicksAreConvertedByTicksPerRev) {
               1e-8);
 }
 
+// --wheel_angle_unit is not for bags only: a stream directory and an interval log whose wheel
+// readings are in degrees give the radians' result with it (it was once ignored off bags).
+TEST_F(InputSanityCliTest, WheelAngleUnitConvertsStreamsAndIntervalLogs) {
+  const fs::path good_streams = Simulate("good_streams");
+  const fs::path degrees = dir_ / "degrees_streams";
+  fs::create_directories(degrees);
+  fs::copy_file(good_streams / "sensor_poses.csv", degrees / "sensor_poses.csv");
+  RewriteCsv(good_streams / "odometry.csv", degrees / "odometry.csv",
+             [](const std::vector<std::string>&, std::vector<double>* row) {
+               (*row)[1] *= 180.0 / M_PI;
+               (*row)[2] *= 180.0 / M_PI;
+             });
+  const CliRun ignored = Calib(Calibrate(degrees, "--timing off"));
+  EXPECT_EQ(ignored.exit_code, 1) << ignored.err;
+  EXPECT_NE(ignored.err.find("--wheel_angle_unit deg"), std::string::npos) << ignored.err;
+  const nlohmann::json expected = Result(Calib(Calibrate(good_streams, "--timing off")));
+  const nlohmann::json converted =
+      Result(Calib(Calibrate(degrees, "--timing off --wheel_angle_unit deg")));
+  for (const char* param : {"r_l", "r_r", "b"}) {
+    EXPECT_NEAR(converted["estimate"][param].get<double>(),
+                expected["estimate"][param].get<double>(), 1e-8)
+        << param;
+  }
+
+  const fs::path good = Simulate("good.csv");
+  const fs::path degrees_csv = dir_ / "degrees.csv";
+  RewriteCsv(good, degrees_csv,
+             [](const std::vector<std::string>& header, std::vector<double>* row) {
+               for (const char* wheel : {"phi_l", "phi_r"}) {
+                 (*row)[CsvColumn(header, wheel)] *= 180.0 / M_PI;
+               }
+             });
+  const nlohmann::json expected_csv = Result(Calib(Calibrate(good)));
+  const nlohmann::json converted_csv =
+      Result(Calib(Calibrate(degrees_csv, "--wheel_angle_unit deg")));
+  EXPECT_NEAR(converted_csv["estimate"]["r_l"].get<double>(),
+              expected_csv["estimate"]["r_l"].get<double>(), 1e-8);
+  EXPECT_EQ(converted_csv["verdict"], "trusted") << converted_csv["warnings"];
+  ExpectRefused(Calib(Calibrate(good, "--wheel_angle_unit furlongs")), {"--wheel_angle_unit"});
+  ExpectRefused(Calib(Calibrate(good, "--wheel_angle_unit deg --ticks_per_rev 4096")),
+                {"--ticks_per_rev and --wheel_angle_unit deg"});
+}
+
 TEST_F(InputSanityCliTest, ThetaInDegreesIsRefused) {
   const fs::path good = Simulate("good.csv");
   const fs::path degrees = dir_ / "degrees.csv";

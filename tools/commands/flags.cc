@@ -87,8 +87,9 @@ DEFINE_string(base_frame, "",
               "base_footprint)");
 DEFINE_string(
     wheel_angle_unit, "rad",
-    "calibrate, diagnose (bags, scan directories): the unit of the wheel joints' positions: rad, "
-    "deg, or ticks:N for raw encoder counts of N per wheel turn");
+    "calibrate, diagnose (every laser input: bags, scan directories, streams, interval logs): the "
+    "unit of the wheel readings (angles, or speeds per second): rad, deg, or ticks:N for raw "
+    "encoder counts of N per wheel turn");
 DEFINE_double(ticks_per_rev, 0.0,
               "calibrate, diagnose (laser logs, streams, bags): the wheel readings are encoder "
               "ticks, this many per wheel turn; they are converted to radians (for bags the same "

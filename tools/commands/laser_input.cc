@@ -16,15 +16,13 @@ StatusOr<std::vector<LaserLog>> ReadCheckedLaserLogs(const CalibrateOptions& fla
 }
 
 StatusOr<std::vector<LaserLog>> ReadLaserLogs(const CalibrateOptions& flags, LaserFormat format) {
-  if (flags.ticks_per_rev != 0.0 &&
-      !(flags.ticks_per_rev > 0.0 && std::isfinite(flags.ticks_per_rev))) {
-    return Status::InvalidInput("--ticks_per_rev must be positive (ticks per wheel turn)");
-  }
+  // --wheel_angle_unit or --ticks_per_rev: the same unit for every log, bag or not.
+  CALIB_ASSIGN_OR_RETURN(const double radians_per_unit, WheelRadiansPerUnit(flags));
   std::vector<LaserLog> logs;
   for (const std::string& path : SplitCommas(flags.input)) {
     CALIB_ASSIGN_OR_RETURN(LaserLog log, ReadLaserInput(path, format, flags.time_offset_s));
-    if (flags.ticks_per_rev > 0.0) {
-      CALIB_RETURN_IF_ERROR(ConvertWheelTicks(flags.ticks_per_rev, &log));
+    if (radians_per_unit != 1.0) {
+      CALIB_RETURN_IF_ERROR(ScaleWheelReadings(radians_per_unit, &log));
     }
     logs.push_back(std::move(log));
   }
