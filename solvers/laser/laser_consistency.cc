@@ -387,9 +387,27 @@ LaserConsistency CheckLaserConsistencyJoint(
   travel.influence_long_run = influence_map * score_long_run[1] * influence_map.transpose();
   out.rotation_lag = rotation.lag;
   out.translation_lag = travel.lag;
-  for (const Window& w : FindWindows(terms, options.min_window_intervals)) {
-    out.windows.push_back(CheckWindow(rotation, travel, terms[w.log], w, estimate));
+  const std::vector<Window> windows = FindWindows(terms, options.min_window_intervals);
+  out.windows.resize(windows.size());
+  // A long window splits its sums across the threads; the short ones (a long log has a thousand
+  // stretches between rests) go side by side instead, each on one thread. The chunks and their
+  // order are the same either way (ParallelSplit), and so are the sums.
+  std::vector<size_t> short_windows;
+  for (size_t i = 0; i < windows.size(); ++i) {
+    const Window& w = windows[i];
+    if (SplitCount(static_cast<size_t>(w.last - w.first + 1), kMinChunkIntervals) > 1) {
+      out.windows[i] = CheckWindow(rotation, travel, terms[w.log], w, estimate);
+    } else {
+      short_windows.push_back(i);
+    }
   }
+  ParallelSplit(
+      short_windows.size(), options.num_threads, 1, [&](size_t, size_t begin, size_t end) {
+        for (size_t j = begin; j < end; ++j) {
+          const Window& w = windows[short_windows[j]];
+          out.windows[short_windows[j]] = CheckWindow(rotation, travel, terms[w.log], w, estimate);
+        }
+      });
   if (out.windows.empty()) {
     out.note =
         Format("not checked: no run holds %d inlier intervals", options.min_window_intervals);

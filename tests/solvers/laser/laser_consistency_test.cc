@@ -234,6 +234,32 @@ TEST(LaserConsistencyTest, WindowsBetweenRestsHaveNoEndTiming) {
   EXPECT_EQ(check.tests, 2 * static_cast<int>(check.windows.size()));
 }
 
+// Short windows go side by side on the threads, long ones split their sums: the same figures,
+// bit for bit and in the same order, as on one thread.
+TEST(LaserConsistencyTest, WindowsOnTwoThreadsEqualOneThread) {
+  const std::vector<LaserInterval> intervals = DriveLoops(6000, 5, 1.0, 300);
+  const StatusOr<LaserCalibrationResult> result = CalibrateLaser(intervals);
+  ASSERT_TRUE(result.ok()) << result.message();
+  LaserConsistencyOptions one, two;
+  one.num_threads = 1;
+  two.num_threads = 2;
+  const LaserConsistency a = Check(intervals, *result, result->estimate, one);
+  const LaserConsistency b = Check(intervals, *result, result->estimate, two);
+  ASSERT_EQ(a.windows.size(), b.windows.size());
+  EXPECT_GE(a.windows.size(), 15u);  // The run and the stretches between its rests.
+  for (size_t i = 0; i < a.windows.size(); ++i) {
+    EXPECT_EQ(a.windows[i].kind, b.windows[i].kind);
+    EXPECT_EQ(a.windows[i].first, b.windows[i].first);
+    for (const auto& [x, y] : {std::pair(a.windows[i].rotation, b.windows[i].rotation),
+                               std::pair(a.windows[i].translation, b.windows[i].translation)}) {
+      EXPECT_EQ(x.measured, y.measured) << i;
+      EXPECT_EQ(x.sigma, y.sigma) << i;
+      EXPECT_EQ(x.z, y.z) << i;
+    }
+  }
+  EXPECT_EQ(a.warnings, b.warnings);
+}
+
 TEST(LaserConsistencyTest, ForwardTravelIsTheArcLength) {
   const Pose2d arc = ArcDisplacement(0.3, 0.8);
   const Pose2d sm = SensorMotionFromRobotMotion(kMounting, arc);
