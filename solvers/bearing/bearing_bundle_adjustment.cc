@@ -95,6 +95,15 @@ BearingProblem::BearingProblem(const BearingLog& log, const BearingParams& initi
   problem_options.enable_fast_removal = false;
   problem_ = std::make_unique<ceres::Problem>(problem_options);
 
+  size_t num_nodes = 0;
+  for (const std::vector<Pose2d>& given : world_T_robot) {
+    run_offsets_.push_back(kNumBearingParams + 1 + 3 * num_nodes);
+    run_nodes_.push_back(given.size());
+    num_nodes += given.size();
+  }
+  parameters_.assign(kNumBearingParams + 1 + 3 * num_nodes, 0.0);
+  calibration_ = parameters_.data();
+  time_offset_ = calibration_ + kNumBearingParams;
   const BearingParamVector c = ToVector(initial);
   for (int i = 0; i < kNumBearingParams; ++i) calibration_[i] = c(i);
   // η, δ, ξ stay positive (η < 0 is the same sensor with φ + π; δ, ξ < 0 are not wheels).
@@ -104,15 +113,18 @@ BearingProblem::BearingProblem(const BearingLog& log, const BearingParams& initi
 
   // Poses, each run turned about the landmark so that its start is on the negative y axis.
   size_t num_intervals = 0;
-  poses_.resize(log.runs.size());
   for (size_t i = 0; i < log.runs.size(); ++i) {
     const std::vector<Pose2d>& given = world_T_robot[i];
     const double turn = -0.5 * M_PI - std::atan2(given.front()(1), given.front()(0));
     const double ct = std::cos(turn), st = std::sin(turn);
-    for (const Pose2d& p : given) {
-      poses_[i].push_back({ct * p(0) - st * p(1), st * p(0) + ct * p(1), p(2) + turn});
+    for (size_t k = 0; k < given.size(); ++k) {
+      const Pose2d& p = given[k];
+      double* node = Node(static_cast<int>(i), static_cast<int>(k));
+      node[0] = ct * p(0) - st * p(1);
+      node[1] = st * p(0) + ct * p(1);
+      node[2] = p(2) + turn;
     }
-    poses_[i].front()[0] = 0.0;
+    Node(static_cast<int>(i), 0)[0] = 0.0;
     num_intervals += given.size() - 1;
   }
   unit_covariance_.reserve(num_intervals);
@@ -257,8 +269,10 @@ Status BearingProblem::Solve(ceres::Solver::Summary* summary) {
     };
   }
   CALIB_RETURN_IF_ERROR(SolveInStages(solve, redescend, summary));
-  for (double v : calibration_) {
-    if (!std::isfinite(v)) return Status::NotConverged("the bundle adjustment diverged");
+  for (int i = 0; i < kNumBearingParams; ++i) {
+    if (!std::isfinite(calibration_[i])) {
+      return Status::NotConverged("the bundle adjustment diverged");
+    }
   }
   return Status::Ok();
 }
@@ -273,9 +287,12 @@ BearingParams BearingProblem::params() const {
 }
 
 std::vector<std::vector<Pose2d>> BearingProblem::poses() const {
-  std::vector<std::vector<Pose2d>> out(poses_.size());
-  for (size_t i = 0; i < poses_.size(); ++i) {
-    for (const auto& p : poses_[i]) out[i].push_back(Pose2d(p[0], p[1], WrapAngle(p[2])));
+  std::vector<std::vector<Pose2d>> out(run_nodes_.size());
+  for (size_t i = 0; i < run_nodes_.size(); ++i) {
+    for (size_t k = 0; k < run_nodes_[i]; ++k) {
+      const double* p = Node(static_cast<int>(i), static_cast<int>(k));
+      out[i].push_back(Pose2d(p[0], p[1], WrapAngle(p[2])));
+    }
   }
   return out;
 }
@@ -292,8 +309,7 @@ double BearingProblem::BearingError(int run, int node, int bearing) const {
 }
 
 std::vector<double*> BearingProblem::TermBlocks(const BearingTerm& term) const {
-  std::vector<double*> blocks = {const_cast<double*>(Node(term.run, term.node)),
-                                 const_cast<double*>(calibration_)};
+  std::vector<double*> blocks = {const_cast<double*>(Node(term.run, term.node)), calibration_};
   if (options_.model_time_offset) blocks.push_back(time_offset_);
   return blocks;
 }

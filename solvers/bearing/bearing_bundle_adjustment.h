@@ -234,8 +234,11 @@ class BearingProblem {
   // The parameter blocks of a bearing term.
   std::vector<double*> TermBlocks(const BearingTerm& term) const;
 
-  double* Node(int run, int node) { return poses_[run][node].data(); }
-  const double* Node(int run, int node) const { return poses_[run][node].data(); }
+  double* Node(int run, int node) { return calibration_ + NodeOffset(run, node); }
+  const double* Node(int run, int node) const { return calibration_ + NodeOffset(run, node); }
+  size_t NodeOffset(int run, int node) const {
+    return run_offsets_[static_cast<size_t>(run)] + 3 * static_cast<size_t>(node);
+  }
   // Σ₁ of one odometry term of run `run`.
   Eigen::Matrix3d UnitCovariance(size_t run, double t0_s, double t1_s, double delta,
                                  double xi) const;
@@ -247,9 +250,15 @@ class BearingProblem {
   std::vector<BearingRunNodes> nodes_;
   BearingAdjustmentOptions options_;
   BearingNoise noise_;
-  double calibration_[kNumBearingParams];
-  mutable double time_offset_[1] = {0.0};
-  std::vector<std::vector<std::array<double, 3>>> poses_;
+  // Every parameter block in one buffer, in the chain's order (the calibration, τ, then each run's
+  // poses): ceres::Covariance orders its columns by the blocks' addresses, and separate heap
+  // blocks land in an order that the other threads' allocations change from run to run, and with
+  // it the last digits of every covariance.
+  std::vector<double> parameters_;
+  double* calibration_ = nullptr;
+  double* time_offset_ = nullptr;
+  std::vector<size_t> run_offsets_;                // Of each run's first pose in parameters_.
+  std::vector<size_t> run_nodes_;                  // Each run's number of poses.
   std::vector<Eigen::Matrix3d> unit_covariance_;   // Σ₁ per odometry term.
   std::vector<Eigen::Matrix3d> sqrt_information_;  // Stable addresses (sized once).
   // 1/σ per bearing term (stable addresses: sized once, before the terms hold them), and the

@@ -59,9 +59,10 @@ double BearingProblem::LossCorrection() const {
 
 std::vector<double*> BearingProblem::Latents() const {
   std::vector<double*> latents;
-  for (size_t i = 0; i < poses_.size(); ++i) {
-    for (size_t k = 0; k < poses_[i].size(); ++k)
-      latents.push_back(const_cast<double*>(Node(i, k)));
+  for (size_t i = 0; i < run_nodes_.size(); ++i) {
+    for (size_t k = 0; k < run_nodes_[i]; ++k) {
+      latents.push_back(calibration_ + NodeOffset(static_cast<int>(i), static_cast<int>(k)));
+    }
   }
   return latents;
 }

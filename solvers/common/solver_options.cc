@@ -1,4 +1,5 @@
 #include <calib/solvers/common/solver_options.h>
+#include <calib/solvers/common/suitesparse_alignment.h>
 
 #include <algorithm>
 #include <cmath>
@@ -6,6 +7,7 @@
 namespace calib {
 
 ceres::Solver::Options MakeSolverOptions(const SolverSettings& settings) {
+  AlignSuiteSparseAllocations();
   ceres::Solver::Options options;
   options.minimizer_type = ceres::TRUST_REGION;
   options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
@@ -26,6 +28,7 @@ ceres::Solver::Options MakeSolverOptions(const SolverSettings& settings) {
 }
 
 ceres::Covariance::Options MakeCovarianceOptions(int num_threads) {
+  AlignSuiteSparseAllocations();
   ceres::Covariance::Options options;
   options.num_threads = num_threads;
   options.algorithm_type = ceres::SPARSE_QR;

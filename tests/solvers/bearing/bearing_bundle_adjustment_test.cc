@@ -230,6 +230,31 @@ TEST(BearingBundleAdjustmentTest, LeveragesSumToTheFreeParametersAndNoiseIsRecov
   EXPECT_GT(vc->odometry_redundancy, 0.0);
 }
 
+// ceres::Covariance orders its columns by the parameter blocks' addresses: the same problem built
+// where the heap has other holes (another thread's allocations do that) gives the same bits.
+TEST(BearingBundleAdjustmentTest, CovarianceDoesNotDependOnWhereTheHeapPutsTheProblem) {
+  BearingSimTruth truth;
+  const BearingLog log = Simulate(ShortCircles(), 2.0 * kDeg, 1e-3, &truth, 5);
+  const auto covariance = [&] {
+    BearingProblem problem(log, truth.params, TruePoses(log, truth),
+                           BearingNoise{2.0 * kDeg, 1e-3});
+    EXPECT_TRUE(problem.Solve().ok());
+    const auto cov = problem.CalibrationCovarianceWithStartDistance(2);
+    EXPECT_TRUE(cov.ok()) << cov.message();
+    return cov.ok() ? Eigen::MatrixXd(cov->covariance) : Eigen::MatrixXd();
+  };
+  const Eigen::MatrixXd first = covariance();
+  for (size_t hole : {size_t{1} << 10, size_t{3} << 12, size_t{5} << 13}) {
+    // Blocks of the size of a run's poses, every other one freed: holes low in the heap.
+    std::vector<std::unique_ptr<char[]>> blocks;
+    for (int i = 0; i < 64; ++i) blocks.emplace_back(new char[hole]);
+    for (size_t i = 0; i < blocks.size(); i += 2) blocks[i].reset();
+    const Eigen::MatrixXd again = covariance();
+    ASSERT_EQ(again.size(), first.size());
+    EXPECT_TRUE((again.array() == first.array()).all()) << hole << "\n" << (again - first);
+  }
+}
+
 TEST(BearingCrlbTest, ScalesWithBearingNoiseAndGrowsWithEncoderNoise) {
   BearingSimTruth truth;
   const BearingLog log = Simulate(MartinelliRuns(), 1.0 * kDeg, 1e-3, &truth);
