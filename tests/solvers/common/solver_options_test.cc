@@ -1,5 +1,11 @@
 #include <calib/solvers/common/solver_options.h>
+#include <calib/solvers/common/suitesparse_alignment.h>
 #include <gtest/gtest.h>
+#include <suitesparse/SuiteSparse_config.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
 
 namespace calib {
 namespace {
@@ -43,6 +49,31 @@ TEST(SolverOptionsTest, ConvergenceIsReadFromTheTermination) {
   summary.termination_type = ceres::NO_CONVERGENCE;
   EXPECT_FALSE(Converged(summary));
   EXPECT_NE(NotConvergedText("the fit", summary).find("the fit stopped after"), std::string::npos);
+}
+
+// Once options are made, SuiteSparse's blocks start on 64-byte boundaries (the alignment-dependent
+// BLAS paths beneath then take the same path in every run); growing keeps the contents, and the
+// blocks are still released by free(), as Ceres releases some of SPQR's.
+TEST(SuiteSparseAlignmentTest, BlocksAreAlignedGrowWithTheirContentsAndFreeWithFree) {
+  MakeCovarianceOptions(1);
+  for (size_t bytes : {size_t{1}, size_t{24}, size_t{1000}, size_t{1} << 20}) {
+    auto* block = static_cast<unsigned char*>(SuiteSparse_malloc(1, bytes));
+    ASSERT_NE(block, nullptr);
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(block) % 64, 0u) << bytes;
+    std::memset(block, 0x5a, bytes);
+    int ok = 0;
+    block = static_cast<unsigned char*>(SuiteSparse_realloc(2 * bytes, bytes, 1, block, &ok));
+    ASSERT_TRUE(ok);
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(block) % 64, 0u) << bytes;
+    for (size_t i = 0; i < bytes; ++i) ASSERT_EQ(block[i], 0x5a) << bytes << " at " << i;
+    std::free(block);
+  }
+  auto* zeros = static_cast<unsigned char*>(SuiteSparse_calloc(100, 8));
+  ASSERT_NE(zeros, nullptr);
+  EXPECT_EQ(reinterpret_cast<uintptr_t>(zeros) % 64, 0u);
+  for (int i = 0; i < 800; ++i) ASSERT_EQ(zeros[i], 0);
+  SuiteSparse_free(zeros);
+  AlignSuiteSparseAllocations();  // Again: nothing changes.
 }
 
 }  // namespace
