@@ -157,6 +157,9 @@ TEST_F(InputSanityCliTest, WheelAngleUnitConvertsStreamsAndIntervalLogs) {
               expected_csv["estimate"]["r_l"].get<double>(), 1e-8);
   EXPECT_EQ(converted_csv["verdict"], "trusted") << converted_csv["warnings"];
   ExpectRefused(Calib(Calibrate(good, "--wheel_angle_unit furlongs")), {"--wheel_angle_unit"});
+  // A unit given to readings already in radians: the refusal says the flag may be the mistake.
+  ExpectRefused(Calib(Calibrate(good_streams, "--timing off --wheel_angle_unit deg")),
+                {"converted with --wheel_angle_unit deg", "leave it out"});
   ExpectRefused(Calib(Calibrate(good, "--wheel_angle_unit deg --ticks_per_rev 4096")),
                 {"--ticks_per_rev and --wheel_angle_unit deg"});
 }

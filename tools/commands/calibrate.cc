@@ -162,7 +162,8 @@ int CalibrateLaserLogs(const CalibrateOptions& flags) {
   }
   // The checks' consensus screen is the closed form's, unless the latent-time route re-forms
   // the intervals.
-  const Status checked = CheckLaserLogs(logs, latent_timing ? nullptr : &options.consensus_screen);
+  const Status checked = WithWheelUnitHint(
+      CheckLaserLogs(logs, latent_timing ? nullptr : &options.consensus_screen), flags);
   if (!checked.ok()) return Fail(checked.message());
 
   // Raw streams carry their own timing: the latent-time calibration models it (one log), and

@@ -1,4 +1,5 @@
 #include <calib/core/laser/wheel_readings.h>
+#include <calib/core/text_number.h>
 #include <calib/solvers/laser/laser_input_checks.h>
 #include <calib/tools/commands/command_util.h>
 #include <calib/tools/commands/laser_input.h>
@@ -11,7 +12,7 @@ namespace calib::cli {
 StatusOr<std::vector<LaserLog>> ReadCheckedLaserLogs(const CalibrateOptions& flags,
                                                      LaserFormat format) {
   CALIB_ASSIGN_OR_RETURN(std::vector<LaserLog> logs, ReadLaserLogs(flags, format));
-  CALIB_RETURN_IF_ERROR(CheckLaserLogs(logs));
+  CALIB_RETURN_IF_ERROR(WithWheelUnitHint(CheckLaserLogs(logs), flags));
   return logs;
 }
 
@@ -36,6 +37,17 @@ Status CheckLaserLogs(const std::vector<LaserLog>& logs,
   if (logs.size() == 1) options.consensus_screen = consensus_screen;
   for (const LaserLog& log : logs) CALIB_RETURN_IF_ERROR(CheckLaserInput(log, options));
   return Status::Ok();
+}
+
+Status WithWheelUnitHint(const Status& checked, const CalibrateOptions& flags) {
+  if (checked.ok() || (flags.wheel_angle_unit == "rad" && flags.ticks_per_rev == 0.0)) {
+    return checked;
+  }
+  const std::string unit = flags.ticks_per_rev != 0.0
+                               ? "--ticks_per_rev " + Num(flags.ticks_per_rev)
+                               : "--wheel_angle_unit " + flags.wheel_angle_unit;
+  return Status(checked.code(), checked.message() + " (the wheel readings were converted with " +
+                                    unit + ": if they are in radians already, leave it out)");
 }
 
 StatusOr<double> WheelRadiansPerUnit(const CalibrateOptions& flags) {

@@ -12,8 +12,8 @@
 #include <vector>
 
 // The laser logs of --input as calibrate and diagnose take them: read, the wheel readings
-// converted from ticks (--ticks_per_rev), and checked for the common input mistakes
-// (solvers/laser/laser_input_checks.h).
+// converted to radians (--wheel_angle_unit, --ticks_per_rev), and checked for the common input
+// mistakes (solvers/laser/laser_input_checks.h).
 namespace calib::cli {
 
 StatusOr<std::vector<LaserLog>> ReadCheckedLaserLogs(const CalibrateOptions& flags,
@@ -25,6 +25,10 @@ StatusOr<std::vector<LaserLog>> ReadLaserLogs(const CalibrateOptions& flags, Las
 // calibration to reuse (LaserInputCheckOptions::consensus_screen).
 Status CheckLaserLogs(const std::vector<LaserLog>& logs,
                       std::shared_ptr<const ConsensusScreen>* consensus_screen = nullptr);
+
+// A failed input check with, when the flags gave the wheel readings a unit, a word that the unit
+// may be the mistake (a wrong unit scales the radii just as a file in another unit does).
+Status WithWheelUnitHint(const Status& checked, const CalibrateOptions& flags);
 
 // --ticks_per_rev for a bag: the JointState positions' radians per unit, as --wheel_angle_unit
 // ticks:N; an error when both flags give a unit.
