@@ -42,6 +42,19 @@ class InputSanityCliTest : public ::testing::Test {
     return path;
   }
 
+  // A copy of the stream directory `streams` named `name`, its wheel angles times `factor`.
+  fs::path ScaledWheels(const fs::path& streams, const std::string& name, double factor) {
+    const fs::path scaled = dir_ / name;
+    fs::create_directories(scaled);
+    fs::copy_file(streams / "sensor_poses.csv", scaled / "sensor_poses.csv");
+    RewriteCsv(streams / "odometry.csv", scaled / "odometry.csv",
+               [factor](const std::vector<std::string>&, std::vector<double>* row) {
+                 (*row)[1] *= factor;
+                 (*row)[2] *= factor;
+               });
+    return scaled;
+  }
+
   std::string Calibrate(const fs::path& input, const std::string& extra = "") {
     fs::remove(dir_ / "out.json");
     return "calibrate --input " + input.string() + " --output " + (dir_ / "out.json").string() +
@@ -99,14 +112,7 @@ TEST_F(InputSanityCliTest, TicksAreRefusedAndTicksPerRevGivesTheCorrectResult) {
 
 TEST_F(InputSanityCliTest, StreamTicksAreConvertedByTicksPerRev) {
   const fs::path good = Simulate("good_streams");
-  const fs::path ticks = dir_ / "ticks_streams";
-  fs::create_directories(ticks);
-  fs::copy_file(good / "sensor_poses.csv", ticks / "sensor_poses.csv");
-  RewriteCsv(good / "odometry.csv", ticks / "odometry.csv",
-             [](const std::vector<std::string>&, std::vector<double>* row) {
-               (*row)[1] *= kTicksPerRev / (2.0 * M_PI);
-               (*row)[2] *= kTicksPerRev / (2.0 * M_PI);
-             });
+  const fs::path ticks = ScaledWheels(good, "ticks_streams", kTicksPerRev / (2.0 * M_PI));
   ExpectRefused(Calib(Calibrate(ticks, "--timing off")),
                 {"the left and right columns of odometry.csv", "encoder ticks"});
   const nlohmann::json expected = Result(Calib(Calibrate(good, "--timing off")));
@@ -122,14 +128,7 @@ TEST_F(InputSanityCliTest, StreamTicksAreConvertedByTicksPerRev) {
 // readings are in degrees give the radians' result with it (it was once ignored off bags).
 TEST_F(InputSanityCliTest, WheelAngleUnitConvertsStreamsAndIntervalLogs) {
   const fs::path good_streams = Simulate("good_streams");
-  const fs::path degrees = dir_ / "degrees_streams";
-  fs::create_directories(degrees);
-  fs::copy_file(good_streams / "sensor_poses.csv", degrees / "sensor_poses.csv");
-  RewriteCsv(good_streams / "odometry.csv", degrees / "odometry.csv",
-             [](const std::vector<std::string>&, std::vector<double>* row) {
-               (*row)[1] *= 180.0 / M_PI;
-               (*row)[2] *= 180.0 / M_PI;
-             });
+  const fs::path degrees = ScaledWheels(good_streams, "degrees_streams", 180.0 / M_PI);
   const CliRun ignored = Calib(Calibrate(degrees, "--timing off"));
   EXPECT_EQ(ignored.exit_code, 1) << ignored.err;
   EXPECT_NE(ignored.err.find("--wheel_angle_unit deg"), std::string::npos) << ignored.err;
