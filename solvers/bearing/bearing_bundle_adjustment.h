@@ -13,7 +13,6 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Core>
-#include <array>
 #include <memory>
 #include <optional>
 #include <string>
