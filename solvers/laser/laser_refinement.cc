@@ -345,9 +345,17 @@ void ShiftIncrements(const LaserInterval& interval, const Eigen::Vector2d& incre
   }
 }
 
-// ψ = ρ'·Jᵀr of one interval (ρ' given).
+// ψ = ρ'·Jᵀr of one interval (ρ' given). With r = L·e and J = −L·∂s (LaserResidual), a
+// constant-speed interval's is −ρ'·∂sᵀ·(LᵀL)·e: `information` = LᵀL spares the whitening of ∂s.
 LaserParamVector Score(const LaserInterval& interval, const Eigen::Matrix3d& root,
-                       const double* odometry, const SensorMounting& mounting, double weight) {
+                       const Eigen::Matrix3d& information, const double* odometry,
+                       const SensorMounting& mounting, double weight) {
+  if (interval.steps.empty()) {
+    Eigen::Vector3d e;
+    Eigen::Matrix<double, 3, kNumLaserParams> ds;
+    LaserResidual::ConstantSpeedError(interval, odometry, mounting, &e, &ds);
+    return -weight * (ds.transpose() * (information * e));
+  }
   Eigen::Matrix<double, 3, kNumLaserParams> j;
   Eigen::Vector3d r;
   LaserResidual::Linearize(interval, root, odometry, mounting, &r, &j);
@@ -366,26 +374,35 @@ void LaserProblem::AddIncrementCorrection(size_t d, size_t k, const Eigen::Matri
   LaserResidual::Linearize(interval, root, odometry_, mounting, &r, &j);
   const LossDerivatives rho = EvaluateLoss(loss_.get(), r.squaredNorm());
   const double weight = rho.rho1;
-  const LaserParamMatrix gauss_newton = weight * j.transpose() * j;
-  sums->hessian += gauss_newton;
   const LaserParamVector g = j.transpose() * r;
   const LaserParamVector center = weight * g;
   sums->gradient += center;
-  sums->newton_hessian += gauss_newton + 2.0 * rho.rho2 * g * g.transpose();
+  // The upper triangles only, in loops the compiler unrolls (as FusedNormalCost does); mirrored
+  // once after the pass.
+  const Eigen::Matrix<double, 3, kNumLaserParams> weighted = weight * j;
+  const double curvature = 2.0 * rho.rho2;
+  for (int b = 0; b < kNumLaserParams; ++b) {
+    for (int a = 0; a <= b; ++a) {
+      sums->hessian(a, b) += weighted.col(a).dot(j.col(b));
+      sums->curvature(a, b) += curvature * g(a) * g(b);
+    }
+  }
   if (covariance == nullptr) return;
   // 2×2: the closed-form eigen decomposition (the iterative one cost as much as a residual).
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen;
   eigen.computeDirect(*covariance);
   LaserInterval shifted = interval;  // One copy for the four evaluations.
+  const Eigen::Matrix3d information = root.transpose() * root;
   for (int i = 0; i < 2; ++i) {
     const double variance = eigen.eigenvalues()(i);
     if (!(variance > 0.0)) continue;
     const Eigen::Vector2d u = std::sqrt(variance) * eigen.eigenvectors().col(i);
     ShiftIncrements(interval, u, &shifted);
-    const LaserParamVector plus = Score(shifted, root, odometry_, mounting, weight);
+    const LaserParamVector plus = Score(shifted, root, information, odometry_, mounting, weight);
     ShiftIncrements(interval, -u, &shifted);
     sums->correction +=
-        0.5 * (plus + Score(shifted, root, odometry_, mounting, weight) - 2.0 * center);
+        0.5 *
+        (plus + Score(shifted, root, information, odometry_, mounting, weight) - 2.0 * center);
   }
 }
 
@@ -407,11 +424,14 @@ StatusOr<LaserProblem::IncrementCorrection> LaserProblem::IncrementNoiseCorrecti
                 });
   for (size_t c = 1; c < sums.size(); ++c) {
     sums[0].hessian += sums[c].hessian;
-    sums[0].newton_hessian += sums[c].newton_hessian;
+    sums[0].curvature += sums[c].curvature;
     sums[0].gradient += sums[c].gradient;
     sums[0].correction += sums[c].correction;
   }
-  const Eigen::LDLT<LaserParamMatrix> ldlt(sums[0].hessian);
+  const LaserParamMatrix hessian = sums[0].hessian.selfadjointView<Eigen::Upper>();
+  const LaserParamMatrix newton_hessian =
+      hessian + LaserParamMatrix(sums[0].curvature.selfadjointView<Eigen::Upper>());
+  const Eigen::LDLT<LaserParamMatrix> ldlt(hessian);
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
     return Status::NotObservable(kSingular);
   }
@@ -421,7 +441,7 @@ StatusOr<LaserProblem::IncrementCorrection> LaserProblem::IncrementNoiseCorrecti
                           -ldlt.solve(sums[0].gradient)};
   // Newton's step where the score's derivative is positive definite (near the optimum), else the
   // Gauss–Newton one.
-  const Eigen::LDLT<LaserParamMatrix> newton(sums[0].newton_hessian);
+  const Eigen::LDLT<LaserParamMatrix> newton(newton_hessian);
   if (newton.info() == Eigen::Success && (newton.vectorD().array() > 0.0).all()) {
     out.newton_step = -newton.solve(sums[0].gradient);
   }

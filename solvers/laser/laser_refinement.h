@@ -149,10 +149,11 @@ class LaserProblem {
   // r and J of interval k of dataset d at the current parameters.
   void Linearize(size_t d, size_t k, const SensorMounting& mounting, Eigen::Vector3d* r,
                  Eigen::Matrix<double, 3, 6>* j) const;
-  // IncrementNoiseCorrection's sums: H = Σρ'JᵀJ, H_ψ, Σψ_k and Σc_k.
+  // IncrementNoiseCorrection's sums: H = Σρ'JᵀJ and H_ψ − H = Σ2ρ''(Jᵀr)(Jᵀr)ᵀ (their upper
+  // triangles), Σψ_k and Σc_k.
   struct IncrementSums {
     LaserParamMatrix hessian = LaserParamMatrix::Zero();
-    LaserParamMatrix newton_hessian = LaserParamMatrix::Zero();
+    LaserParamMatrix curvature = LaserParamMatrix::Zero();
     LaserParamVector gradient = LaserParamVector::Zero();
     LaserParamVector correction = LaserParamVector::Zero();
   };
