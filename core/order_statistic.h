@@ -19,8 +19,8 @@ double KthSmallest(std::vector<double>* values, size_t k);
 double UpperMedian(std::vector<double>* values);
 
 // The permutation that sorts `values` ascending, equal values in their given order: what
-// std::stable_sort of the indices by value gives (−0 equal to +0; NaN after +∞). By radix (11
-// bits a pass, passes whose digit all values share skipped): the model screen orders a dozen
+// std::stable_sort of the indices by value gives (−0 equal to +0; NaN after +∞). By radix (8 or
+// 11 bits a pass, passes whose digit all values share skipped): the model screen orders a dozen
 // covariates per run, and the comparison sort's merges cost a tenth of its time.
 std::vector<size_t> StableOrder(const std::vector<double>& values);
 

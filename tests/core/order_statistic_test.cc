@@ -73,7 +73,7 @@ TEST(OrderStatisticTest, StableOrderEqualsStableSort) {
   Random random(5);
   const double inf = std::numeric_limits<double>::infinity();
   std::vector<std::vector<double>> arrays = {{}, {3.0}, {0.0, -0.0, 0.0, -0.0}, {-inf, 1.0, inf}};
-  for (const size_t n : {2, 17, 1000, 5000}) {
+  for (const size_t n : {2, 17, 1000, 5000, 70000}) {  // 8-bit digits, and 11 from 65536.
     std::vector<double> normal(n), ties(n), narrow(n), wide(n), ascending(n), descending(n);
     for (size_t k = 0; k < n; ++k) {
       normal[k] = random.Normal();
