@@ -168,6 +168,7 @@ Status RefitWithIntervalJitter(const std::vector<const std::vector<LaserInterval
       inliers[d] = Inliers(errors, sensitivities[d], jitter[d], options.inlier_chi2);
       IntervalJitterOptions near = options.jitter;
       near.previous_jitter_s = jitter[d].jitter_s;  // The refit moves σ_j little.
+      near.previous_noise_sigma = jitter[d].noise_sigma;
       // σ of σ_j only where this round may be the last (see the loop's end).
       const bool last_round = round + 1 == rounds;
       near.stddev_wanted = [&, last_round](const IntervalJitterEstimate& e) {

@@ -374,7 +374,11 @@ IntervalJitterEstimate EstimateIntervalJitter(
   const auto joint = [&](double lo, double hi, double start, double* jitter_s) {
     if (!options.estimate_noise || !options.joint_scoring) return false;
     Eigen::Vector3d start_theta = warm;
-    ProfileLogLikelihood(data, start, true, &start_theta, kGridTolerance);
+    if (start == options.previous_jitter_s && (options.previous_noise_sigma.array() > 0.0).all()) {
+      start_theta = options.previous_noise_sigma.cwiseAbs2().cwiseMax(kMinVariance);
+    } else {
+      ProfileLogLikelihood(data, start, true, &start_theta, kGridTolerance);
+    }
     double found = start;
     if (!JointMaximum(data, lo, hi, &start_theta, &found, &joint_information)) return false;
     warm = start_theta, warm_at = -1.0;

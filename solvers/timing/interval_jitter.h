@@ -102,6 +102,10 @@ struct IntervalJitterOptions {
   // within a factor of 3 of it, without the grid; the grid runs when it lies on that bracket's
   // edge.
   double previous_jitter_s = 0.0;
+  // With previous_jitter_s: the scan noise σ (x, y, θ) estimated there (the previous round's). The
+  // joint scoring then starts from it rather than profiling θ at previous_jitter_s first (two or
+  // three passes fewer); zero: profiled.
+  Eigen::Vector3d previous_noise_sigma = Eigen::Vector3d::Zero();
   // Refine the search's best σ_j by Fisher scoring jointly in (θ, σ_j²) (a few passes), falling
   // back to a golden-section search of the profile when that does not settle inside the bracket;
   // false: the golden section always (the reference the tests compare with).
