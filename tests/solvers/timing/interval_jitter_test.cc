@@ -201,6 +201,29 @@ TEST(IntervalJitterTest, PreviousEstimateGivesTheGridsAnswer) {
   }
 }
 
+// A previous round's noise levels start the joint scoring in place of a profile at the previous
+// σ_j: the same maximum, from levels 10 % off as from the profile's own.
+TEST(IntervalJitterTest, PreviousNoiseLevelsStartTheJointScoringAtTheSameMaximum) {
+  const JitteredCase jittered(2000, 6, 0.03);
+  IntervalJitterOptions profiled;
+  profiled.previous_jitter_s = 0.8 * jittered.Estimate().jitter_s;
+  const IntervalJitterEstimate reference = jittered.Estimate(profiled);
+  ASSERT_TRUE(reference.significant);
+  for (double off : {0.9, 1.0, 1.1}) {
+    IntervalJitterOptions started = profiled;
+    started.previous_noise_sigma = off * reference.noise_sigma;
+    const IntervalJitterEstimate e = jittered.Estimate(started);
+    EXPECT_NEAR(e.jitter_s, reference.jitter_s, 1e-6 * reference.jitter_s) << off;
+    EXPECT_LT((e.noise_sigma - reference.noise_sigma)
+                  .cwiseQuotient(reference.noise_sigma)
+                  .cwiseAbs()
+                  .maxCoeff(),
+              1e-6);
+    EXPECT_NEAR(e.log_likelihood, reference.log_likelihood, 1e-8);
+    EXPECT_NEAR(e.jitter_stddev_s, reference.jitter_stddev_s, 1e-4 * reference.jitter_stddev_s);
+  }
+}
+
 // σ of σ_j is computed only where asked (a refit's last round): the rest of the estimate is the
 // same bit for bit, and the predicate sees the estimate it decides on.
 TEST(IntervalJitterTest, StddevOnlyWhereWanted) {
